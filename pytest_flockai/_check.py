@@ -1,0 +1,73 @@
+"""Small argument validators: each raises ConfigError naming field and value."""
+
+from __future__ import annotations
+
+import math
+from numbers import Real
+
+from .errors import ConfigError
+
+
+def _where(where: str) -> str:
+    return f"{where}: " if where else ""
+
+
+def number(field: str, value, *, where: str = "", minimum=None, maximum=None,
+           min_inclusive=True, max_inclusive=True) -> float:
+    """A finite real number within optional bounds, returned as float."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise ConfigError(f"{_where(where)}{field} = {value!r} is not a number; "
+                          f"expected a finite real number")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ConfigError(f"{_where(where)}{field} = {value!r} is not finite; "
+                          f"expected a finite real number")
+    if minimum is not None:
+        bad = v < minimum if min_inclusive else v <= minimum
+        if bad:
+            op = ">=" if min_inclusive else ">"
+            rng = f"{op} {minimum:g}" + (f" and <= {maximum:g}" if maximum is not None else "")
+            raise ConfigError(f"{_where(where)}{field} = {value!r} is out of range; allowed: {rng}")
+    if maximum is not None:
+        bad = v > maximum if max_inclusive else v >= maximum
+        if bad:
+            op = "<=" if max_inclusive else "<"
+            lo = f"{minimum:g} .. " if minimum is not None else ""
+            raise ConfigError(f"{_where(where)}{field} = {value!r} is out of range; "
+                              f"allowed: {lo}{op} {maximum:g}")
+    return v
+
+
+def positive(field: str, value, *, where: str = "") -> float:
+    return number(field, value, where=where, minimum=0.0, min_inclusive=False)
+
+
+def non_negative(field: str, value, *, where: str = "") -> float:
+    return number(field, value, where=where, minimum=0.0)
+
+
+def fraction(field: str, value, *, where: str = "", allow_zero=True, allow_one=True) -> float:
+    return number(field, value, where=where, minimum=0.0, maximum=1.0,
+                  min_inclusive=allow_zero, max_inclusive=allow_one)
+
+
+def vector(field: str, value, n: int, *, where: str = "", positive_entries=False) -> tuple:
+    try:
+        items = tuple(value)
+    except TypeError:
+        raise ConfigError(f"{_where(where)}{field} = {value!r} is not a sequence; "
+                          f"expected {n} numbers") from None
+    if len(items) != n:
+        raise ConfigError(f"{_where(where)}{field} = {value!r} has {len(items)} entries; "
+                          f"expected {n} numbers")
+    check = positive if positive_entries else number
+    return tuple(check(f"{field}[{i}]", x, where=where) for i, x in enumerate(items))
+
+
+def choice(field: str, value, allowed, *, where: str = ""):
+    if value not in allowed:
+        from .errors import close_matches
+        raise ConfigError(f"{_where(where)}{field} = {value!r} is not allowed; "
+                          f"allowed: {', '.join(map(repr, allowed))}"
+                          f"{close_matches(str(value), [str(a) for a in allowed])}")
+    return value

@@ -1,0 +1,230 @@
+"""The Drone: a blueprint's parameters, validated, plus its energy model.
+
+``drone("dji-mavic-2-pro")`` reads a TOML blueprint shipped with the package
+(or a user's own file) and returns a fresh, independent ``Drone``. Every field
+can be changed afterwards (``d.battery.capacity_mah = 4500``); every change is
+validated where it is made.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+from .. import _check
+from ..errors import ConfigError, close_matches
+from .params import Airframe, Battery, Camera, EnergyParams, Radio, Rotor, Sim
+
+G = 9.81  # m/s^2, standard gravity rounded as in most flight-control code
+MIN_THRUST_TO_WEIGHT = 1.3
+
+_TOP_KEYS = {"name", "description", "airframe", "rotor", "battery", "energy", "radio",
+             "compute", "sensors", "camera", "sim"}
+
+# keyword overrides accepted by drone(): alias -> (section attribute, field)
+_ALIASES = {
+    "battery_mah": ("battery", "capacity_mah"),
+    "battery_v": ("battery", "voltage_v"),
+    "payload_kg": (None, "payload_kg"),
+    "device": (None, "device"),
+    "physics_hz": ("sim", "physics_hz"),
+    "control_hz": ("sim", "control_hz"),
+}
+_SECTIONS = {"airframe": Airframe, "rotor": Rotor, "battery": Battery, "radio": Radio,
+             "camera": Camera, "sim": Sim}
+
+
+def _blueprint_dir():
+    return resources.files("pytest_flockai.airframe") / "blueprints"
+
+
+def blueprints() -> list[str]:
+    """Names of the built-in drone blueprints."""
+    return sorted(p.name[:-5] for p in _blueprint_dir().iterdir() if p.name.endswith(".toml"))
+
+
+class Drone:
+    """A simulated drone built from a blueprint.
+
+    Attributes: ``name``, ``airframe``, ``rotor``, ``battery``, ``radio``,
+    ``camera`` (or None), ``sim`` (physics and control rates), ``device``
+    (on-board computer profile name or "none"), ``sensors`` (names),
+    ``payload_kg`` and ``energy`` (the composable energy model).
+    """
+
+    def __init__(self, data: dict, *, source: str = "<dict>"):
+        where = source
+        unknown = sorted(set(data) - _TOP_KEYS)
+        if unknown:
+            raise ConfigError(f"{where}: unknown key {unknown[0]!r}{close_matches(unknown[0], _TOP_KEYS)}; "
+                              f"allowed top-level keys: {', '.join(sorted(_TOP_KEYS))}")
+        for req in ("name", "airframe", "rotor", "battery", "energy"):
+            if req not in data:
+                raise ConfigError(f"{where}: missing table or key {req!r}")
+        object.__setattr__(self, "_ready", False)
+        self.source = source
+        self.name = _check_str("name", data["name"], where)
+        self.description = str(data.get("description", ""))
+        self.airframe = Airframe(data["airframe"], where=f"{where} [airframe]")
+        self.rotor = Rotor(data["rotor"], where=f"{where} [rotor]")
+        self.battery = Battery(data["battery"], where=f"{where} [battery]")
+        self.radio = Radio(data.get("radio", {"tx_uj_per_byte": 0, "tx_uj_per_packet": 0,
+                                               "rx_uj_per_byte": 0, "rx_uj_per_packet": 0,
+                                               "idle_w": 0, "bitrate_bps": 1e6}),
+                           where=f"{where} [radio]")
+        self.camera = Camera(data["camera"], where=f"{where} [camera]") if "camera" in data else None
+        self.sim = Sim(data.get("sim", {}), where=f"{where} [sim]")
+        compute = data.get("compute", {})
+        _no_unknown(compute, {"device"}, f"{where} [compute]")
+        self.device = compute.get("device", "none")
+        sensors = data.get("sensors", {})
+        _no_unknown(sensors, {"names"}, f"{where} [sensors]")
+        self.sensors = list(sensors.get("names", []))
+        self.payload_kg = 0.0
+        energy = EnergyParams(data["energy"], where=f"{where} [energy]")
+        from ..energy import EnergyModel
+        self.energy = EnergyModel.from_params(energy, self)
+        object.__setattr__(self, "_ready", True)
+        self.check(where)
+
+    def __setattr__(self, name, value):
+        if name == "payload_kg":
+            value = _check.non_negative("payload_kg", value, where=self.name)
+        elif name == "device":
+            value = _check_str("device", value, getattr(self, "name", ""))
+        elif name in _SECTIONS and value is not None and not isinstance(value, _SECTIONS[name]):
+            raise ConfigError(f"{self.name}: {name} must be a {_SECTIONS[name].__name__} section, "
+                              f"got {type(value).__name__}")
+        object.__setattr__(self, name, value)
+
+    # derived quantities -------------------------------------------------
+    @property
+    def mass_kg(self) -> float:
+        """Total mass: airframe plus payload."""
+        return self.airframe.mass_kg + self.payload_kg
+
+    @property
+    def max_thrust_n(self) -> float:
+        return self.airframe.rotor_count * self.rotor.max_thrust_n
+
+    @property
+    def thrust_to_weight(self) -> float:
+        return self.max_thrust_n / (self.mass_kg * G)
+
+    @property
+    def hover_thrust_per_rotor_n(self) -> float:
+        return self.mass_kg * G / self.airframe.rotor_count
+
+    def rotor_layout(self) -> list[tuple[float, float, float]]:
+        """(x, y, spin) per rotor in the body frame (x forward, y left).
+
+        Rotors sit at angles (i + 1/2) * 360 / n from the nose, counter-clockwise
+        seen from above; spin alternates, +1 for a counter-clockwise propeller
+        (whose reaction torque on the body is clockwise, -z).
+        """
+        n, r = self.airframe.rotor_count, self.airframe.arm_length_m
+        out = []
+        for i in range(n):
+            a = (i + 0.5) * 2.0 * math.pi / n
+            out.append((r * math.cos(a), r * math.sin(a), 1.0 if i % 2 == 0 else -1.0))
+        return out
+
+    def check(self, where: str | None = None) -> None:
+        """Cross-field checks (thrust-to-weight); run again before every flight."""
+        where = where or self.source
+        tw = self.thrust_to_weight
+        if not tw >= MIN_THRUST_TO_WEIGHT:
+            raise ConfigError(
+                f"{where}: thrust-to-weight = {tw:.2f} (max thrust {self.max_thrust_n:.3g} N "
+                f"for {self.mass_kg:.3g} kg incl. payload {self.payload_kg:g} kg) is below the "
+                f"minimum {MIN_THRUST_TO_WEIGHT}; raise [rotor] max_speed_rad_s or thrust_coeff, "
+                f"or lower the mass")
+
+    def copy(self) -> "Drone":
+        return copy.deepcopy(self)
+
+    def to_dict(self) -> dict:
+        """JSON-ready description, as it goes into a flight's scenario."""
+        return {
+            "name": self.name, "source": self.source, "payload_kg": self.payload_kg,
+            "mass_kg": self.mass_kg, "device": self.device, "sensors": list(self.sensors),
+            "airframe": self.airframe.to_dict(), "rotor": self.rotor.to_dict(),
+            "battery": self.battery.to_dict(), "sim": self.sim.to_dict(),
+            "energy": self.energy.describe(),
+        }
+
+    def __repr__(self):
+        return (f"Drone({self.name!r}, mass={self.mass_kg:.3f} kg, "
+                f"battery={self.battery.capacity_mah:g} mAh, device={self.device!r})")
+
+
+def _check_str(field, value, where):
+    if not isinstance(value, str) or not value:
+        raise ConfigError(f"{where}: {field} = {value!r} is not allowed; expected a non-empty string")
+    return value
+
+
+def _no_unknown(table, allowed, where):
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where}: expected a table, got {table!r}")
+    extra = sorted(set(table) - set(allowed))
+    if extra:
+        raise ConfigError(f"{where}: unknown key {extra[0]!r}; allowed keys: {', '.join(sorted(allowed))}")
+
+
+def load_blueprint(path: str | Path) -> dict:
+    p = Path(path)
+    try:
+        with open(p, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(f"blueprint file {str(p)!r} does not exist") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"blueprint file {str(p)!r} is not valid TOML: {exc}") from None
+
+
+def drone(name_or_path: str | Path, **overrides) -> Drone:
+    """A fresh Drone from a built-in blueprint name or a path to a TOML file.
+
+    Keyword overrides: ``battery_mah``, ``battery_v``, ``payload_kg``,
+    ``device``, ``physics_hz``, ``control_hz``, or any field name of a section
+    (``mass_kg=1.0``, ``usable_fraction=0.9``) or ``section__field``.
+    """
+    s = str(name_or_path)
+    if s.endswith(".toml") or "/" in s or "\\" in s:
+        data, source = load_blueprint(s), s
+    else:
+        names = blueprints()
+        if s not in names:
+            raise ConfigError(f"unknown blueprint {s!r}{close_matches(s, names)}; "
+                              f"available: {', '.join(names)} (or a path to a .toml file)")
+        with (_blueprint_dir() / f"{s}.toml").open("rb") as fh:
+            data, source = tomllib.load(fh), f"blueprint {s!r}"
+    d = Drone(data, source=source)
+    for key, value in overrides.items():
+        section, field = _resolve_override(key)
+        target = d if section is None else getattr(d, section)
+        if target is None:
+            raise ConfigError(f"{source}: override {key}={value!r} needs a [{section}] table, "
+                              f"which this blueprint does not have")
+        setattr(target, field, value)
+    d.check(source)
+    return d
+
+
+def _resolve_override(key: str):
+    if key in _ALIASES:
+        return _ALIASES[key]
+    if "__" in key:
+        section, field = key.split("__", 1)
+        if section in _SECTIONS and field in _SECTIONS[section].FIELDS:
+            return section, field
+    hits = [sec for sec, cls in _SECTIONS.items() if key in cls.FIELDS]
+    if len(hits) == 1:
+        return hits[0], key
+    allowed = sorted(set(_ALIASES) | {f for c in _SECTIONS.values() for f in c.FIELDS})
+    raise ConfigError(f"drone(): unknown override {key!r}{close_matches(key, allowed)}; "
+                      f"allowed: {', '.join(allowed)} or section__field")

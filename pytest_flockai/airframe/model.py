@@ -1,0 +1,68 @@
+"""Compose the MuJoCo model of a drone (and its world) with ``mujoco.MjSpec``.
+
+The drone is a free body with the blueprint's mass and inertia (payload added
+at the centre), a collision box, and one site per rotor. Each rotor is a MuJoCo
+actuator on its site: force along the rotor axis and reaction torque
+``-spin * km/kf`` per newton about it, with first-order dynamics
+(``mjDYN_FILTEREXACT``, time constant = motor time constant) and the control
+clamped to [0, max thrust]. Motor lag and saturation therefore run inside
+MuJoCo at the physics rate; Python only runs at the control rate. The lag is
+applied to thrust rather than rotor speed (a first-order approximation).
+"""
+
+from __future__ import annotations
+
+import mujoco
+
+from ..airframe.drone import G
+
+
+def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:
+    spec = mujoco.MjSpec()
+    spec.modelname = drone.name
+    spec.option.timestep = physics_dt
+    spec.option.gravity = [0.0, 0.0, -G]
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    (world if world is not None else _EMPTY).add_to_spec(spec)
+    af = drone.airframe
+    L, W, H = af.body_size_m
+    body = spec.worldbody.add_body(name="drone", pos=[0.0, 0.0, 0.5 * H + 1e-3])
+    body.add_freejoint(name="drone")
+    body.explicitinertial = True
+    body.mass = drone.mass_kg
+    body.inertia = list(af.inertia_kg_m2)
+    body.ipos = [0.0, 0.0, 0.0]
+    body.add_geom(name="hull", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.5 * L, 0.5 * W, 0.5 * H],
+                  rgba=[0.25, 0.25, 0.28, 1], friction=[1.0, 0.005, 0.0001])
+    k = drone.rotor.torque_coeff / drone.rotor.thrust_coeff
+    r_prop = 0.5 * drone.rotor.diameter_m
+    fmax = drone.rotor.max_thrust_n
+    for i, (x, y, spin) in enumerate(drone.rotor_layout()):
+        body.add_geom(name=f"arm{i}", type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0, 0, 0, x, y, 0],
+                      size=[0.1 * H, 0, 0], contype=0, conaffinity=0, rgba=[0.2, 0.2, 0.2, 1])
+        body.add_geom(name=f"prop{i}", type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[x, y, 0.5 * H],
+                      size=[r_prop, 0.002, 0], contype=0, conaffinity=0, rgba=[0.7, 0.7, 0.75, 0.5])
+        body.add_site(name=f"rotor{i}", pos=[x, y, 0.5 * H])
+        act = spec.add_actuator(name=f"rotor{i}", target=f"rotor{i}",
+                                trntype=mujoco.mjtTrn.mjTRN_SITE)
+        act.gear = [0.0, 0.0, 1.0, 0.0, 0.0, -spin * k]
+        act.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
+        act.dynprm[0] = drone.rotor.time_constant_s
+        act.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        act.gainprm[0] = 1.0
+        act.biastype = mujoco.mjtBias.mjBIAS_NONE
+        act.ctrllimited = 1
+        act.ctrlrange = [0.0, fmax]
+    return spec
+
+
+class _Empty:
+    def add_to_spec(self, spec):
+        spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1])
+
+
+_EMPTY = _Empty()
+
+
+def build_model(drone, world=None, *, physics_dt: float) -> mujoco.MjModel:
+    return build_spec(drone, world, physics_dt=physics_dt).compile()

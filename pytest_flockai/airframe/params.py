@@ -1,0 +1,212 @@
+"""Validated parameter sections.
+
+A ``Section`` holds the fields of one blueprint table (``[airframe]``,
+``[battery]``...). Every assignment, from a TOML file or from user code
+(``drone.battery.capacity_mah = 4500``), goes through the field's validator,
+so a bad value is refused where it enters, with the field, the value and what
+is allowed in the message.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+from .. import _check
+from ..errors import ConfigError
+
+
+class Field:
+    __slots__ = ("kind", "default", "doc", "unit")
+
+    def __init__(self, kind: str, default=..., doc: str = "", unit: str = ""):
+        self.kind, self.default, self.doc, self.unit = kind, default, doc, unit
+
+    @property
+    def required(self) -> bool:
+        return self.default is ...
+
+    def check(self, name: str, value, where: str):
+        k = self.kind
+        if k == "pos":
+            return _check.positive(name, value, where=where)
+        if k == "nonneg":
+            return _check.non_negative(name, value, where=where)
+        if k == "frac01":          # (0, 1]
+            return _check.number(name, value, where=where, minimum=0.0, maximum=1.0,
+                                 min_inclusive=False)
+        if k == "reserve":         # [0, 1)
+            return _check.number(name, value, where=where, minimum=0.0, maximum=1.0,
+                                 max_inclusive=False)
+        if k == "angle":
+            return _check.number(name, value, where=where, minimum=0.0, maximum=89.0,
+                                 min_inclusive=False)
+        if k == "pitch":
+            return _check.number(name, value, where=where, minimum=-90.0, maximum=90.0)
+        if k == "fov":
+            return _check.number(name, value, where=where, minimum=1.0, maximum=179.0)
+        if k == "vec3pos":
+            return _check.vector(name, value, 3, where=where, positive_entries=True)
+        if k == "rotors":
+            if isinstance(value, bool) or not isinstance(value, int) or value not in (4, 6, 8):
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; allowed: 4, 6, 8")
+            return value
+        if k == "pixels":
+            if isinstance(value, bool) or not isinstance(value, int) or value <= 0 or value > 4096:
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; "
+                                  f"allowed: a whole number of pixels from 1 to 4096")
+            return value
+        if k == "layout":
+            return _check.choice(name, value, ("x",), where=where)
+        if k == "str":
+            if not isinstance(value, str) or not value:
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; expected a non-empty string")
+            return value
+        if k == "strlist":
+            if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; expected a list of strings")
+            return list(value)
+        if k == "powers":          # table of name -> watts
+            if not isinstance(value, dict):
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; expected a table of name = watts")
+            return {str(kk): _check.non_negative(f"{name}.{kk}", vv, where=where) for kk, vv in value.items()}
+        raise AssertionError(k)
+
+
+class Section:
+    """A validated group of parameters; subclasses declare ``FIELDS``."""
+
+    FIELDS: dict[str, Field] = {}
+    TABLE = ""
+
+    def __init__(self, values: dict | None = None, *, where: str = ""):
+        object.__setattr__(self, "_where", where or f"[{self.TABLE}]")
+        values = dict(values or {})
+        unknown = sorted(set(values) - set(self.FIELDS))
+        if unknown:
+            from ..errors import close_matches
+            raise ConfigError(
+                f"{self._where}: unknown key {unknown[0]!r}"
+                f"{close_matches(unknown[0], self.FIELDS)}; allowed keys: {', '.join(self.FIELDS)}")
+        for name, f in self.FIELDS.items():
+            if name in values:
+                setattr(self, name, values[name])
+            elif f.required:
+                raise ConfigError(f"{self._where}: missing field {name!r} ({f.doc or f.kind})")
+            else:
+                object.__setattr__(self, name, copy.deepcopy(f.default))
+
+    def __setattr__(self, name, value):
+        f = self.FIELDS.get(name)
+        if f is None:
+            from ..errors import close_matches
+            raise ConfigError(f"{self._where}: unknown field {name!r}{close_matches(name, self.FIELDS)}; "
+                              f"allowed: {', '.join(self.FIELDS)}")
+        object.__setattr__(self, name, f.check(name, value, self._where))
+
+    def to_dict(self) -> dict:
+        return {k: copy.deepcopy(getattr(self, k)) for k in self.FIELDS}
+
+    def __repr__(self):
+        inner = ", ".join(f"{k}={getattr(self, k)!r}" for k in self.FIELDS)
+        return f"{type(self).__name__}({inner})"
+
+    def __eq__(self, other):
+        return type(self) is type(other) and self.to_dict() == other.to_dict()
+
+
+class Airframe(Section):
+    TABLE = "airframe"
+    FIELDS = {
+        "mass_kg": Field("pos", doc="takeoff mass without payload", unit="kg"),
+        "arm_length_m": Field("pos", doc="centre to rotor axis", unit="m"),
+        "layout": Field("layout", "x"),
+        "rotor_count": Field("rotors", 4),
+        "inertia_kg_m2": Field("vec3pos", doc="principal moments Ixx Iyy Izz", unit="kg m^2"),
+        "body_size_m": Field("vec3pos", doc="collision box L W H", unit="m"),
+        "drag_area_m2": Field("vec3pos", doc="Cd*A along body x y z", unit="m^2"),
+        "max_tilt_deg": Field("angle", 35.0, unit="deg"),
+    }
+
+
+class Rotor(Section):
+    TABLE = "rotor"
+    FIELDS = {
+        "diameter_m": Field("pos", unit="m"),
+        "thrust_coeff": Field("pos", doc="kf, N/(rad/s)^2"),
+        "torque_coeff": Field("pos", doc="km, N m/(rad/s)^2"),
+        "max_speed_rad_s": Field("pos", unit="rad/s"),
+        "time_constant_s": Field("pos", unit="s"),
+    }
+
+    @property
+    def max_thrust_n(self) -> float:
+        return self.thrust_coeff * self.max_speed_rad_s ** 2
+
+    @property
+    def disc_area_m2(self) -> float:
+        return math.pi * (0.5 * self.diameter_m) ** 2
+
+
+class Battery(Section):
+    """Battery: capacity, nominal voltage, usable fraction and reserve level."""
+
+    TABLE = "battery"
+    FIELDS = {
+        "capacity_mah": Field("pos", unit="mAh"),
+        "voltage_v": Field("pos", unit="V"),
+        "usable_fraction": Field("frac01", 1.0, doc="share of nameplate energy that can be drawn"),
+        "reserve_fraction": Field("reserve", 0.15, doc="state of charge that triggers return home"),
+    }
+
+    @property
+    def energy_j(self) -> float:
+        """Usable energy in joules: mAh x V x 3.6 x usable fraction."""
+        return self.capacity_mah * self.voltage_v * 3.6 * self.usable_fraction
+
+    @property
+    def nameplate_wh(self) -> float:
+        return self.capacity_mah * self.voltage_v / 1000.0
+
+
+class EnergyParams(Section):
+    TABLE = "energy"
+    FIELDS = {
+        "figure_of_merit": Field("frac01", doc="hover figure of merit of one rotor"),
+        "induced_power_factor": Field("pos", 1.15, doc="kappa >= 1"),
+        "motor_efficiency": Field("frac01"),
+        "esc_efficiency": Field("frac01"),
+        "wake_interference": Field("nonneg", 0.0, doc="share of fore wake ingested by aft rotors"),
+        "flight_controller_w": Field("nonneg", unit="W"),
+        "io_w": Field("nonneg", 0.0, unit="W"),
+        "sensors": Field("powers", {}, doc="sensor name = watts"),
+    }
+
+
+class Radio(Section):
+    TABLE = "radio"
+    FIELDS = {
+        "tx_uj_per_byte": Field("nonneg"), "tx_uj_per_packet": Field("nonneg"),
+        "rx_uj_per_byte": Field("nonneg"), "rx_uj_per_packet": Field("nonneg"),
+        "idle_w": Field("nonneg", unit="W"),
+        "bitrate_bps": Field("pos"),
+        "heartbeat_period_s": Field("pos", 1.0, unit="s"),
+        "heartbeat_bytes": Field("pos", 256, unit="B"),
+    }
+
+
+class Camera(Section):
+    TABLE = "camera"
+    FIELDS = {
+        "width": Field("pixels", 320), "height": Field("pixels", 240),
+        "fov_deg": Field("fov", 60.0, doc="vertical field of view"),
+        "pitch_deg": Field("pitch", -90.0, doc="gimbal pitch, -90 = straight down"),
+    }
+
+
+class Sim(Section):
+    TABLE = "sim"
+    FIELDS = {
+        "physics_hz": Field("pos", 500.0, unit="Hz"),
+        "control_hz": Field("pos", 100.0, unit="Hz"),
+    }

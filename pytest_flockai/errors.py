@@ -1,0 +1,29 @@
+"""One error hierarchy for the whole package.
+
+``ConfigError`` is also a ``ValueError`` so callers that already catch bad
+input the standard way keep working. Every message names the field, the bad
+value and what is allowed, and is raised where the value enters.
+"""
+
+from __future__ import annotations
+
+import difflib
+from typing import Iterable
+
+
+class FlockAIError(Exception):
+    """Base class of every error pytest-flockai raises on purpose."""
+
+
+class ConfigError(FlockAIError, ValueError):
+    """Bad input: a field, its value and what is allowed."""
+
+
+class SimulationError(FlockAIError, RuntimeError):
+    """The simulation itself failed (diverged, produced NaN, ...)."""
+
+
+def close_matches(word: str, choices: Iterable[str], n: int = 3) -> str:
+    """' (did you mean: a, b?)' or '' when nothing is close."""
+    hits = difflib.get_close_matches(str(word), list(choices), n=n, cutoff=0.5)
+    return f" (did you mean: {', '.join(hits)}?)" if hits else ""

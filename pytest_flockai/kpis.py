@@ -1,0 +1,88 @@
+"""The registry of KPI names: unit (SI), description, which direction is better.
+
+``better`` is "higher", "lower" or None (no better direction: not gated by
+baselines). Custom probe metrics are named ``<probe>.<metric>`` and registered
+at run time with ``register``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import ConfigError
+
+
+@dataclass(frozen=True)
+class KPI:
+    name: str
+    unit: str          # "s", "J", "W", "m", "m/s", "1" (fraction or count), "kB"
+    better: str | None
+    description: str
+
+
+_ROWS = [
+    # flight
+    ("flight_time_s", "s", "higher", "time from take-off to landing (or to the end of the flight)"),
+    ("takeoff_time_s", "s", None, "time spent climbing to the mission altitude"),
+    ("hover_time_s", "s", None, "airborne time below 0.5 m/s"),
+    ("move_time_s", "s", None, "airborne time moving at steady speed"),
+    ("accel_time_s", "s", None, "airborne time accelerating or braking (> 0.5 m/s^2)"),
+    ("landing_time_s", "s", None, "time spent descending to land"),
+    ("distance_m", "m", None, "path length flown"),
+    ("max_speed_mps", "m/s", None, "highest ground speed"),
+    ("tracking_error_max_m", "m", "lower", "largest distance between the drone and the pilot's reference"),
+    ("crashed", "1", "lower", "1 if the flight ended in a crash, else 0"),
+    # energy
+    ("energy_total_j", "J", "lower", "E_total = E_motors + E_proc + E_comm"),
+    ("energy_motors_j", "J", "lower", "energy drawn by the motors"),
+    ("energy_proc_j", "J", "lower", "energy drawn by processing (flight controller, SoC, I/O, sensors)"),
+    ("energy_comm_j", "J", "lower", "energy drawn by the radio"),
+    ("energy_share_motors", "1", None, "E_motors / E_total"),
+    ("energy_share_proc", "1", "lower", "E_proc / E_total"),
+    ("energy_share_comm", "1", "lower", "E_comm / E_total"),
+    ("mean_power_w", "W", "lower", "mean electrical power over the flight"),
+    ("battery_remaining", "1", "higher", "usable battery energy left at the end, fraction"),
+    ("endurance_s", "s", "higher", "projected flight time to depletion at the mission's mean power"),
+    # compute
+    ("cpu_utilization", "1", "lower", "busy fraction of the on-board computer"),
+    ("cpu_time_s", "s", "lower", "busy time of the on-board computer"),
+    ("io_time_s", "s", "lower", "time spent on storage I/O"),
+    ("mem_utilization", "1", "lower", "memory in use on the on-board computer, fraction"),
+    # comm
+    ("kbytes_in", "kB", None, "kilobytes received by the drone"),
+    ("kbytes_out", "kB", None, "kilobytes sent by the drone"),
+    ("packets_in", "1", None, "packets received by the drone"),
+    ("packets_out", "1", None, "packets sent by the drone"),
+    # ML
+    ("inference_count", "1", None, "inferences completed"),
+    ("inference_latency_p50_s", "s", "lower", "median inference latency, capture to result"),
+    ("inference_latency_p95_s", "s", "lower", "95th percentile inference latency"),
+    ("inference_latency_max_s", "s", "lower", "largest inference latency"),
+    ("frames_dropped", "1", "lower", "frames skipped because the model was busy"),
+    ("count_mae", "1", "lower", "mean absolute error of the people count"),
+    ("detection_precision", "1", "higher", "precision of crowd detection"),
+    ("detection_recall", "1", "higher", "recall of crowd detection"),
+    ("detection_delay_frames", "1", "lower", "frames from a crowd entering view until detected"),
+]
+
+REGISTRY: dict[str, KPI] = {r[0]: KPI(*r) for r in _ROWS}
+
+
+def get(name: str) -> KPI | None:
+    return REGISTRY.get(name)
+
+
+def names() -> list[str]:
+    return list(REGISTRY)
+
+
+def register(name: str, unit: str = "1", better: str | None = None, description: str = "") -> KPI:
+    """Register a custom KPI (e.g. a probe metric ``probe.metric``)."""
+    if better not in ("higher", "lower", None):
+        raise ConfigError(f"KPI {name!r}: better = {better!r} is not allowed; allowed: 'higher', 'lower', None")
+    k = KPI(name, unit, better, description)
+    old = REGISTRY.get(name)
+    if old is not None and old != k and "." not in name:
+        raise ConfigError(f"KPI {name!r} is built in; choose another name")
+    REGISTRY[name] = k
+    return k

@@ -1,0 +1,454 @@
+"""Mission: one drone, one pilot, a world and tasks, flown on one simulated clock.
+
+The loop runs at the control rate; MuJoCo advances ``physics_hz / control_hz``
+substeps per tick in one C call. Each control tick: read the state, advance the
+wind, apply body drag through the air-relative velocity, get the setpoint from
+the stage (take-off, pilot, return, landing), run the cascaded controller, feed
+the energy meter, classify the flight phase, record telemetry at its own rate,
+step the physics, check for crashes and divergence. No pandas, dicts or
+numpy allocation per tick; the DataFrame is built once at the end.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from numbers import Real
+
+import mujoco
+import numpy as np
+import pandas as pd
+
+from . import _check
+from .airframe.drone import Drone, G
+from .airframe.model import build_model
+from .control.controller import CascadedController
+from .control.pilots import Pilot
+from .control.trajectory import Leg, Path
+from .energy.components import RHO_SEA_LEVEL, Usage
+from .energy.model import Meter
+from .errors import ConfigError, SimulationError
+from .result import FlightResult
+from .world.wind import Wind
+
+UNTIL = ("landed", "battery_depleted", "battery_reserve")
+PHASES = ("takeoff", "hover", "move", "accelerating", "landing", "landed")
+_TAKEOFF, _HOVER, _MOVE, _ACCEL, _LANDING, _LANDED = range(6)
+# mission stages (what the drone is commanded to do)
+_S_TAKEOFF, _S_PILOT, _S_RETURN, _S_LAND, _S_DONE = range(5)
+STAGES = ("takeoff", "pilot", "return", "landing", "done")
+
+HOVER_SPEED = 0.5        # m/s: below this an airborne drone is hovering
+ACCEL_THRESHOLD = 0.5    # m/s^2: above this it is accelerating
+CRASH_SPEED = 2.0        # m/s: touching anything faster than this is a crash
+SEEDS = {"wind": 0, "sensors": 1, "tasks": 2, "link": 3, "world": 4, "probes": 5}
+
+
+def seed_sequence(seed: int, component: str) -> np.random.SeedSequence:
+    """The SeedSequence of one component of a mission (fixed spawn keys)."""
+    return np.random.SeedSequence(seed, spawn_key=(SEEDS[component],))
+
+
+class Mission:
+    """A flight to simulate: ``Mission(drone, pilot, ...).run() -> FlightResult``.
+
+    until: "landed" (fly the plan, return home, land), "battery_depleted" (fly
+    until the battery is empty), "battery_reserve" (return home and land when the
+    battery falls to its reserve), or a number of simulated seconds.
+    """
+
+    def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
+                 seed: int = 0, until="landed", *, return_home: bool = True,
+                 max_time_s: float = 4 * 3600.0, telemetry_hz: float = 10.0,
+                 climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None):
+        if not isinstance(drone, Drone):
+            raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
+        if not isinstance(pilot, Pilot):
+            raise ConfigError(f"Mission: pilot = {pilot!r} is not a Pilot (fa.pilots.Hover, "
+                              f"Waypoints, ZigZag, Orbit or a Pilot subclass)")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ConfigError(f"Mission: seed = {seed!r} is not allowed; expected an integer >= 0")
+        if isinstance(until, str):
+            _check.choice("until", until, UNTIL, where="Mission")
+        elif isinstance(until, Real) and not isinstance(until, bool):
+            until = _check.positive("until", until, where="Mission")
+        else:
+            raise ConfigError(f"Mission: until = {until!r} is not allowed; allowed: "
+                              f"{', '.join(map(repr, UNTIL))} or a number of seconds > 0")
+        self.drone = drone
+        self.pilot = pilot
+        self.world = world
+        self.tasks = tuple(tasks or ())
+        self.probes = probes
+        self.wind = Wind.coerce(wind)
+        self.seed = int(seed)
+        self.until = until
+        self.return_home = bool(return_home)
+        self.max_time_s = _check.positive("max_time_s", max_time_s, where="Mission")
+        self.telemetry_hz = _check.positive("telemetry_hz", telemetry_hz, where="Mission")
+        self.climb_speed = _check.positive("climb_speed", climb_speed, where="Mission")
+        self.descent_speed = _check.positive("descent_speed", descent_speed, where="Mission")
+        self.name = name
+
+    def scenario(self) -> dict:
+        return {
+            "name": self.name, "drone": self.drone.to_dict(), "pilot": self.pilot.to_dict(),
+            "world": self.world.to_dict() if self.world is not None else {"name": "empty"},
+            "wind": self.wind.to_dict() if self.wind is not None else None,
+            "seed": self.seed, "until": self.until, "return_home": self.return_home,
+            "tasks": [getattr(t, "to_dict", lambda: repr(t))() for t in self.tasks],
+        }
+
+    def __repr__(self):
+        return f"Mission({self.drone.name!r}, {self.pilot!r}, seed={self.seed}, until={self.until!r})"
+
+    # ------------------------------------------------------------------
+    def run(self) -> FlightResult:
+        wall0 = _time.perf_counter()
+        run = _Run(self)
+        try:
+            run.loop()
+        except SimulationError as exc:
+            exc.result = run.result(_time.perf_counter() - wall0, end_reason="diverged")
+            raise
+        return run.result(_time.perf_counter() - wall0)
+
+
+class _Run:
+    """State of one flight. Split from Mission so a Mission can be flown again."""
+
+    def __init__(self, mission: Mission):
+        self.mission = m = mission
+        drone = m.drone
+        drone.check()
+        sim = drone.sim
+        if sim.physics_hz < sim.control_hz:
+            raise ConfigError(f"{drone.name} [sim]: physics_hz = {sim.physics_hz:g} must be >= "
+                              f"control_hz = {sim.control_hz:g}")
+        self.substeps = max(1, int(round(sim.physics_hz / sim.control_hz)))
+        physics_dt = 1.0 / sim.physics_hz
+        self.ctrl_dt = physics_dt * self.substeps
+        self.model = build_model(drone, m.world, physics_dt=physics_dt)
+        self.data = mujoco.MjData(self.model)
+        mujoco.mj_forward(self.model, self.data)
+        self.controller = CascadedController(drone, self.ctrl_dt)
+        self.meter = Meter(drone.energy, drone)
+        self.usage = Usage(drone.airframe.rotor_count)
+        self.events: list[dict] = []
+        self.end_reason = "running"
+        self.crashed = False
+        self._rec = None
+
+    # -- the loop --------------------------------------------------------
+    def loop(self):
+        ms, drone = self.mission, self.mission.drone
+        model, d = self.model, self.data
+        ctrl = self.controller
+        meter, u = self.meter, self.usage
+        n_rot = drone.airframe.rotor_count
+        dt = self.ctrl_dt
+        nsub = self.substeps
+        until = ms.until
+        t_end = float(until) if not isinstance(until, str) else ms.max_time_s
+        t_end = min(t_end, ms.max_time_s)
+        e_usable = drone.battery.energy_j
+        reserve_e = drone.battery.reserve_fraction * e_usable
+        use_reserve = until == "battery_reserve"
+        # wind
+        wind = ms.wind.sampler(np.random.default_rng(seed_sequence(ms.seed, "wind")), dt) \
+            if ms.wind is not None else None
+        w = (0.0, 0.0, 0.0)
+        # drag: F = -1/2 rho |v| R diag(CdA) R^T v
+        cdx, cdy, cdz = (0.5 * RHO_SEA_LEVEL * c for c in drone.airframe.drag_area_m2)
+        xfrc = d.xfrc_applied[1]
+        qpos, qvel, act, dctrl = d.qpos, d.qvel, d.act, d.ctrl
+        xmat = d.xmat[1]
+        # accel limit of trajectories: a quarter of the thrust margin, at most 2.5 m/s^2
+        accel = min(2.5, 0.25 * (drone.thrust_to_weight - 1.0) * G)
+        self.traj_accel = accel
+        pilot = ms.pilot
+        ground_z = float(qpos[2])
+        self.home = home = (0.0, 0.0, ground_z)
+        alt = float(pilot.altitude)
+        stage = _S_TAKEOFF
+        path = Path([Leg(home, (0.0, 0.0, alt), ms.climb_speed, accel)])
+        t_stage = 0.0
+        sp = [0.0, 0.0, ground_z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        # radio heartbeats (health checks) to the ground station
+        radio = drone.radio
+        hb_period = radio.heartbeat_period_s
+        hb_bytes = int(radio.heartbeat_bytes)
+        next_hb = 0.0
+        self.bytes_out = self.bytes_in = self.pkts_out = self.pkts_in = 0
+        # phase bookkeeping
+        phase_time = [0.0] * 6
+        phase = _TAKEOFF
+        self._event(0.0, "stage", stage="takeoff")
+        dist = 0.0
+        vmax = 0.0
+        track_max = 0.0
+        pvx = pvy = pvz = 0.0
+        acc_f = 0.0
+        a_filt = math.exp(-dt / 0.2)  # 0.2 s smoothing of |dv/dt|
+        # telemetry
+        rec_dt = 1.0 / ms.telemetry_hz
+        next_rec = 0.0
+        est = (float(until) if not isinstance(until, str) else 1800.0)
+        self._rec_alloc(int(min(est, ms.max_time_s) * ms.telemetry_hz) + 16, n_rot)
+        energy_j = 0.0
+        airborne = True
+        t = 0.0
+        self.t_land = None
+        step = mujoco.mj_step
+        sqrt = math.sqrt
+        while True:
+            t = d.time
+            q = qpos.tolist()
+            v = qvel.tolist()
+            z, vx, vy, vz = q[2], v[0], v[1], v[2]
+            if not (z == z and abs(z) < 1e5 and vx == vx):
+                raise SimulationError(
+                    f"simulation diverged at t = {t:.3f} s (position or velocity not finite: "
+                    f"z = {z!r}, vx = {vx!r}); check the blueprint's inertia and rotor "
+                    f"coefficients or lower the physics timestep")
+            # -- setpoint by stage --------------------------------------
+            if stage == _S_PILOT:
+                if pilot.update(t, (q[0], q[1], z, vx, vy, vz), sp):
+                    stage, path, t_stage = self._after_pilot(t, q, sp)
+            elif stage != _S_DONE:
+                if path.fill(t - t_stage, sp):
+                    if stage == _S_TAKEOFF:
+                        stage = _S_PILOT
+                        pilot.start(t, (q[0], q[1], z), accel)
+                        self._event(t, "stage", stage="pilot")
+                        pilot.update(t, (q[0], q[1], z, vx, vy, vz), sp)
+                    elif stage == _S_RETURN:
+                        stage, t_stage = _S_LAND, t
+                        path = Path([Leg((sp[0], sp[1], sp[2]), (sp[0], sp[1], ground_z - 0.5),
+                                         ms.descent_speed, accel)])
+                        self._event(t, "stage", stage="landing")
+            if stage == _S_LAND and d.ncon > 0 and abs(vz) < 0.3:
+                stage = _S_DONE
+                self.t_land = t
+                self._event(t, "stage", stage="landed")
+            # -- air and drag -------------------------------------------
+            if wind is not None:
+                w = wind.step()
+            rvx, rvy, rvz = vx - w[0], vy - w[1], vz - w[2]
+            R = xmat.tolist()
+            bx = R[0] * rvx + R[3] * rvy + R[6] * rvz
+            by = R[1] * rvx + R[4] * rvy + R[7] * rvz
+            bz = R[2] * rvx + R[5] * rvy + R[8] * rvz
+            sp_air = sqrt(rvx * rvx + rvy * rvy + rvz * rvz)
+            fx, fy, fz = -cdx * sp_air * bx, -cdy * sp_air * by, -cdz * sp_air * bz
+            xfrc[0] = R[0] * fx + R[1] * fy + R[2] * fz
+            xfrc[1] = R[3] * fx + R[4] * fy + R[5] * fz
+            xfrc[2] = R[6] * fx + R[7] * fy + R[8] * fz
+            # -- control ---------------------------------------------------
+            if stage == _S_DONE:
+                dctrl[:] = 0.0
+                airborne = False
+            else:
+                dctrl[:] = ctrl.update(q, v, sp)
+            # -- radio and energy --------------------------------------------
+            if t >= next_hb:
+                next_hb += hb_period
+                u.tx_bytes, u.tx_packets, u.rx_bytes, u.rx_packets = hb_bytes, 1, 64, 1
+                self.bytes_out += hb_bytes
+                self.bytes_in += 64
+                self.pkts_out += 1
+                self.pkts_in += 1
+            else:
+                u.tx_bytes = u.tx_packets = u.rx_bytes = u.rx_packets = 0
+            u.t, u.dt = t, dt
+            u.airborne = airborne
+            u.thrust = act.tolist()
+            u.v_rel_body = (bx, by, bz)
+            power = meter.step(u)
+            energy_j += power * dt
+            # -- phases and flight KPIs --------------------------------------
+            speed = sqrt(vx * vx + vy * vy + vz * vz)
+            if airborne:
+                dv = sqrt((vx - pvx) ** 2 + (vy - pvy) ** 2 + (vz - pvz) ** 2) / dt
+                acc_f = a_filt * acc_f + (1.0 - a_filt) * dv
+                if stage == _S_TAKEOFF:
+                    phase = _TAKEOFF
+                elif stage == _S_LAND:
+                    phase = _LANDING
+                elif speed < HOVER_SPEED:
+                    phase = _HOVER
+                elif acc_f > ACCEL_THRESHOLD:
+                    phase = _ACCEL
+                else:
+                    phase = _MOVE
+                phase_time[phase] += dt
+                dist += speed * dt
+                if speed > vmax:
+                    vmax = speed
+                if stage == _S_PILOT:
+                    ex, ey, ez = q[0] - sp[0], q[1] - sp[1], z - sp[2]
+                    e = sqrt(ex * ex + ey * ey + ez * ez)
+                    if e > track_max:
+                        track_max = e
+            else:
+                phase = _LANDED
+            pvx, pvy, pvz = vx, vy, vz
+            # -- telemetry ------------------------------------------------
+            if t >= next_rec:
+                next_rec += rec_dt
+                self._record(t, q, v, sp, w, phase, stage, power, energy_j, e_usable)
+            # -- end conditions -------------------------------------------
+            if stage == _S_DONE:
+                self.end_reason = "landed"
+                break
+            if energy_j >= e_usable:
+                self.end_reason = "battery_depleted"
+                self._event(t, "battery_depleted")
+                break
+            if use_reserve and stage == _S_PILOT and e_usable - energy_j <= reserve_e:
+                self._event(t, "battery_reserve", remaining=(e_usable - energy_j) / e_usable)
+                stage, path, t_stage = self._after_pilot(t, q, sp, force_home=True)
+            if t + 0.5 * dt >= t_end:
+                self.end_reason = "time" if not isinstance(until, str) else "time_cap"
+                break
+            # -- physics --------------------------------------------------
+            step(model, d, nsub)
+            if d.ncon > 0 and stage != _S_DONE:
+                if self._impact(d, stage, speed, q):
+                    self.crashed = True
+                    self.end_reason = "crashed"
+                    self._event(d.time, "crash", speed=speed)
+                    break
+            if d.time < t:
+                raise SimulationError(
+                    f"MuJoCo reset the simulation at t = {t:.3f} s (unstable physics: "
+                    f"{_warnings(d)}); check the blueprint or lower the physics timestep")
+        t = d.time
+        self.t_final = t
+        self.phase_time = phase_time
+        self.dist, self.vmax, self.track_max = dist, vmax, track_max
+        self.energy_j = energy_j
+        self.e_usable = e_usable
+        q = qpos.tolist()
+        self._record(t, q, qvel.tolist(), sp, w, _LANDED if not airborne else phase, stage,
+                     meter.last_power, energy_j, e_usable)
+
+    def _after_pilot(self, t, q, sp, force_home=False):
+        ms = self.mission
+        here = (sp[0], sp[1], sp[2])
+        home_air = (self.home[0], self.home[1], sp[2])
+        far = math.dist(here[:2], home_air[:2]) > 0.5
+        if (ms.return_home or force_home) and far:
+            self._event(t, "stage", stage="return")
+            speed = getattr(ms.pilot, "speed", 5.0)
+            return _S_RETURN, Path([Leg(here, home_air, speed, self.traj_accel)]), t
+        self._event(t, "stage", stage="landing")
+        return _S_LAND, Path([Leg(here, (here[0], here[1], self.home[2] - 0.5),
+                                  ms.descent_speed, self.traj_accel)]), t
+
+    def _impact(self, d, stage, speed, q):
+        # flipped over, or touched anything faster than CRASH_SPEED
+        R = d.xmat[1]
+        if R[8] < 0.0:
+            return True
+        if stage == _S_TAKEOFF and q[2] < self.home[2] + 0.05:
+            return False
+        return speed > CRASH_SPEED
+
+    def _event(self, t, kind, **info):
+        self.events.append({"t": round(float(t), 6), "kind": kind, **info})
+
+    # -- telemetry storage -------------------------------------------------
+    _BASE_COLS = ("x", "y", "z", "vx", "vy", "vz", "roll", "pitch", "yaw", "wx", "wy", "wz",
+                  "sp_x", "sp_y", "sp_z", "wind_x", "wind_y", "wind_z", "power_w", "energy_j",
+                  "battery_remaining")
+
+    def _rec_alloc(self, rows, n_rot):
+        self._cols = list(self._BASE_COLS) + [f"thrust_{i}" for i in range(n_rot)] + \
+            [f"energy_{k}_j" for k in ("motors", "proc", "comm")]
+        self._buf = np.empty((max(rows, 16), len(self._cols)))
+        self._t = np.empty(self._buf.shape[0])
+        self._phase = np.empty(self._buf.shape[0], dtype=np.int8)
+        self._stage = np.empty(self._buf.shape[0], dtype=np.int8)
+        self._n = 0
+
+    def _record(self, t, q, v, sp, w, phase, stage, power, energy_j, e_usable):
+        i = self._n
+        if i >= self._buf.shape[0]:   # grow by doubling: amortised, not per tick
+            k = self._buf.shape[0]
+            self._buf = np.concatenate([self._buf, np.empty_like(self._buf)])
+            self._t = np.concatenate([self._t, np.empty(k)])
+            self._phase = np.concatenate([self._phase, np.empty(k, dtype=np.int8)])
+            self._stage = np.concatenate([self._stage, np.empty(k, dtype=np.int8)])
+        qw, qx, qy, qz = q[3], q[4], q[5], q[6]
+        roll = math.atan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
+        pitch = math.asin(max(-1.0, min(1.0, 2 * (qw * qy - qz * qx))))
+        yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+        e = self.meter.energy
+        top = self.meter.top
+        em = ep = ec = 0.0
+        for name, val in zip(top, e):
+            if name == "motors":
+                em += val
+            elif name == "proc":
+                ep += val
+            elif name == "comm":
+                ec += val
+        self._buf[i] = (q[0], q[1], q[2], v[0], v[1], v[2], roll, pitch, yaw, v[3], v[4], v[5],
+                        sp[0], sp[1], sp[2], w[0], w[1], w[2], power, energy_j,
+                        max(0.0, 1.0 - energy_j / e_usable), *self.data.act.tolist(), em, ep, ec)
+        self._t[i] = t
+        self._phase[i] = phase
+        self._stage[i] = stage
+        self._n = i + 1
+
+    # -- result --------------------------------------------------------------
+    def result(self, wall, end_reason=None) -> FlightResult:
+        if end_reason:
+            self.end_reason = end_reason
+        n = self._n if self._buf is not None else 0
+        tel = pd.DataFrame(self._buf[:n].copy(), columns=self._cols,
+                           index=pd.Index(self._t[:n].copy(), name="t"))
+        tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(PHASES))
+        tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(STAGES))
+        kpis = self._kpis()
+        scen = self.mission.scenario()
+        scen["sim_time_s"] = float(getattr(self, "t_final", self.data.time))
+        scen["physics_hz"] = self.mission.drone.sim.physics_hz
+        scen["control_hz"] = 1.0 / self.ctrl_dt
+        scen["controller_gains"] = self.controller.gains
+        return FlightResult(kpis, tel, self.events, scen, self.meter.breakdown(), self.end_reason, wall)
+
+    def _kpis(self) -> dict:
+        pt = getattr(self, "phase_time", [0.0] * 6)
+        ft = sum(pt)
+        tops = self.meter.totals_by_top()
+        e_tot = sum(self.meter.energy)
+        e_m, e_p, e_c = tops.get("motors", 0.0), tops.get("proc", 0.0), tops.get("comm", 0.0)
+        t_all = float(getattr(self, "t_final", self.data.time))
+        mean_p = e_tot / t_all if t_all > 0 else 0.0
+        e_usable = self.mission.drone.battery.energy_j
+        share = (lambda e: e / e_tot) if e_tot > 0 else (lambda e: 0.0)
+        return {
+            "flight_time_s": ft,
+            "takeoff_time_s": pt[_TAKEOFF], "hover_time_s": pt[_HOVER], "move_time_s": pt[_MOVE],
+            "accel_time_s": pt[_ACCEL], "landing_time_s": pt[_LANDING],
+            "distance_m": getattr(self, "dist", 0.0), "max_speed_mps": getattr(self, "vmax", 0.0),
+            "tracking_error_max_m": getattr(self, "track_max", 0.0),
+            "crashed": 1.0 if self.crashed else 0.0,
+            "energy_total_j": e_tot, "energy_motors_j": e_m, "energy_proc_j": e_p, "energy_comm_j": e_c,
+            "energy_share_motors": share(e_m), "energy_share_proc": share(e_p),
+            "energy_share_comm": share(e_c), "mean_power_w": mean_p,
+            "battery_remaining": max(0.0, 1.0 - e_tot / e_usable),
+            "endurance_s": e_usable / mean_p if mean_p > 0 else float("inf"),
+            "kbytes_in": self.bytes_in / 1000.0 if hasattr(self, "bytes_in") else 0.0,
+            "kbytes_out": self.bytes_out / 1000.0 if hasattr(self, "bytes_out") else 0.0,
+            "packets_in": float(getattr(self, "pkts_in", 0)),
+            "packets_out": float(getattr(self, "pkts_out", 0)),
+        }
+
+
+def _warnings(d) -> str:
+    names = [w.name for w in mujoco.mjtWarning if w.name != "mjNWARNING"]
+    hits = [n for n in names if d.warning[getattr(mujoco.mjtWarning, n)].number > 0]
+    return ", ".join(hits) or "no MuJoCo warning recorded"
