@@ -25,7 +25,7 @@ from .airframe.model import build_model
 from .control.controller import CascadedController
 from .control.pilots import Pilot
 from .control.trajectory import Leg, Path
-from .energy.components import RHO_SEA_LEVEL, Usage
+from .energy.components import Usage
 from .energy.model import Meter
 from .errors import ConfigError, SimulationError
 from .result import FlightResult
@@ -60,6 +60,7 @@ class Mission:
     def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
                  seed: int = 0, until="landed", *, return_home: bool = True,
                  max_time_s: float = 4 * 3600.0, telemetry_hz: float = 10.0,
+                 energy_hz: float = 20.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
@@ -86,6 +87,7 @@ class Mission:
         self.return_home = bool(return_home)
         self.max_time_s = _check.positive("max_time_s", max_time_s, where="Mission")
         self.telemetry_hz = _check.positive("telemetry_hz", telemetry_hz, where="Mission")
+        self.energy_hz = _check.positive("energy_hz", energy_hz, where="Mission")
         self.climb_speed = _check.positive("climb_speed", climb_speed, where="Mission")
         self.descent_speed = _check.positive("descent_speed", descent_speed, where="Mission")
         self.name = name
@@ -158,11 +160,10 @@ class _Run:
         wind = ms.wind.sampler(np.random.default_rng(seed_sequence(ms.seed, "wind")), dt) \
             if ms.wind is not None else None
         w = (0.0, 0.0, 0.0)
-        # drag: F = -1/2 rho |v| R diag(CdA) R^T v
-        cdx, cdy, cdz = (0.5 * RHO_SEA_LEVEL * c for c in drone.airframe.drag_area_m2)
-        xfrc = d.xfrc_applied[1]
+        mwind = model.opt.wind
+        if wind is not None:
+            mwind[:] = ms.wind.mean
         qpos, qvel, act, dctrl = d.qpos, d.qvel, d.act, d.ctrl
-        xmat = d.xmat[1]
         # accel limit of trajectories: a quarter of the thrust margin, at most 2.5 m/s^2
         accel = min(2.5, 0.25 * (drone.thrust_to_weight - 1.0) * G)
         self.traj_accel = accel
@@ -189,18 +190,29 @@ class _Run:
         track_max = 0.0
         pvx = pvy = pvz = 0.0
         acc_f = 0.0
-        a_filt = math.exp(-dt / 0.2)  # 0.2 s smoothing of |dv/dt|
+        # bookkeeping (phases, distance, tracking error) at 50 Hz, or every tick if slower
+        book_dt = max(dt, 0.02 // dt * dt)
+        next_book = 0.0
+        t_book = 0.0
+        a_filt = math.exp(-book_dt / 0.2)  # 0.2 s smoothing of |dv/dt|
         # telemetry
         rec_dt = 1.0 / ms.telemetry_hz
         next_rec = 0.0
         est = (float(until) if not isinstance(until, str) else 1800.0)
         self._rec_alloc(int(min(est, ms.max_time_s) * ms.telemetry_hz) + 16, n_rot)
         energy_j = 0.0
+        e_period = 1.0 / ms.energy_hz
+        next_e = 0.0
+        t_e = 0.0
+        power = 0.0
+        tx_b = tx_p = rx_b = rx_p = 0
         airborne = True
         t = 0.0
         self.t_land = None
         step = mujoco.mj_step
         sqrt = math.sqrt
+        cupdate, pupdate, mstep = ctrl.update, pilot.update, meter.step
+        rot_idx = range(n_rot)
         while True:
             t = d.time
             q = qpos.tolist()
@@ -213,7 +225,7 @@ class _Run:
                     f"coefficients or lower the physics timestep")
             # -- setpoint by stage --------------------------------------
             if stage == _S_PILOT:
-                if pilot.update(t, (q[0], q[1], z, vx, vy, vz), sp):
+                if pupdate(t, (q[0], q[1], z, vx, vy, vz), sp):
                     stage, path, t_stage = self._after_pilot(t, q, sp)
             elif stage != _S_DONE:
                 if path.fill(t - t_stage, sp):
@@ -231,68 +243,80 @@ class _Run:
                 stage = _S_DONE
                 self.t_land = t
                 self._event(t, "stage", stage="landed")
-            # -- air and drag -------------------------------------------
-            if wind is not None:
-                w = wind.step()
-            rvx, rvy, rvz = vx - w[0], vy - w[1], vz - w[2]
-            R = xmat.tolist()
-            bx = R[0] * rvx + R[3] * rvy + R[6] * rvz
-            by = R[1] * rvx + R[4] * rvy + R[7] * rvz
-            bz = R[2] * rvx + R[5] * rvy + R[8] * rvz
-            sp_air = sqrt(rvx * rvx + rvy * rvy + rvz * rvz)
-            fx, fy, fz = -cdx * sp_air * bx, -cdy * sp_air * by, -cdz * sp_air * bz
-            xfrc[0] = R[0] * fx + R[1] * fy + R[2] * fz
-            xfrc[1] = R[3] * fx + R[4] * fy + R[5] * fz
-            xfrc[2] = R[6] * fx + R[7] * fy + R[8] * fz
             # -- control ---------------------------------------------------
             if stage == _S_DONE:
                 dctrl[:] = 0.0
                 airborne = False
             else:
-                dctrl[:] = ctrl.update(q, v, sp)
-            # -- radio and energy --------------------------------------------
+                f = cupdate(q, v, sp)
+                for i in rot_idx:
+                    dctrl[i] = f[i]
+            # -- air: MuJoCo applies body drag against opt.wind every substep ----
+            if wind is not None:
+                w = wind.step()
+                mwind[0], mwind[1], mwind[2] = w
+            # -- radio and energy (energy on its own clock; usage accumulates) --
             if t >= next_hb:
                 next_hb += hb_period
-                u.tx_bytes, u.tx_packets, u.rx_bytes, u.rx_packets = hb_bytes, 1, 64, 1
-                self.bytes_out += hb_bytes
-                self.bytes_in += 64
-                self.pkts_out += 1
-                self.pkts_in += 1
-            else:
-                u.tx_bytes = u.tx_packets = u.rx_bytes = u.rx_packets = 0
-            u.t, u.dt = t, dt
-            u.airborne = airborne
-            u.thrust = act.tolist()
-            u.v_rel_body = (bx, by, bz)
-            power = meter.step(u)
-            energy_j += power * dt
-            # -- phases and flight KPIs --------------------------------------
+                tx_b += hb_bytes
+                tx_p += 1
+                rx_b += 64
+                rx_p += 1
+            if t >= next_e:
+                # usage of the interval (t_e, t]: bytes and busy time accumulated,
+                # rotor thrust and airspeed sampled now
+                edt = t - t_e
+                u.dt = edt
+                u.t = t
+                u.airborne = airborne
+                u.thrust = act.tolist()
+                rvx, rvy, rvz = vx - w[0], vy - w[1], vz - w[2]
+                R = ctrl.R
+                u.v_rel_body = (R[0] * rvx + R[3] * rvy + R[6] * rvz,
+                                R[1] * rvx + R[4] * rvy + R[7] * rvz,
+                                R[2] * rvx + R[5] * rvy + R[8] * rvz)
+                u.tx_bytes, u.tx_packets, u.rx_bytes, u.rx_packets = tx_b, tx_p, rx_b, rx_p
+                self.bytes_out += tx_b
+                self.bytes_in += rx_b
+                self.pkts_out += tx_p
+                self.pkts_in += rx_p
+                tx_b = tx_p = rx_b = rx_p = 0
+                power = mstep(u)
+                energy_j += power * edt
+                t_e = t
+                next_e += e_period
+            # -- phases and flight KPIs, on the bookkeeping clock -----------------
             speed = sqrt(vx * vx + vy * vy + vz * vz)
-            if airborne:
-                dv = sqrt((vx - pvx) ** 2 + (vy - pvy) ** 2 + (vz - pvz) ** 2) / dt
-                acc_f = a_filt * acc_f + (1.0 - a_filt) * dv
-                if stage == _S_TAKEOFF:
-                    phase = _TAKEOFF
-                elif stage == _S_LAND:
-                    phase = _LANDING
-                elif speed < HOVER_SPEED:
-                    phase = _HOVER
-                elif acc_f > ACCEL_THRESHOLD:
-                    phase = _ACCEL
+            if t >= next_book:
+                bdt = t - t_book
+                t_book = t
+                next_book += book_dt
+                if airborne:
+                    if bdt > 0.0:
+                        dv = sqrt((vx - pvx) ** 2 + (vy - pvy) ** 2 + (vz - pvz) ** 2) / bdt
+                        acc_f = a_filt * acc_f + (1.0 - a_filt) * dv
+                    if stage == _S_TAKEOFF:
+                        phase = _TAKEOFF
+                    elif stage == _S_LAND:
+                        phase = _LANDING
+                    elif speed < HOVER_SPEED:
+                        phase = _HOVER
+                    elif acc_f > ACCEL_THRESHOLD:
+                        phase = _ACCEL
+                    else:
+                        phase = _MOVE
+                    phase_time[phase] += book_dt
+                    dist += speed * book_dt
+                    if speed > vmax:
+                        vmax = speed
+                    if stage == _S_PILOT:
+                        ex, ey, ez = q[0] - sp[0], q[1] - sp[1], z - sp[2]
+                        e = sqrt(ex * ex + ey * ey + ez * ez)
+                        if e > track_max:
+                            track_max = e
                 else:
-                    phase = _MOVE
-                phase_time[phase] += dt
-                dist += speed * dt
-                if speed > vmax:
-                    vmax = speed
-                if stage == _S_PILOT:
-                    ex, ey, ez = q[0] - sp[0], q[1] - sp[1], z - sp[2]
-                    e = sqrt(ex * ex + ey * ey + ez * ez)
-                    if e > track_max:
-                        track_max = e
-            else:
-                phase = _LANDED
-            pvx, pvy, pvz = vx, vy, vz
+                    phase = _LANDED
+                pvx, pvy, pvz = vx, vy, vz
             # -- telemetry ------------------------------------------------
             if t >= next_rec:
                 next_rec += rec_dt
@@ -324,6 +348,15 @@ class _Run:
                     f"MuJoCo reset the simulation at t = {t:.3f} s (unstable physics: "
                     f"{_warnings(d)}); check the blueprint or lower the physics timestep")
         t = d.time
+        if t > t_e:   # charge the last partial energy interval
+            u.dt, u.t, u.airborne = t - t_e, t, airborne
+            u.thrust = act.tolist()
+            u.tx_bytes, u.tx_packets, u.rx_bytes, u.rx_packets = tx_b, tx_p, rx_b, rx_p
+            self.bytes_out += tx_b
+            self.bytes_in += rx_b
+            self.pkts_out += tx_p
+            self.pkts_in += rx_p
+            energy_j += meter.step(u) * (t - t_e)
         self.t_final = t
         self.phase_time = phase_time
         self.dist, self.vmax, self.track_max = dist, vmax, track_max

@@ -8,13 +8,28 @@ actuator on its site: force along the rotor axis and reaction torque
 clamped to [0, max thrust]. Motor lag and saturation therefore run inside
 MuJoCo at the physics rate; Python only runs at the control rate. The lag is
 applied to thrust rather than rotor speed (a first-order approximation).
+
+Body drag is MuJoCo's ellipsoid fluid model, computed every physics step
+against the air velocity (``opt.wind``, which the mission updates with the
+gusts): a massless, non-colliding ellipsoid whose projected areas along the
+body axes equal the blueprint's Cd*A, with only the blunt-drag coefficient
+set. MuJoCo's blunt drag is rho * C * A_proj * |v| * v, so C = 0.5 gives
+1/2 rho (Cd A) |v| v along each axis (checked in tests/test_physics.py).
+The ellipsoid model also adds added-mass forces, proportional to the
+ellipsoid's volume: a drone is not an ellipsoidal hull, and at 10 m/s the
+resulting Munk moment rivals the Mavic's control authority. Drag scales with
+C * area and added mass with volume, so the ellipsoid is shrunk by
+``AERO_SCALE`` and C raised by 1 / AERO_SCALE^2: same drag, added mass / 1000.
 """
 
 from __future__ import annotations
 
 import mujoco
 
+import math
+
 from ..airframe.drone import G
+from ..energy.components import RHO_SEA_LEVEL
 
 
 def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:
@@ -23,6 +38,8 @@ def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:
     spec.option.timestep = physics_dt
     spec.option.gravity = [0.0, 0.0, -G]
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
+    spec.option.density = RHO_SEA_LEVEL
+    spec.option.viscosity = 0.0
     (world if world is not None else _EMPTY).add_to_spec(spec)
     af = drone.airframe
     L, W, H = af.body_size_m
@@ -34,6 +51,11 @@ def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:
     body.ipos = [0.0, 0.0, 0.0]
     body.add_geom(name="hull", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.5 * L, 0.5 * W, 0.5 * H],
                   rgba=[0.25, 0.25, 0.28, 1], friction=[1.0, 0.005, 0.0001])
+    ax, ay, az = (AERO_SCALE * r for r in drag_ellipsoid(af.drag_area_m2))
+    aero = body.add_geom(name="aero", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=[ax, ay, az],
+                         contype=0, conaffinity=0, group=3, mass=0.0, rgba=[0, 0, 0, 0])
+    aero.fluid_ellipsoid = 1
+    aero.fluid_coefs = [0.5 / AERO_SCALE ** 2, 0.0, 0.0, 0.0, 0.0]
     k = drone.rotor.torque_coeff / drone.rotor.thrust_coeff
     r_prop = 0.5 * drone.rotor.diameter_m
     fmax = drone.rotor.max_thrust_n
@@ -54,6 +76,16 @@ def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:
         act.ctrllimited = 1
         act.ctrlrange = [0.0, fmax]
     return spec
+
+
+AERO_SCALE = 0.1
+
+
+def drag_ellipsoid(cda):
+    """Semi-axes (a, b, c) whose projected areas pi*b*c, pi*a*c, pi*a*b equal CdA x, y, z."""
+    cx, cy, cz = cda
+    return (math.sqrt(cy * cz / (math.pi * cx)), math.sqrt(cx * cz / (math.pi * cy)),
+            math.sqrt(cx * cy / (math.pi * cz)))
 
 
 class _Empty:

@@ -55,6 +55,11 @@ class CascadedController:
         self.a_up = max(0.5, 0.8 * (tw - 1.0) * G)   # keep 20% of the margin for attitude
         self.a_down = 0.6 * G
         self.i_lim = 0.3 * G
+        # drag feed-forward: the reference velocity's expected body drag (still air),
+        # 1/2 rho CdA / m with the frontal CdA horizontally and the top CdA vertically
+        from ..energy.components import RHO_SEA_LEVEL
+        self.kd_h = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[0] / self.mass
+        self.kd_v = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[2] / self.mass
         # allocation: [T, tau_x, tau_y, tau_z] = A f
         k = rot.torque_coeff / rot.thrust_coeff
         lay = drone.rotor_layout()
@@ -69,6 +74,7 @@ class CascadedController:
         self.reset()
 
     def reset(self):
+        self.R = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
         self.ix = self.iy = self.iz = 0.0
         self.collective = 0.0
         self.f = [0.0] * self.n
@@ -86,11 +92,14 @@ class CascadedController:
         vsx = sp[3] + kp * (sp[0] - x)
         vsy = sp[4] + kp * (sp[1] - y)
         vsz = sp[5] + kp * (sp[2] - z)
-        # velocity -> acceleration (PI + feedforward)
+        # velocity -> acceleration (PI + feedforward of the reference's acceleration and drag)
         ex, ey, ez = vsx - vx, vsy - vy, vsz - vz
-        ax = sp[6] + kv * ex + ki * self.ix
-        ay = sp[7] + kv * ey + ki * self.iy
-        az = sp[8] + kv * ez + ki * self.iz
+        rvx, rvy, rvz = sp[3], sp[4], sp[5]
+        rs = math.sqrt(rvx * rvx + rvy * rvy + rvz * rvz)
+        kh, kz = self.kd_h * rs, self.kd_v * rs
+        ax = sp[6] + kv * ex + ki * self.ix + kh * rvx
+        ay = sp[7] + kv * ey + ki * self.iy + kh * rvy
+        az = sp[8] + kv * ez + ki * self.iz + kz * rvz
         sat = False
         if az > self.a_up:
             az, sat = self.a_up, True
@@ -143,6 +152,8 @@ class CascadedController:
         tx = Jx * kr * (-ka * erx - wx) + (Jz - Jy) * wy * wz
         ty = Jy * kr * (-ka * ery - wy) + (Jx - Jz) * wz * wx
         tz = Jz * self.k_yaw_rate * (-self.k_yaw * erz - wz) + (Jy - Jx) * wx * wy
+        # row-major rotation matrix, shared with the mission (drag) to avoid recomputing it
+        self.R = (r0x, r1x, r2x, r0y, r1y, r2y, r0z, r1z, r2z)
         # collective thrust along the current body z
         m = self.mass
         T = m * (ax * r2x + ay * r2y + fz * r2z)
@@ -152,16 +163,12 @@ class CascadedController:
         return self._mix(T, tx, ty, tz)
 
     def _mix(self, T, tx, ty, tz):
-        B, fmax, f = self.B, self.fmax, self.f
-        ok = True
-        for i in range(self.n):
-            b = B[i]
-            fi = b[0] * T + b[1] * tx + b[2] * ty + b[3] * tz
-            f[i] = fi
-            if fi < 0.0 or fi > fmax:
-                ok = False
-        if ok:
+        B, fmax = self.B, self.fmax
+        f = [b0 * T + b1 * tx + b2 * ty + b3 * tz for b0, b1, b2, b3 in B]
+        if min(f) >= 0.0 and max(f) <= fmax:
+            self.f = f
             return f
+        f = self.f = [0.0] * self.n
         n = self.n
         base = [B[i][0] * T for i in range(n)]
         rp = [B[i][1] * tx + B[i][2] * ty for i in range(n)]

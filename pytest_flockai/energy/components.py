@@ -306,7 +306,7 @@ class Motors(Component):
             v = vi_state[i]
             if v <= 0.0:
                 v = math.sqrt(vh2)
-            for _ in range(3):  # Newton on f(v) = v sqrt(V_par^2 + (V_ax+v)^2) - vh^2, warm-started
+            for _ in range(2):  # Newton on f(v) = v sqrt(V_par^2 + (V_ax+v)^2) - vh^2, warm-started
                 s = vax + v
                 root = math.sqrt(vpar2 + s * s)
                 f = v * root - vh2
