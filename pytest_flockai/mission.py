@@ -164,8 +164,9 @@ class _Run:
         if wind is not None:
             mwind[:] = ms.wind.mean
         qpos, qvel, act, dctrl = d.qpos, d.qvel, d.act, d.ctrl
-        # accel limit of trajectories: a quarter of the thrust margin, at most 2.5 m/s^2
-        accel = min(2.5, 0.25 * (drone.thrust_to_weight - 1.0) * G)
+        # accel limit of trajectories: a quarter of the thrust margin, at most 2.5 m/s^2,
+        # and no more than the velocity loop can follow (1.5 x its bandwidth, in m/s^2 per m/s)
+        accel = min(2.5, 0.25 * (drone.thrust_to_weight - 1.0) * G, 1.5 * ctrl.k_vel)
         self.traj_accel = accel
         pilot = ms.pilot
         ground_z = float(qpos[2])
@@ -249,6 +250,11 @@ class _Run:
                 airborne = False
             else:
                 f = cupdate(q, v, sp)
+                if f[0] != f[0]:
+                    raise SimulationError(
+                        f"the controller produced NaN rotor thrust at t = {t:.3f} s (stage "
+                        f"{STAGES[stage]}, setpoint {[round(x, 3) for x in sp]}); a pilot or "
+                        f"estimate gave a non-finite value")
                 for i in rot_idx:
                     dctrl[i] = f[i]
             # -- air: MuJoCo applies body drag against opt.wind every substep ----

@@ -47,7 +47,7 @@ class CascadedController:
         self.k_yaw_rate = 0.5 * self.k_rate
         self.k_yaw = self.k_yaw_rate / CASCADE_RATIO
         self.k_vel = self.k_att / CASCADE_RATIO
-        self.k_vel_i = 0.15 * self.k_vel * self.k_vel
+        self.k_vel_i = 0.35 * self.k_vel * self.k_vel
         self.k_pos = self.k_vel / CASCADE_RATIO
         self.max_tilt = math.radians(af.max_tilt_deg)
         tw = drone.thrust_to_weight
