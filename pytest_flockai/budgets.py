@@ -158,7 +158,7 @@ def parse(kpi: str, text) -> Budget:
         raise ConfigError(f"{where}: {shown} is not allowed; allowed operators: "
                           f"{', '.join(OPERATORS)}")
     value = float(num)
-    if unit == "":
+    if unit == "" or (dim is not None and unit == dim and unit != "1"):
         factor, udim = 1.0, dim
     elif unit in UNITS:
         udim, factor = UNITS[unit]
