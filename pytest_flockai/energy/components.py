@@ -244,7 +244,8 @@ class Motors(Component):
       v_i = T / (2 rho A sqrt(V_par^2 + (V_ax + v_i)^2)) (Leishman 2006, eq. 5.22),
       so translational lift lowers it in forward flight;
     - induced power kappa T v_i, plus, for aft rotors, the share
-      ``wake_interference`` of the fore rotors' wake they ingest;
+      ``wake_interference`` of the fore rotors' wake they ingest, growing with
+      the square of the wake skew sin(chi) = V_par / sqrt(V_par^2 + (V_ax + v_i)^2);
     - climb and drag power T V_ax (the tilted disc's propulsive power equals body
       drag times airspeed, so parasitic power comes out of the simulated tilt);
     - profile power c0 T^1.5 (1 + 4.65 mu^2), mu = V_par / (Omega R) (Leishman
@@ -327,6 +328,7 @@ class Motors(Component):
             hx, hy = vx / vpar, vy / vpar
             vi_mean = wake_vi / n
             skew = vpar / math.sqrt(vpar2 + (vax + vi_mean) ** 2)
+            skew *= skew    # the skewed wake reaches the aft rotors only as it flattens
             ws = [max(0.0, -(dx * hx + dy * hy)) for dx, dy in self._dirs]
             tot = sum(ws)
             if tot > 0.0:

@@ -1,0 +1,302 @@
+"""Reports: the JSON report, baselines, artifacts and the text tables.
+
+JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
+
+    {
+      "schema": "pytest-flockai/1",
+      "created": "2024-01-01T12:00:00+00:00",     # wall clock of the writer, metadata only
+      "interrupted": false,                        # the session was interrupted
+      "exitstatus": 0,
+      "environment": {"python": "3.12.1", "implementation": "CPython",
+                      "platform": "Linux-...", "machine": "x86_64",
+                      "packages": {"pytest-flockai": "0.1.0", "pytest": "...",
+                                   "mujoco": "...", "numpy": "...", "pandas": "...",
+                                   "pytest-xdist": "..." or null}},
+      "options": {"baseline": path or null, "max_regression_pct": 5.0},
+      "summary": {"tests": 3, "passed": 2, "failed": 1, "flights": 4},
+      "tests": [
+        {"nodeid": "tests/test_x.py::test_hover",
+         "outcome": "passed" | "failed" | "error" | "skipped" | "xfailed" | "xpassed",
+         "error": null or "the flockai configuration error of this test",
+         "flights": [{"name": "flight", "end_reason": "landed", "sim_time_s": 45.9,
+                      "scenario": {...}, "kpis": {"flight_time_s": 45.96, ...}}],
+         "budgets": [{"flight": "flight", "kpi": "flight_time_s", "budget": ">= 24 min",
+                      "op": ">=", "limit": 1440.0, "actual": 45.96, "margin": -1394.04,
+                      "verdict": "pass" | "fail"}],
+         "regressions": [{"flight": "flight", "kpi": "energy_total_j", "baseline": 100.0,
+                          "actual": 110.0, "change_pct": 10.0, "better": "lower"}]}
+      ]
+    }
+
+Numbers are SI (see ``kpis.py``); non-finite numbers are written as ``null``.
+The file lists the tests that flew at least one mission or carry a ``kpi``
+marker. It is written atomically (a temporary file in the same directory, then
+``os.replace``), at the end of the session, also when tests fail or the
+session is interrupted.
+
+Baseline (``--flockai-save PATH``), schema ``"pytest-flockai-baseline/1"``::
+
+    {"schema": "pytest-flockai-baseline/1",
+     "tests": {"<nodeid>": {"<flight>": {"<kpi>": value, ...}, ...}, ...}}
+
+``load_baseline`` also accepts a bare ``{nodeid: {flight: kpis}}`` mapping and
+a JSON report (``pytest-flockai/1``).
+
+This module is used by the plugin only (it needs no pytest itself).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import os
+import platform
+import re
+import sys
+import tempfile
+from importlib import metadata
+from pathlib import Path
+
+from . import kpis as _kpis
+
+SCHEMA = "pytest-flockai/1"
+BASELINE_SCHEMA = "pytest-flockai-baseline/1"
+
+_PACKAGES = ("pytest-flockai", "pytest", "pytest-xdist", "mujoco", "numpy", "pandas",
+             "hypothesis", "onnxruntime", "opencv-python-headless")
+
+
+class ReportError(Exception):
+    """A report or baseline file cannot be read or written (the plugin makes it a UsageError)."""
+
+
+# -- JSON-ready values ----------------------------------------------------------
+def jsonable(obj):
+    """A copy of ``obj`` made of dict/list/str/int/float/bool/None only.
+
+    numpy scalars and arrays become Python numbers and lists, tuples become
+    lists, non-finite floats become None, anything else its ``str``.
+    """
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, int):
+        return int(obj)
+    if isinstance(obj, float):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, set, frozenset)):
+        return [jsonable(v) for v in obj]
+    tolist = getattr(obj, "tolist", None)     # numpy scalars and arrays
+    if callable(tolist):
+        try:
+            return jsonable(tolist())
+        except Exception:  # pragma: no cover - exotic objects
+            pass
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    return str(obj)
+
+
+def environment() -> dict:
+    pk = {}
+    for name in _PACKAGES:
+        try:
+            pk[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            pk[name] = None
+    return {"python": platform.python_version(), "implementation": platform.python_implementation(),
+            "platform": platform.platform(), "machine": platform.machine(),
+            "executable": sys.executable, "packages": pk}
+
+
+# -- files ------------------------------------------------------------------------
+def check_writable(path: Path, what: str) -> None:
+    """Raise ReportError unless ``path`` can be written (its directory exists and
+    accepts a new file; the path is not a directory)."""
+    path = Path(path)
+    if path.is_dir():
+        raise ReportError(f"{what} {str(path)!r} is a directory; give a file path")
+    parent = path.parent
+    if not parent.is_dir():
+        raise ReportError(f"{what} {str(path)!r}: directory {str(parent)!r} does not exist")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".check", dir=parent)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise ReportError(f"{what} {str(path)!r} is not writable: {exc.strerror or exc}") from None
+    if path.exists() and not os.access(path, os.W_OK):
+        raise ReportError(f"{what} {str(path)!r} exists and is not writable")
+
+
+def write_json_atomic(path: Path, data) -> None:
+    """Write ``data`` as JSON to ``path`` through a temporary file and ``os.replace``."""
+    path = Path(path)
+    text = json.dumps(jsonable(data), indent=2, sort_keys=False, allow_nan=False) + "\n"
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+# -- the JSON report -------------------------------------------------------------------
+def build_report(tests: list[dict], *, exitstatus=0, interrupted=False, options=None) -> dict:
+    """The ``pytest-flockai/1`` document from per-test entries (see the module doc)."""
+    summary: dict = {"tests": len(tests)}
+    for t in tests:
+        summary[t["outcome"]] = summary.get(t["outcome"], 0) + 1
+    summary["flights"] = sum(len(t.get("flights", ())) for t in tests)
+    return {
+        "schema": SCHEMA,
+        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "interrupted": bool(interrupted),
+        "exitstatus": int(exitstatus) if exitstatus is not None else None,
+        "environment": environment(),
+        "options": options or {},
+        "summary": summary,
+        "tests": tests,
+    }
+
+
+# -- baselines ---------------------------------------------------------------------------
+def baseline_from_tests(tests: list[dict]) -> dict:
+    """``{"schema": ..., "tests": {nodeid: {flight: kpis}}}`` for the tests that flew."""
+    out = {}
+    for t in tests:
+        flights = {f["name"]: dict(f["kpis"]) for f in t.get("flights", ())}
+        if flights:
+            out[t["nodeid"]] = flights
+    return {"schema": BASELINE_SCHEMA, "tests": out}
+
+
+def load_baseline(path: Path) -> dict:
+    """``{nodeid: {flight: {kpi: value}}}`` from a baseline or a JSON report.
+
+    Raises ReportError for a missing, unreadable or malformed file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ReportError(f"baseline file {str(path)!r} does not exist (write one with "
+                          f"--flockai-save PATH)")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ReportError(f"baseline file {str(path)!r} cannot be read: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise ReportError(f"baseline file {str(path)!r} is not valid JSON: {exc}") from None
+    if isinstance(data, dict) and data.get("schema") == SCHEMA:       # a JSON report
+        tests = data.get("tests")
+        if not isinstance(tests, list):
+            raise ReportError(f"baseline file {str(path)!r}: 'tests' must be a list")
+        try:
+            data = {t["nodeid"]: {f["name"]: f["kpis"] for f in t.get("flights", ())}
+                    for t in tests}
+        except (KeyError, TypeError) as exc:
+            raise ReportError(f"baseline file {str(path)!r}: malformed report ({exc})") from None
+    elif isinstance(data, dict) and "schema" in data:
+        if data["schema"] != BASELINE_SCHEMA:
+            raise ReportError(f"baseline file {str(path)!r}: schema {data['schema']!r} is not "
+                              f"supported; allowed: {BASELINE_SCHEMA!r}, {SCHEMA!r}")
+        data = data.get("tests")
+    if not isinstance(data, dict):
+        raise ReportError(f"baseline file {str(path)!r}: expected {{nodeid: {{flight: {{kpi: "
+                          f"value}}}}}}, got {type(data).__name__}")
+    for nodeid, flights in data.items():
+        if not isinstance(flights, dict) or not all(
+                isinstance(k, dict) and all(v is None or isinstance(v, (int, float))
+                                            for v in k.values()) for k in flights.values()):
+            raise ReportError(f"baseline file {str(path)!r}: entry {nodeid!r} must map flight "
+                              f"names to {{kpi: number}}")
+    return data
+
+
+def regressions(flights: dict, base: dict, max_regression_pct: float) -> list[dict]:
+    """KPIs of ``flights`` ({flight: kpis}) worse than ``base`` ({flight: kpis}) by
+    more than ``max_regression_pct`` percent, in each KPI's ``better`` direction.
+
+    KPIs without a better direction, missing on either side or non-finite are
+    not compared."""
+    out = []
+    frac = max_regression_pct / 100.0
+    for fname, kp in flights.items():
+        bk = base.get(fname)
+        if not bk:
+            continue
+        for kpi, b in bk.items():
+            info = _kpis.get(kpi)
+            a = kp.get(kpi)
+            if info is None or info.better is None or a is None or b is None:
+                continue
+            a, b = float(a), float(b)
+            if not (math.isfinite(a) and math.isfinite(b)):
+                continue
+            tol = abs(b) * frac + 1e-9 * max(1.0, abs(b))
+            worse = a < b - tol if info.better == "higher" else a > b + tol
+            if worse:
+                change = (a - b) / abs(b) * 100.0 if b != 0 else math.inf
+                out.append({"flight": fname, "kpi": kpi, "baseline": b, "actual": a,
+                            "change_pct": change, "better": info.better})
+    return out
+
+
+# -- artifacts -----------------------------------------------------------------------------
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_")[:150] or "test"
+
+
+def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
+    """Telemetry CSV and the flight's JSON (scenario, KPIs, events) under
+    ``directory/<nodeid>/``; returns that folder."""
+    folder = Path(directory) / _safe(nodeid)
+    folder.mkdir(parents=True, exist_ok=True)
+    result.telemetry.to_csv(folder / f"{_safe(flight)}.telemetry.csv")
+    write_json_atomic(folder / f"{_safe(flight)}.json", result.to_dict())
+    return folder
+
+
+# -- text ------------------------------------------------------------------------------------------
+_FRACTIONS = ("energy_share_", "battery_remaining", "cpu_utilization", "mem_utilization",
+              "detection_precision", "detection_recall")
+
+
+def format_kpi(name: str, value) -> str:
+    """A KPI value for humans: SI number with its unit; fractions as percent."""
+    if value is None:
+        return "n/a"
+    v = float(value)
+    if math.isnan(v):
+        return "nan"
+    info = _kpis.get(name)
+    unit = info.unit if info is not None else ""
+    if unit == "1":
+        if name.startswith(_FRACTIONS):
+            return f"{v * 100:.3g}%"
+        return f"{v:.6g}"
+    return f"{v:.4g} {unit}".rstrip()
+
+
+def table(headers: list[str], rows: list[list[str]], indent: str = "  ") -> str:
+    """A plain left-aligned text table."""
+    widths = [len(h) for h in headers]
+    for r in rows:
+        for i, c in enumerate(r):
+            widths[i] = max(widths[i], len(c))
+    lines = [indent + "  ".join(h.ljust(w) for h, w in zip(headers, widths)).rstrip(),
+             indent + "  ".join("-" * w for w in widths)]
+    lines += [indent + "  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+    return "\n".join(lines)
+
+
+__all__ = ["BASELINE_SCHEMA", "SCHEMA", "ReportError", "baseline_from_tests", "build_report",
+           "check_writable", "environment", "format_kpi", "jsonable", "load_baseline",
+           "regressions", "table", "write_artifacts", "write_json_atomic"]
