@@ -270,7 +270,8 @@ class FlockSession:
         entry["outcome"] = _outcome(entry["outcome"], report)
 
     def entries(self) -> list[dict]:
-        return list(self.tests.values())
+        """Per-test entries sorted by nodeid (the same order with or without xdist)."""
+        return [self.tests[k] for k in sorted(self.tests)]
 
     def pytest_sessionfinish(self, session, exitstatus):
         if self.worker:
@@ -311,10 +312,10 @@ class FlockSession:
             for f in e["flights"]:
                 kp = f["kpis"]
                 if verbose:
-                    rows = [[k, _report.format_kpi(k, v), _unit(k)] for k, v in kp.items()]
+                    rows = [[k, _report.format_kpi(k, v), _better(k)] for k, v in kp.items()]
                     tr.write_line(f"  flight {f['name']!r}: {f.get('end_reason')}, "
                                   f"drone {_drone_name(f)}")
-                    tr.write_line(_report.table(["KPI", "value", "unit"], rows, indent="    "))
+                    tr.write_line(_report.table(["KPI", "value", "better"], rows, indent="    "))
                 else:
                     names = [k for k in HEADLINE_KPIS if k in kp]
                     names += [b["kpi"] for b in budgets
@@ -343,9 +344,9 @@ def _outcome(prev: str, report) -> str:
     return prev
 
 
-def _unit(kpi):
+def _better(kpi):
     info = _kpis.get(kpi)
-    return info.unit if info is not None else ""
+    return (info.better or "") if info is not None else ""
 
 
 def _drone_name(flight: dict):
