@@ -1,0 +1,513 @@
+"""The pytest layer, end to end: generated test files run by pytester, real flights.
+
+Every generated test flies a Crazyflie hovering 1 m up for a couple of
+simulated seconds (well under a second of wall time per flight).
+"""
+
+import json
+import sys
+import xml.etree.ElementTree as ET
+
+import pytest
+
+HEADER = '''
+import pytest
+import pytest_flockai as fa
+
+
+def cf(duration=2.0, **kw):
+    """Quick settings: a short Crazyflie hover."""
+    return pytest.mark.flockai(drone="crazyflie-2-1",
+                               pilot=fa.pilots.Hover(altitude=1.0, duration=duration), **kw)
+
+
+def fly(duration=2.0, name=None, seed=0):
+    m = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=duration),
+                   seed=seed, name=name)
+    return m.run()
+'''
+
+
+def make(pytester, body, name="test_flights"):
+    return pytester.makepyfile(**{name: HEADER + body})
+
+
+def run(pytester, *args):
+    return pytester.runpytest_inprocess("-p", "no:cacheprovider", *args)
+
+
+def load(path):
+    return json.loads(path.read_text())
+
+
+def by_nodeid(report):
+    return {t["nodeid"].split("::")[-1]: t for t in report["tests"]}
+
+
+# -- budgets ------------------------------------------------------------------------------
+def test_passing_and_broken_budgets(pytester):
+    make(pytester, '''
+@cf()
+@pytest.mark.kpi(flight_time_s=">= 2 s", energy_share_proc="< 50%", crashed="== 0",
+                 energy_total_j="<= 2 Wh", max_speed_mps="<= 20 km/h")
+def test_within_budget(flight):
+    assert flight.kpis["crashed"] == 0
+
+@cf()
+@pytest.mark.kpi(flight_time_s=">= 24 min", crashed="== 0")
+def test_too_short(flight):
+    pass
+''')
+    res = run(pytester)
+    res.assert_outcomes(passed=1, failed=1)
+    out = res.stdout.str()
+    res.stdout.fnmatch_lines([
+        "*1 of 2 KPI budget(s) broken in test_flights.py::test_too_short*",
+        "*flight*KPI*budget*actual*margin*verdict*",
+        "*flight*flight_time_s*>= 24 min*min*-2?.* min*BROKEN*",
+        "*flight*crashed*== 0*0*0*ok*",
+    ])
+    assert "test_within_budget" not in out.split("= FAILURES =")[1].split("flockai KPIs")[0]
+
+
+def test_bad_markers_error_at_setup_before_anything_flies(pytester):
+    make(pytester, '''
+@cf()
+@pytest.mark.kpi(flight_tme_s=">= 24 min")
+def test_unknown_kpi(flight):
+    pass
+
+@cf()
+@pytest.mark.kpi(flight_time_s="=> 24 min")
+def test_bad_operator(flight):
+    pass
+
+@cf()
+@pytest.mark.kpi(flight_time_s=">= 24 minutes")
+def test_bad_unit(flight):
+    pass
+
+@cf()
+@pytest.mark.kpi(flight_time_s=">= 5 m")
+def test_wrong_dimension(flight):
+    pass
+
+@pytest.mark.flockai(drones="crazyflie-2-1")
+def test_bad_setting(flight):
+    pass
+
+@cf()
+def test_fine(flight):
+    pass
+''')
+    res = run(pytester, "--flockai-json", "report.json")
+    res.assert_outcomes(passed=1, errors=5)
+    res.stdout.fnmatch_lines([
+        "*ERROR at setup of test_unknown_kpi*",
+        "*bad @pytest.mark.kpi on test_flights.py::test_unknown_kpi: unknown KPI 'flight_tme_s'"
+        " (did you mean: flight_time_s*",
+        "*ERROR at setup of test_bad_operator*",
+        "*KPI flight_time_s: budget '=> 24 min': '=>' is not allowed; allowed operators: "
+        "<, <=, >, >=, ==*",
+        "*ERROR at setup of test_bad_unit*",
+        "*KPI flight_time_s: budget '>= 24 minutes': unknown unit 'minutes'*allowed for "
+        "flight_time_s: s, ms, min, h*",
+        "*ERROR at setup of test_wrong_dimension*",
+        "*unit 'm' measures length, but flight_time_s is in 's' (time)*",
+        "*ERROR at setup of test_bad_setting*",
+        "*bad @pytest.mark.flockai*unknown setting 'drones' (did you mean: drone*",
+    ])
+    assert "Traceback" not in res.stdout.str()
+    tests = by_nodeid(load(pytester.path / "report.json"))
+    for name in ("test_unknown_kpi", "test_bad_operator", "test_bad_unit", "test_wrong_dimension"):
+        assert tests[name]["outcome"] == "error"
+        assert tests[name]["flights"] == []          # the flight fixture never ran
+        assert "bad @pytest.mark.kpi" in tests[name]["error"]
+    assert len(tests["test_fine"]["flights"]) == 1
+
+
+def test_several_flights_per_test(pytester):
+    make(pytester, '''
+@pytest.mark.kpi(crashed="== 0")
+@pytest.mark.kpi(flight_time_s=">= 6 s", flight="long")
+def test_named_budget():
+    fly(duration=1.0, name="short")
+    fly(duration=5.0, name="long")
+
+@pytest.mark.kpi(flight_time_s=">= 6 s")
+def test_every_flight_checked():
+    fly(duration=5.0)
+    fly(duration=1.0)
+
+@cf()
+@pytest.mark.kpi(crashed="== 0")
+def test_fixture_and_body(flight):
+    again = fly(duration=1.0)
+    assert flight is not again
+''')
+    res = run(pytester, "--flockai-json", "report.json")
+    res.assert_outcomes(passed=2, failed=1)
+    res.stdout.fnmatch_lines([
+        "*1 of 2 KPI budget(s) broken in test_flights.py::test_every_flight_checked*",
+        "*flight  *flight_time_s*>= 6 s*ok*",
+        "*flight-2*flight_time_s*>= 6 s*BROKEN*",
+    ])
+    tests = by_nodeid(load(pytester.path / "report.json"))
+    named = tests["test_named_budget"]
+    assert [f["name"] for f in named["flights"]] == ["short", "long"]
+    assert sorted((b["flight"], b["kpi"]) for b in named["budgets"]) == [
+        ("long", "crashed"), ("long", "flight_time_s"), ("short", "crashed")]
+    assert [f["name"] for f in tests["test_every_flight_checked"]["flights"]] == ["flight",
+                                                                                  "flight-2"]
+    fb = tests["test_fixture_and_body"]["flights"]
+    assert [f["name"] for f in fb] == ["flight", "flight-2"]
+    assert fb[0]["kpis"]["flight_time_s"] > fb[1]["kpis"]["flight_time_s"]
+
+
+def test_marker_misuse_found_after_the_body(pytester):
+    make(pytester, '''
+@pytest.mark.kpi(flight_time_s=">= 1 s")
+def test_flew_nothing():
+    pass
+
+@pytest.mark.kpi(flight_time_s=">= 1 s", flight="lond")
+def test_no_such_flight():
+    fly(name="long")
+
+@cf()
+@pytest.mark.kpi(inference_count=">= 1")
+def test_kpi_not_produced(flight):
+    pass
+''')
+    res = run(pytester)
+    res.assert_outcomes(failed=3)
+    res.stdout.fnmatch_lines([
+        "*test_flights.py::test_flew_nothing has @pytest.mark.kpi budgets (flight_time_s) but "
+        "flew no mission*",
+        "*@pytest.mark.kpi(flight='lond') on test_flights.py::test_no_such_flight: no flight "
+        "named 'lond' (did you mean: long?); this test flew: long*",
+        "*budget inference_count '>= 1': flight 'flight' did not produce KPI "
+        "'inference_count'*it produced: flight_time_s*",
+    ])
+
+
+# -- reports ----------------------------------------------------------------------------------
+def test_json_report_is_written_when_tests_fail(pytester):
+    make(pytester, '''
+@cf()
+@pytest.mark.kpi(flight_time_s=">= 24 min")
+def test_broken(flight):
+    pass
+
+@cf(seed=3)
+def test_plain(flight):
+    pass
+
+def test_no_flight():
+    pass
+''')
+    (pytester.path / "out").mkdir()
+    res = run(pytester, "--flockai-json", "out/report.json")
+    res.assert_outcomes(passed=2, failed=1)
+    report = load(pytester.path / "out" / "report.json")
+    assert report["schema"] == "pytest-flockai/1"
+    assert report["interrupted"] is False
+    env = report["environment"]
+    assert env["python"] == "%d.%d.%d" % sys.version_info[:3]
+    assert env["platform"]
+    assert {"pytest-flockai", "pytest", "mujoco", "numpy"} <= set(env["packages"])
+    assert env["packages"]["pytest"] == pytest.__version__
+    tests = by_nodeid(report)
+    assert set(tests) == {"test_broken", "test_plain"}   # only tests that flew
+    assert report["summary"] == {"tests": 2, "passed": 1, "failed": 1, "flights": 2}
+    broken = tests["test_broken"]
+    assert broken["outcome"] == "failed"
+    assert broken["nodeid"] == "test_flights.py::test_broken"
+    (b,) = broken["budgets"]
+    assert (b["kpi"], b["budget"], b["limit"], b["verdict"], b["flight"]) == (
+        "flight_time_s", ">= 24 min", 1440.0, "fail", "flight")
+    assert b["actual"] == broken["flights"][0]["kpis"]["flight_time_s"]
+    assert b["margin"] == pytest.approx(b["actual"] - 1440.0)
+    (f,) = tests["test_plain"]["flights"]
+    assert f["name"] == "flight"
+    assert f["scenario"]["seed"] == 3
+    assert f["scenario"]["drone"]["name"] == "crazyflie-2-1"
+    assert f["kpis"]["crashed"] == 0.0 and f["kpis"]["flight_time_s"] > 2.0
+    assert tests["test_plain"]["budgets"] == []
+    assert not list((pytester.path / "out").glob(".*"))      # no temporary file left
+
+
+def test_json_report_is_written_when_the_session_is_interrupted(pytester):
+    make(pytester, '''
+@cf()
+def test_first(flight):
+    pass
+
+def test_interrupt():
+    raise KeyboardInterrupt
+
+def test_never_run():
+    pass
+''')
+    res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--flockai-json", "report.json",
+                                       no_reraise_ctrlc=True)
+    assert res.ret == pytest.ExitCode.INTERRUPTED
+    report = load(pytester.path / "report.json")
+    assert report["interrupted"] is True
+    assert [t["nodeid"] for t in report["tests"]] == ["test_flights.py::test_first"]
+    assert report["tests"][0]["flights"][0]["kpis"]["flight_time_s"] > 0
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--flockai-json", "missing-dir/report.json", "directory * does not exist"),
+    ("--flockai-json", ".", "is a directory"),
+    ("--flockai-save", "missing-dir/base.json", "directory * does not exist"),
+    ("--flockai-baseline", "missing.json", "baseline file * does not exist*"),
+    ("--flockai-baseline", "corrupt.json", "baseline file * is not valid JSON*"),
+    ("--flockai-max-regression", "lots", "--flockai-max-regression = 'lots' is not allowed*"),
+])
+def test_bad_options_are_usage_errors_before_any_flight(pytester, option, value, message):
+    make(pytester, '''
+def test_flies():
+    fly()
+    open("flew.txt", "w").close()
+''')
+    (pytester.path / "corrupt.json").write_text("{not json")
+    res = run(pytester, option, value)
+    assert res.ret == pytest.ExitCode.USAGE_ERROR
+    res.stderr.fnmatch_lines([f"ERROR: *{message}"])
+    assert not (pytester.path / "flew.txt").exists()
+
+
+def test_junit_properties(pytester):
+    make(pytester, '''
+@cf()
+def test_one(flight):
+    pass
+
+def test_two():
+    fly(name="a")
+    fly(name="b", duration=1.0)
+
+def test_none():
+    pass
+''')
+    res = run(pytester, "--junitxml", "junit.xml", "--flockai-json", "report.json")
+    res.assert_outcomes(passed=3)
+    root = ET.parse(pytester.path / "junit.xml").getroot()
+    props = {tc.get("name"): {p.get("name"): p.get("value") for p in tc.iter("property")}
+             for tc in root.iter("testcase")}
+    tests = by_nodeid(load(pytester.path / "report.json"))
+    kpis = tests["test_one"]["flights"][0]["kpis"]
+    assert set(props["test_one"]) == {f"flockai.{k}" for k in kpis}
+    assert float(props["test_one"]["flockai.flight_time_s"]) == kpis["flight_time_s"]
+    assert props["test_two"]["flockai.a.flight_time_s"]
+    assert props["test_two"]["flockai.b.energy_total_j"]
+    assert "flockai.flight_time_s" not in props["test_two"]
+    assert props["test_none"] == {}
+
+
+def test_terminal_summary_compact_and_verbose(pytester):
+    make(pytester, '''
+@cf()
+@pytest.mark.kpi(distance_m="<= 10 m")
+def test_hover(flight):
+    pass
+''')
+    res = run(pytester)
+    res.stdout.fnmatch_lines(["*= flockai KPIs =*", "test_flights.py::test_hover (passed)",
+                              "  flight: flight_time_s=* s  energy_total_j=* J*distance_m=* m"])
+    assert "endurance_s" not in res.stdout.str()
+    res = run(pytester, "-v")
+    res.stdout.fnmatch_lines(["*= flockai KPIs =*", "*flight 'flight': landed, drone crazyflie-2-1",
+                              "*KPI*value*better*", "*endurance_s*s*higher*",
+                              "*distance_m*<= 10 m*ok*"])
+
+
+# -- baselines ---------------------------------------------------------------------------------------------
+def test_baseline_fails_only_the_regressed_test(pytester):
+    make(pytester, '''
+@cf()
+def test_steady(flight):
+    pass
+
+@cf()
+def test_regressed(flight):
+    pass
+
+@cf()
+def test_new(flight):
+    pass
+''')
+    res = run(pytester, "--flockai-save", "base.json")
+    res.assert_outcomes(passed=3)
+    base = load(pytester.path / "base.json")
+    assert base["schema"] == "pytest-flockai-baseline/1"
+    nodeid = "test_flights.py::test_regressed"
+    assert set(base["tests"]) == {"test_flights.py::test_steady", nodeid,
+                                  "test_flights.py::test_new"}
+    energy = base["tests"][nodeid]["flight"]["energy_total_j"]
+    # the baseline says this test used to need 20% less energy and fly 20% longer
+    base["tests"][nodeid]["flight"]["energy_total_j"] = energy * 0.8
+    base["tests"][nodeid]["flight"]["endurance_s"] *= 1.2
+    # a 3% worse energy is within the default 5%; KPIs without a better direction are ignored
+    base["tests"]["test_flights.py::test_steady"]["flight"]["energy_total_j"] *= 0.97
+    base["tests"]["test_flights.py::test_steady"]["flight"]["distance_m"] *= 0.5
+    del base["tests"]["test_flights.py::test_new"]
+    (pytester.path / "base.json").write_text(json.dumps(base))
+
+    res = run(pytester, "--flockai-baseline", "base.json", "--flockai-json", "r.json")
+    res.assert_outcomes(passed=2, failed=1)
+    res.stdout.fnmatch_lines([
+        "*2 KPI regression(s) against baseline *base.json (max 5%) in "
+        "test_flights.py::test_regressed:",
+        "*flight*KPI*baseline*actual*change*better*",
+        "*flight*energy_total_j*J*J*+25.00%*lower*",
+        "*flight*endurance_s*s*s*-16.67%*higher*",
+        "FAILED test_flights.py::test_regressed*",
+    ])
+    tests = by_nodeid(load(pytester.path / "r.json"))
+    assert [r["kpi"] for r in tests["test_regressed"]["regressions"]] == ["energy_total_j",
+                                                                          "endurance_s"]
+    assert tests["test_steady"]["regressions"] == []
+
+    res = run(pytester, "--flockai-baseline", "base.json", "--flockai-max-regression", "30")
+    res.assert_outcomes(passed=3)
+
+
+# -- fixtures, markers, hooks, ini ----------------------------------------------------------------------
+def test_fixture_defaults_and_quick_settings(pytester):
+    make(pytester, '''
+def test_defaults(drone, world, pilot, tasks, probes, mission):
+    assert drone.name == "dji-mavic-2-pro"
+    assert world is None and tasks == () and probes is None
+    assert isinstance(pilot, fa.pilots.Hover)
+    assert (pilot.altitude, pilot.duration) == (10.0, 30.0)
+    assert isinstance(mission, fa.Mission)
+    assert (mission.drone, mission.pilot, mission.seed, mission.until) == (drone, pilot, 0, "landed")
+
+@cf(seed=7, until=3.0, wind=(1.0, 0.0, 0.0), name="gusty")
+def test_settings(mission, drone):
+    assert drone.name == "crazyflie-2-1"
+    assert (mission.seed, mission.until, mission.name) == (7, 3.0, "gusty")
+    assert mission.wind.mean == (1.0, 0.0, 0.0) or list(mission.wind.mean) == [1.0, 0.0, 0.0]
+
+@pytest.mark.flockai(seed=1)
+class TestClassMarker:
+    @pytest.mark.flockai(seed=2)
+    def test_closest_wins(self, mission):
+        assert mission.seed == 2
+
+    def test_class(self, mission):
+        assert mission.seed == 1
+
+@pytest.fixture
+def pilot():
+    return fa.pilots.Hover(altitude=1.0, duration=1.0)
+
+@pytest.mark.flockai(drone="crazyflie-2-1")
+def test_override_fixture(flight):
+    assert flight.scenario["pilot"]["duration"] == 1.0
+''')
+    res = run(pytester, "--flockai-json", "report.json")
+    res.assert_outcomes(passed=5)
+    tests = by_nodeid(load(pytester.path / "report.json"))
+    assert list(tests) == ["test_override_fixture"]    # building a mission flies nothing
+
+
+def test_hooks_adjust_mission_and_derived_kpis(pytester):
+    pytester.makeconftest('''
+def pytest_flockai_adjust_mission(mission, item):
+    if item.get_closest_marker("slow_seed"):
+        mission.seed = 42
+
+def pytest_flockai_derived_kpis(result, item):
+    k = result.kpis
+    return {"probe.hover_share": k["hover_time_s"] / k["flight_time_s"]}
+''')
+    pytester.makeini("[pytest]\nmarkers = slow_seed\n")
+    make(pytester, '''
+@cf()
+@pytest.mark.slow_seed
+@pytest.mark.kpi({"probe.hover_share": "> 10%"})
+def test_derived(flight):
+    assert flight.scenario["seed"] == 42
+    assert 0 < flight.kpis["probe.hover_share"] < 1
+
+@cf()
+@pytest.mark.kpi({"probe.hover_share": "> 99%"})
+def test_derived_broken(flight):
+    pass
+''')
+    res = run(pytester, "--flockai-json", "report.json")
+    res.assert_outcomes(passed=1, failed=1)
+    res.stdout.fnmatch_lines(["*probe.hover_share*> 99%*BROKEN*"])
+    tests = by_nodeid(load(pytester.path / "report.json"))
+    assert "probe.hover_share" in tests["test_derived"]["flights"][0]["kpis"]
+
+
+def test_ini_options(pytester):
+    pytester.makeini("[pytest]\nflockai_json = reports/flockai.json\n"
+                     "flockai_save = base.json\nflockai_max_regression = 2.5\n")
+    (pytester.path / "reports").mkdir()
+    make(pytester, '''
+@cf()
+def test_hover(flight):
+    pass
+''')
+    res = run(pytester)
+    res.assert_outcomes(passed=1)
+    report = load(pytester.path / "reports" / "flockai.json")
+    assert report["options"]["max_regression_pct"] == 2.5
+    assert (pytester.path / "base.json").exists()
+    # the command line wins over the ini file
+    res = run(pytester, "--flockai-json", "cli.json")
+    assert (pytester.path / "cli.json").exists()
+    res = run(pytester, "--help")
+    res.stdout.fnmatch_lines(["*--flockai-json=PATH*", "*--flockai-artifacts=DIR*",
+                              "*flockai_max_regression*"])
+
+
+def test_artifacts(pytester):
+    make(pytester, '''
+@cf()
+def test_hover(flight):
+    pass
+''')
+    res = run(pytester, "--flockai-artifacts", "art")
+    res.assert_outcomes(passed=1)
+    folder = pytester.path / "art" / "test_flights.py_test_hover"
+    assert (folder / "flight.telemetry.csv").read_text().startswith("t,x,y,z")
+    assert load(folder / "flight.json")["kpis"]["flight_time_s"] > 0
+
+
+# -- xdist ---------------------------------------------------------------------------------------------------
+def test_xdist_reports_equal_the_serial_ones(pytester):
+    pytest.importorskip("xdist")
+    make(pytester, "".join(f'''
+@cf(seed={i}, duration={1.0 + i % 3})
+@pytest.mark.kpi(crashed="== 0")
+def test_hover_{i}(flight):
+    fly(duration=1.0, name="extra", seed={i})
+''' for i in range(6)))
+    serial = run(pytester, "--flockai-json", "serial.json", "--junitxml", "serial.xml")
+    serial.assert_outcomes(passed=6)
+    par = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-n", "2", "--flockai-json",
+                                        "parallel.json", "--junitxml", "parallel.xml")
+    par.assert_outcomes(passed=6)
+    par.stdout.fnmatch_lines(["*2 workers*", "*= flockai KPIs =*"])
+
+    def kpis(path):
+        return {t["nodeid"]: {f["name"]: f["kpis"] for f in t["flights"]}
+                for t in load(path)["tests"]}
+
+    a, b = kpis(pytester.path / "serial.json"), kpis(pytester.path / "parallel.json")
+    assert len(a) == 6 and all(set(v) == {"flight", "extra"} for v in a.values())
+    assert a == b
+
+    def props(path):
+        return {tc.get("name"): {p.get("name"): p.get("value") for p in tc.iter("property")}
+                for tc in ET.parse(path).getroot().iter("testcase")}
+
+    pa, pb = props(pytester.path / "serial.xml"), props(pytester.path / "parallel.xml")
+    assert pa == pb and pa["test_hover_0"]["flockai.extra.crashed"] == "0.0"
