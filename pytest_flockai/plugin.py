@@ -54,6 +54,7 @@ from .airframe import drone as _make_drone
 from .control.pilots import Hover as _Hover
 from .errors import ConfigError, close_matches
 from .mission import Mission
+from .result import FlightResult
 
 # ---------------------------------------------------------------------------
 # options
@@ -145,8 +146,8 @@ class TestState:
 
     __test__ = False  # not a pytest test class
 
-    def record(self, mission, result):
-        base = getattr(mission, "name", None) or "flight"
+    def record(self, mission, result, name: str | None = None):
+        base = str(name or getattr(mission, "name", None) or "flight")
         taken = {f.name for f in self.flights}
         name, k = base, 1
         while name in taken:
@@ -223,6 +224,7 @@ class FlockSession:
     def __init__(self, config):
         self.config = config
         self.worker = hasattr(config, "workerinput")
+        self.tests: dict[str, dict] = {}   # nodeid -> entry (controller only)
         self.json_path = _path_option(config, "json")
         self.save_path = _path_option(config, "save")
         self.baseline_path = _path_option(config, "baseline")
@@ -236,6 +238,8 @@ class FlockSession:
             raise pytest.UsageError(f"--flockai-max-regression = {v!r} is not allowed; "
                                     f"expected a percentage >= 0, e.g. 5")
         self.baseline = None
+        if getattr(config.option, "help", False) or getattr(config.option, "version", False):
+            return   # pytest --help must work whatever the options say
         try:
             if not self.worker:
                 for path, what in ((self.json_path, "--flockai-json"),
@@ -251,7 +255,6 @@ class FlockSession:
             raise pytest.UsageError(f"pytest-flockai: {exc}") from None
         except OSError as exc:
             raise pytest.UsageError(f"pytest-flockai: --flockai-artifacts: {exc}") from None
-        self.tests: dict[str, dict] = {}   # nodeid -> entry, in report order
 
     # -- collecting reports (on the controller: also the ones xdist workers send) --
     def pytest_runtest_logreport(self, report):
@@ -453,9 +456,21 @@ def pytest_runtest_setup(item):
         pytest.fail(st.error, pytrace=False)
 
 
+def _adopt_fixture_flights(item, st: TestState) -> None:
+    """FlightResults the test receives from fixtures but did not fly itself (a
+    module- or session-scoped flight fixture) count as its flights, named after
+    the fixture."""
+    mine = {id(f.result) for f in st.flights}
+    for argname, value in (getattr(item, "funcargs", None) or {}).items():
+        if isinstance(value, FlightResult) and id(value) not in mine:
+            st.record(None, value, name=argname)
+            mine.add(id(value))
+
+
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_call(item):
     st = _state(item)
+    _adopt_fixture_flights(item, st)
     try:
         result = yield
     except BaseException:

@@ -260,7 +260,7 @@ def test_never_run():
 
 @pytest.mark.parametrize("option, value, message", [
     ("--flockai-json", "missing-dir/report.json", "directory * does not exist"),
-    ("--flockai-json", ".", "is a directory"),
+    ("--flockai-json", ".", "is a directory; give a file path"),
     ("--flockai-save", "missing-dir/base.json", "directory * does not exist"),
     ("--flockai-baseline", "missing.json", "baseline file * does not exist*"),
     ("--flockai-baseline", "corrupt.json", "baseline file * is not valid JSON*"),
@@ -401,13 +401,14 @@ class TestClassMarker:
     def test_class(self, mission):
         assert mission.seed == 1
 
-@pytest.fixture
-def pilot():
-    return fa.pilots.Hover(altitude=1.0, duration=1.0)
+class TestOverride:
+    @pytest.fixture
+    def pilot(self):
+        return fa.pilots.Hover(altitude=1.0, duration=1.0)
 
-@pytest.mark.flockai(drone="crazyflie-2-1")
-def test_override_fixture(flight):
-    assert flight.scenario["pilot"]["duration"] == 1.0
+    @pytest.mark.flockai(drone="crazyflie-2-1")
+    def test_override_fixture(self, flight):
+        assert flight.scenario["pilot"]["duration"] == 1.0
 ''')
     res = run(pytester, "--flockai-json", "report.json")
     res.assert_outcomes(passed=5)

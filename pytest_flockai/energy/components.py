@@ -183,9 +183,12 @@ class RadioStates(Component):
         dt = u.dt
         if dt <= 0.0:
             return (self.idle_w, 0.0, 0.0)
-        t_tx = min(dt, u.tx_bytes * 8.0 / self.bitrate_bps)
-        t_rx = min(dt - t_tx, u.rx_bytes * 8.0 / self.bitrate_bps)
-        return (self.idle_w * (dt - t_tx - t_rx) / dt, self.tx_w * t_tx / dt, self.rx_w * t_rx / dt)
+        # every byte's airtime is charged in full (a short tick must not lose it);
+        # only the idle time is what is left of the tick
+        t_tx = u.tx_bytes * 8.0 / self.bitrate_bps
+        t_rx = u.rx_bytes * 8.0 / self.bitrate_bps
+        idle = max(0.0, dt - t_tx - t_rx)
+        return (self.idle_w * idle / dt, self.tx_w * t_tx / dt, self.rx_w * t_rx / dt)
 
     def power(self, u):
         return sum(self.power_parts(u))
