@@ -203,7 +203,7 @@ class _Run:
         self._rec_alloc(int(min(est, ms.max_time_s) * ms.telemetry_hz) + 16, n_rot)
         energy_j = 0.0
         e_period = 1.0 / ms.energy_hz
-        next_e = 0.0
+        next_e = e_period        # the first interval (0, e_period] is charged at its end
         t_e = 0.0
         power = 0.0
         tx_b = tx_p = rx_b = rx_p = 0

@@ -229,6 +229,10 @@ class FlockSession:
         self.save_path = _path_option(config, "save")
         self.baseline_path = _path_option(config, "baseline")
         self.artifacts = _path_option(config, "artifacts")
+        self.max_regression = DEFAULT_MAX_REGRESSION
+        self.baseline = None
+        if getattr(config.option, "help", False) or getattr(config.option, "version", False):
+            return   # pytest --help must work whatever the options say
         v, _ = _option(config, "max-regression")
         try:
             self.max_regression = DEFAULT_MAX_REGRESSION if v is None else float(v)
@@ -237,9 +241,6 @@ class FlockSession:
         if not (self.max_regression >= 0 and math.isfinite(self.max_regression)):
             raise pytest.UsageError(f"--flockai-max-regression = {v!r} is not allowed; "
                                     f"expected a percentage >= 0, e.g. 5")
-        self.baseline = None
-        if getattr(config.option, "help", False) or getattr(config.option, "version", False):
-            return   # pytest --help must work whatever the options say
         try:
             if not self.worker:
                 for path, what in ((self.json_path, "--flockai-json"),

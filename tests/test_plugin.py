@@ -491,7 +491,9 @@ def test_xdist_reports_equal_the_serial_ones(pytester):
 def test_hover_{i}(flight):
     fly(duration=1.0, name="extra", seed={i})
 ''' for i in range(6)))
-    serial = run(pytester, "--flockai-json", "serial.json", "--junitxml", "serial.xml")
+    # both in fresh processes: each imports the same core, like CI would
+    serial = pytester.runpytest_subprocess("-p", "no:cacheprovider", "--flockai-json",
+                                           "serial.json", "--junitxml", "serial.xml")
     serial.assert_outcomes(passed=6)
     par = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-n", "2", "--flockai-json",
                                         "parallel.json", "--junitxml", "parallel.xml")
@@ -512,3 +514,37 @@ def test_hover_{i}(flight):
 
     pa, pb = props(pytester.path / "serial.xml"), props(pytester.path / "parallel.xml")
     assert pa == pb and pa["test_hover_0"]["flockai.extra.crashed"] == "0.0"
+
+
+def test_shared_flight_fixture_counts_for_every_test_using_it(pytester):
+    make(pytester, '''
+@pytest.fixture(scope="module")
+def survey():
+    return fly(duration=3.0, name="survey")
+
+@pytest.mark.kpi(flight_time_s=">= 3 s")
+def test_first(survey):
+    pass
+
+@pytest.mark.kpi(flight_time_s=">= 24 min")
+def test_second(survey):
+    pass
+''')
+    res = run(pytester, "--flockai-json", "report.json")
+    res.assert_outcomes(passed=1, failed=1)
+    tests = by_nodeid(load(pytester.path / "report.json"))
+    # flown during test_first's setup (named by the mission), adopted by test_second
+    assert [f["name"] for f in tests["test_first"]["flights"]] == ["survey"]
+    assert [f["name"] for f in tests["test_second"]["flights"]] == ["survey"]
+    assert tests["test_first"]["flights"][0]["kpis"] == tests["test_second"]["flights"][0]["kpis"]
+    assert tests["test_second"]["budgets"][0]["verdict"] == "fail"
+
+
+def test_help_works_with_bad_options_in_the_ini_file(pytester):
+    pytester.makeini("[pytest]\nflockai_json = missing/report.json\n"
+                     "flockai_baseline = missing.json\nflockai_max_regression = -1\n")
+    res = run(pytester, "--help")
+    assert res.ret == 0
+    res.stdout.fnmatch_lines(["*pytest-flockai*", "*--flockai-baseline=PATH*"])
+    res = run(pytester)
+    assert res.ret == pytest.ExitCode.USAGE_ERROR
