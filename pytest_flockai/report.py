@@ -22,13 +22,18 @@ JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
                       "scenario": {...}, "kpis": {"flight_time_s": 45.96, ...}}],
          "budgets": [{"flight": "flight", "kpi": "flight_time_s", "budget": ">= 24 min",
                       "op": ">=", "limit": 1440.0, "actual": 45.96, "margin": -1394.04,
-                      "verdict": "pass" | "fail"}],
+                      "verdict": "pass" | "fail",
+                      "actual_text": "0.766 min", "margin_text": "-23.23 min"}],
          "regressions": [{"flight": "flight", "kpi": "energy_total_j", "baseline": 100.0,
                           "actual": 110.0, "change_pct": 10.0, "better": "lower"}]}
       ]
     }
 
-Numbers are SI (see ``kpis.py``); non-finite numbers are written as ``null``.
+Numbers are SI (see ``kpis.py``; ``limit``, ``actual`` and ``margin`` too, the
+``*_text`` fields repeat them in the unit the budget was written in); the
+margin is positive inside the budget. Non-finite numbers are written as
+``null``. ``budgets`` is empty when the test body failed before the check or
+the marker was bad (then ``error`` says why).
 The file lists the tests that flew at least one mission or carry a ``kpi``
 marker. It is written atomically (a temporary file in the same directory, then
 ``os.replace``), at the end of the session, also when tests fail or the

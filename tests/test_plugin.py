@@ -425,6 +425,9 @@ def pytest_flockai_adjust_mission(mission, item):
 def pytest_flockai_derived_kpis(result, item):
     k = result.kpis
     return {"probe.hover_share": k["hover_time_s"] / k["flight_time_s"]}
+
+def pytest_flockai_json_report(report, config):
+    report["ci"] = {"build": 7}
 ''')
     pytester.makeini("[pytest]\nmarkers = slow_seed\n")
     make(pytester, '''
@@ -443,8 +446,9 @@ def test_derived_broken(flight):
     res = run(pytester, "--flockai-json", "report.json")
     res.assert_outcomes(passed=1, failed=1)
     res.stdout.fnmatch_lines(["*probe.hover_share*> 99%*BROKEN*"])
-    tests = by_nodeid(load(pytester.path / "report.json"))
-    assert "probe.hover_share" in tests["test_derived"]["flights"][0]["kpis"]
+    report = load(pytester.path / "report.json")
+    assert report["ci"] == {"build": 7}
+    assert "probe.hover_share" in by_nodeid(report)["test_derived"]["flights"][0]["kpis"]
 
 
 def test_ini_options(pytester):
