@@ -21,10 +21,11 @@ import pytest_flockai as fa
 from pytest_flockai.airframe.model import build_model
 
 
-def mission(seconds: float, blueprint: str = "dji-mavic-2-pro"):
+def mission(seconds: float, blueprint: str = "dji-mavic-2-pro", probes: bool = True):
     d = fa.drone(blueprint)
     pilot = fa.pilots.ZigZag(area=((0, 0), (600, 600)), altitude=30, spacing=25, speed=8)
-    return fa.Mission(d, pilot, seed=1, until=seconds)
+    off = None if probes else [cls(enabled=False) for cls in fa.probes.builtin.BUILTIN]
+    return fa.Mission(d, pilot, seed=1, until=seconds, probes=off)
 
 
 def bare_rtf(blueprint: str, sim_seconds: float, batched: bool) -> float:
@@ -54,11 +55,12 @@ def main(argv=None):
     ap.add_argument("--blueprint", default="dji-mavic-2-pro")
     a = ap.parse_args(argv)
     mission(5.0, a.blueprint).run()                      # warm-up (imports, caches)
-    rtfs, walls = [], []
-    for _ in range(a.repeat):
+    rtfs, walls, bare_core = [], [], []
+    for _ in range(a.repeat):          # interleaved, so both see the same machine load
         r = mission(a.seconds, a.blueprint).run()
         rtfs.append(r.rtf)
         walls.append(r.wall_time_s)
+        bare_core.append(mission(a.seconds, a.blueprint, probes=False).run().wall_time_s)
     bare = [bare_rtf(a.blueprint, min(a.seconds, 300.0), False) for _ in range(a.repeat)]
     batched = [bare_rtf(a.blueprint, min(a.seconds, 300.0), True) for _ in range(a.repeat)]
     tracemalloc.start()
@@ -76,6 +78,9 @@ def main(argv=None):
     print(f"{'bare mj_step RTF (nstep batched per tick)':46s} {bb:12.0f}")
     print(f"{'ratio bare loop / mission':46s} {br / mr:12.2f}")
     print(f"{'ratio bare batched / mission':46s} {bb / mr:12.2f}")
+    wp, wn = statistics.median(walls), statistics.median(bare_core)
+    print(f"{'mission wall time, probes disabled (s)':46s} {wn:12.3f}")
+    print(f"{'probe overhead at default periods':46s} {100 * (wp - wn) / wn:11.1f}%")
     print(f"{'peak traced memory, 600 s mission (MB)':46s} {peak / 1e6:12.1f}")
     print(f"runs (RTF): {', '.join(f'{x:.0f}' for x in rtfs)}")
 

@@ -29,6 +29,7 @@ from .energy.components import Usage
 from .energy.model import Meter
 from .errors import ConfigError, SimulationError
 from .result import FlightResult
+from .probes.hub import ProbeHub, RunView, resolve_probes
 from .world.wind import Wind
 
 UNTIL = ("landed", "battery_depleted", "battery_reserve")
@@ -41,7 +42,13 @@ STAGES = ("takeoff", "pilot", "return", "landing", "done")
 HOVER_SPEED = 0.5        # m/s: below this an airborne drone is hovering
 ACCEL_THRESHOLD = 0.5    # m/s^2: above this it is accelerating
 CRASH_SPEED = 2.0        # m/s: touching anything faster than this is a crash
+CLOCK_EPS = 1e-6         # s: tolerance of the sub-clocks against the summed physics time
 SEEDS = {"wind": 0, "sensors": 1, "tasks": 2, "link": 3, "world": 4, "probes": 5}
+
+#: callables ``fn(result, mission)`` called after every flight, also one that
+#: ended in a SimulationError (then ``result`` is the partial result). The pytest
+#: plugin records flights this way; notebooks can log them.
+FLIGHT_OBSERVERS: list = []
 
 
 def seed_sequence(seed: int, component: str) -> np.random.SeedSequence:
@@ -80,7 +87,8 @@ class Mission:
         self.pilot = pilot
         self.world = world
         self.tasks = tuple(tasks or ())
-        self.probes = probes
+        self.probes = resolve_probes(probes)
+        self.subscribers: list = []
         self.wind = Wind.coerce(wind)
         self.seed = int(seed)
         self.until = until
@@ -92,6 +100,14 @@ class Mission:
         self.descent_speed = _check.positive("descent_speed", descent_speed, where="Mission")
         self.name = name
 
+    def subscribe(self, target) -> "Mission":
+        """Receive probe samples live: ``target`` is a callable ``fn(sample)`` or a
+        ``queue.Queue``; each sample is ``{"t": s, "probe": name, "values": {...}}``."""
+        if not (callable(target) or hasattr(target, "put_nowait")):
+            raise ConfigError(f"Mission.subscribe: {target!r} is neither callable nor a queue")
+        self.subscribers.append(target)
+        return self
+
     def scenario(self) -> dict:
         return {
             "name": self.name, "drone": self.drone.to_dict(), "pilot": self.pilot.to_dict(),
@@ -99,6 +115,7 @@ class Mission:
             "wind": self.wind.to_dict() if self.wind is not None else None,
             "seed": self.seed, "until": self.until, "return_home": self.return_home,
             "tasks": [getattr(t, "to_dict", lambda: repr(t))() for t in self.tasks],
+            "probes": [p.to_dict() for p in self.probes],
         }
 
     def __repr__(self):
@@ -112,8 +129,16 @@ class Mission:
             run.loop()
         except SimulationError as exc:
             exc.result = run.result(_time.perf_counter() - wall0, end_reason="diverged")
+            _notify(exc.result, self)
             raise
-        return run.result(_time.perf_counter() - wall0)
+        result = run.result(_time.perf_counter() - wall0)
+        _notify(result, self)
+        return result
+
+
+def _notify(result, mission):
+    for fn in list(FLIGHT_OBSERVERS):
+        fn(result, mission)
 
 
 class _Run:
@@ -137,8 +162,16 @@ class _Run:
         self.meter = Meter(drone.energy, drone)
         self.usage = Usage(drone.airframe.rotor_count)
         self.events: list[dict] = []
+        self.view = RunView(mission, self.meter)
+        self.hub = ProbeHub(mission.probes, mission.subscribers)
+        self.hub.bind(self.view)
+        self.phase_ticks = [0] * 6
+        self.book_dt = self.ctrl_dt
+        self.dist = self.vmax = self.track_max = 0.0
+        self.bytes_out = self.bytes_in = self.pkts_out = self.pkts_in = 0
         self.end_reason = "running"
         self.crashed = False
+        self.t_land = None
         self._rec = None
 
     # -- the loop --------------------------------------------------------
@@ -181,9 +214,8 @@ class _Run:
         hb_period = radio.heartbeat_period_s
         hb_bytes = int(radio.heartbeat_bytes)
         next_hb = 0.0
-        self.bytes_out = self.bytes_in = self.pkts_out = self.pkts_in = 0
-        # phase bookkeeping
-        phase_time = [0.0] * 6
+        # phase bookkeeping (whole ticks, so times add up exactly)
+        phase_ticks = self.phase_ticks
         phase = _TAKEOFF
         self._event(0.0, "stage", stage="takeoff")
         dist = 0.0
@@ -192,7 +224,8 @@ class _Run:
         pvx = pvy = pvz = 0.0
         acc_f = 0.0
         # bookkeeping (phases, distance, tracking error) at 50 Hz, or every tick if slower
-        book_dt = max(dt, 0.02 // dt * dt)
+        book_dt = self.book_dt = max(dt, 0.02 // dt * dt)
+        hub = self.hub
         next_book = 0.0
         t_book = 0.0
         a_filt = math.exp(-book_dt / 0.2)  # 0.2 s smoothing of |dv/dt|
@@ -262,13 +295,13 @@ class _Run:
                 w = wind.step()
                 mwind[0], mwind[1], mwind[2] = w
             # -- radio and energy (energy on its own clock; usage accumulates) --
-            if t >= next_hb:
+            if t >= next_hb - CLOCK_EPS:
                 next_hb += hb_period
                 tx_b += hb_bytes
                 tx_p += 1
                 rx_b += 64
                 rx_p += 1
-            if t >= next_e:
+            if t >= next_e - CLOCK_EPS:
                 # usage of the interval (t_e, t]: bytes and busy time accumulated,
                 # rotor thrust and airspeed sampled now
                 edt = t - t_e
@@ -293,7 +326,7 @@ class _Run:
                 next_e += e_period
             # -- phases and flight KPIs, on the bookkeeping clock -----------------
             speed = sqrt(vx * vx + vy * vy + vz * vz)
-            if t >= next_book:
+            if t >= next_book - CLOCK_EPS:
                 bdt = t - t_book
                 t_book = t
                 next_book += book_dt
@@ -311,7 +344,7 @@ class _Run:
                         phase = _ACCEL
                     else:
                         phase = _MOVE
-                    phase_time[phase] += book_dt
+                    phase_ticks[phase] += 1
                     dist += speed * book_dt
                     if speed > vmax:
                         vmax = speed
@@ -323,8 +356,13 @@ class _Run:
                 else:
                     phase = _LANDED
                 pvx, pvy, pvz = vx, vy, vz
+            # -- probes, each on its own period ----------------------------------
+            if t >= hub.next_due - CLOCK_EPS:
+                self.dist, self.vmax, self.track_max = dist, vmax, track_max
+                self._sync_view(t, q, v, stage)
+                hub.sample(t, self.view)
             # -- telemetry ------------------------------------------------
-            if t >= next_rec:
+            if t >= next_rec - CLOCK_EPS:
                 next_rec += rec_dt
                 self._record(t, q, v, sp, w, phase, stage, power, energy_j, e_usable)
             # -- end conditions -------------------------------------------
@@ -364,13 +402,25 @@ class _Run:
             self.pkts_in += rx_p
             energy_j += meter.step(u) * (t - t_e)
         self.t_final = t
-        self.phase_time = phase_time
         self.dist, self.vmax, self.track_max = dist, vmax, track_max
         self.energy_j = energy_j
         self.e_usable = e_usable
         q = qpos.tolist()
         self._record(t, q, qvel.tolist(), sp, w, _LANDED if not airborne else phase, stage,
                      meter.last_power, energy_j, e_usable)
+
+    def _sync_view(self, t, q, v, stage):
+        vw = self.view
+        vw.t = t
+        vw.position = (q[0], q[1], q[2])
+        vw.velocity = (v[0], v[1], v[2])
+        vw.stage = STAGES[stage]
+        bd = self.book_dt
+        vw.phase_time = [n * bd for n in self.phase_ticks]
+        vw.distance_m, vw.max_speed_mps, vw.tracking_error_max_m = self.dist, self.vmax, self.track_max
+        vw.crashed = self.crashed
+        vw.bytes_in, vw.bytes_out = self.bytes_in, self.bytes_out
+        vw.packets_in, vw.packets_out = self.pkts_in, self.pkts_out
 
     def _after_pilot(self, t, q, sp, force_home=False):
         ms = self.mission
@@ -451,40 +501,30 @@ class _Run:
         tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(PHASES))
         tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(STAGES))
         kpis = self._kpis()
+        frames = self.hub.frames()
+        for name, df in frames.items():   # probe metrics into the telemetry, as of each row
+            extra = [c for c in df.columns if c not in tel.columns]
+            if extra and len(df) and len(tel):
+                merged = pd.merge_asof(tel[[]].reset_index(), df[extra].reset_index(), on="t",
+                                       direction="backward")
+                for c in extra:
+                    tel[c] = merged[c].to_numpy()
         scen = self.mission.scenario()
         scen["sim_time_s"] = float(getattr(self, "t_final", self.data.time))
         scen["physics_hz"] = self.mission.drone.sim.physics_hz
         scen["control_hz"] = 1.0 / self.ctrl_dt
         scen["controller_gains"] = self.controller.gains
-        return FlightResult(kpis, tel, self.events, scen, self.meter.breakdown(), self.end_reason, wall)
+        events = sorted(self.events + self.hub.errors, key=lambda e: e["t"])
+        return FlightResult(kpis, tel, events, scen, self.meter.breakdown(), self.end_reason, wall,
+                            probe_samples=frames, probe_errors=list(self.hub.errors))
 
     def _kpis(self) -> dict:
-        pt = getattr(self, "phase_time", [0.0] * 6)
-        ft = sum(pt)
-        tops = self.meter.totals_by_top()
-        e_tot = sum(self.meter.energy)
-        e_m, e_p, e_c = tops.get("motors", 0.0), tops.get("proc", 0.0), tops.get("comm", 0.0)
-        t_all = float(getattr(self, "t_final", self.data.time))
-        mean_p = e_tot / t_all if t_all > 0 else 0.0
-        e_usable = self.mission.drone.battery.energy_j
-        share = (lambda e: e / e_tot) if e_tot > 0 else (lambda e: 0.0)
-        return {
-            "flight_time_s": ft,
-            "takeoff_time_s": pt[_TAKEOFF], "hover_time_s": pt[_HOVER], "move_time_s": pt[_MOVE],
-            "accel_time_s": pt[_ACCEL], "landing_time_s": pt[_LANDING],
-            "distance_m": getattr(self, "dist", 0.0), "max_speed_mps": getattr(self, "vmax", 0.0),
-            "tracking_error_max_m": getattr(self, "track_max", 0.0),
-            "crashed": 1.0 if self.crashed else 0.0,
-            "energy_total_j": e_tot, "energy_motors_j": e_m, "energy_proc_j": e_p, "energy_comm_j": e_c,
-            "energy_share_motors": share(e_m), "energy_share_proc": share(e_p),
-            "energy_share_comm": share(e_c), "mean_power_w": mean_p,
-            "battery_remaining": max(0.0, 1.0 - e_tot / e_usable),
-            "endurance_s": e_usable / mean_p if mean_p > 0 else float("inf"),
-            "kbytes_in": self.bytes_in / 1000.0 if hasattr(self, "bytes_in") else 0.0,
-            "kbytes_out": self.bytes_out / 1000.0 if hasattr(self, "bytes_out") else 0.0,
-            "packets_in": float(getattr(self, "pkts_in", 0)),
-            "packets_out": float(getattr(self, "pkts_out", 0)),
-        }
+        """Every KPI comes out of a probe: the final sample of each enabled probe."""
+        d = self.data
+        t = float(getattr(self, "t_final", d.time))
+        self._sync_view(t, d.qpos.tolist(), d.qvel.tolist(), _S_DONE if self.t_land else _S_PILOT)
+        self.hub.sample(t, self.view, force=True)
+        return self.hub.kpis()
 
 
 def _warnings(d) -> str:

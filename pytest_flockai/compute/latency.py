@@ -1,0 +1,167 @@
+"""Inference latency on a device profile: ``modeled`` and ``measured``.
+
+``modeled`` (the default, deterministic)::
+
+    latency = device.overhead_s + macs / device.macs_per_s
+
+``measured``: the host's wall time of the *real* inference, scaled to the
+device. The scale comes from a calibration benchmark run once per process: a
+fixed convolutional ONNX model (built in memory, its MACs counted exactly) is
+timed with ONNX Runtime on the host, which gives the host's effective
+MAC rate ``host_macs_per_s``. Then::
+
+    latency = device.overhead_s + wall_s * host_macs_per_s / device.macs_per_s
+
+so a model that runs as fast (per MAC) on the host as the calibration network
+gets exactly its modeled latency, and one that runs slower (memory bound,
+Python overhead, unusual operators) gets proportionally more. Measured results
+are not reproducible by nature (they depend on the host and its load): use
+them to check the modeled MAC count of a model, not as CI budgets.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from dataclasses import dataclass
+
+from .devices import Device, device as _device
+from ..errors import ConfigError
+
+LATENCY_MODES = ("modeled", "measured")
+
+
+def resolve_device(dev, field: str = "device") -> Device:
+    """A ``Device`` from a profile name or a ``Device``; ConfigError otherwise."""
+    if isinstance(dev, Device):
+        return dev
+    if isinstance(dev, str):
+        try:
+            return _device(dev)
+        except ConfigError as e:
+            raise ConfigError(f"{field} = {dev!r}: {e}") from None
+    raise ConfigError(f"{field} = {dev!r} is not a device; expected a profile name "
+                      f"(see pytest_flockai.devices()) or a Device")
+
+
+def modeled_latency(macs, device) -> float:
+    """Seconds for one inference of ``macs`` multiply-accumulates on ``device``.
+
+    Deterministic: ``overhead_s + macs / macs_per_s``.
+    """
+    dev = resolve_device(device)
+    if macs is None:
+        raise ConfigError("macs = None: the modeled latency needs the model's MAC count; "
+                          "give the model macs=... or use latency='measured'")
+    if isinstance(macs, bool) or not isinstance(macs, (int, float)) or macs < 0 or not math.isfinite(macs):
+        raise ConfigError(f"macs = {macs!r} is not allowed; expected a finite number >= 0")
+    return dev.overhead_s + float(macs) / dev.macs_per_s
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The host benchmark behind ``measured`` latency."""
+
+    host_macs_per_s: float   # median effective MAC rate of the host (ONNX Runtime, CPU)
+    macs: int                # MACs of the calibration network per run
+    runs: int
+    median_s: float
+    p10_s: float
+    p90_s: float
+
+    @property
+    def spread(self) -> float:
+        """(p90 - p10) / median of the calibration runs: the timing noise of this host."""
+        return (self.p90_s - self.p10_s) / self.median_s if self.median_s > 0 else math.nan
+
+    def to_dict(self) -> dict:
+        return {"host_macs_per_s": self.host_macs_per_s, "macs": self.macs, "runs": self.runs,
+                "median_s": self.median_s, "p10_s": self.p10_s, "p90_s": self.p90_s,
+                "spread": self.spread}
+
+
+_CAL: Calibration | None = None
+_CAL_LOCK = threading.Lock()
+
+
+def _calibration_model_bytes() -> bytes:
+    """Three 3x3 convolutions + ReLU on a 1x16x64x64 tensor; fixed seed weights."""
+    import numpy as np
+    import onnx
+    from onnx import TensorProto, helper, numpy_helper
+
+    rng = np.random.default_rng(12345)
+    nodes, inits = [], []
+    c_in = 16
+    name = "x"
+    for i, c_out in enumerate((32, 32, 16)):
+        w = numpy_helper.from_array((rng.standard_normal((c_out, c_in, 3, 3)) * 0.1)
+                                    .astype(np.float32), f"w{i}")
+        inits.append(w)
+        nodes.append(helper.make_node("Conv", [name, f"w{i}"], [f"c{i}"], pads=[1, 1, 1, 1]))
+        nodes.append(helper.make_node("Relu", [f"c{i}"], [f"r{i}"]))
+        name, c_in = f"r{i}", c_out
+    graph = helper.make_graph(
+        nodes, "flockai_calibration",
+        [helper.make_tensor_value_info("x", TensorProto.FLOAT, [1, 16, 64, 64])],
+        [helper.make_tensor_value_info(name, TensorProto.FLOAT, [1, 16, 64, 64])], inits)
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)])
+    model.ir_version = 8
+    return model.SerializeToString()
+
+
+def calibrate(*, runs: int = 15, force: bool = False) -> Calibration:
+    """Benchmark the host once per process (cached); about 0.1-0.3 s on 2 cores."""
+    global _CAL
+    with _CAL_LOCK:
+        if _CAL is not None and not force:
+            return _CAL
+        import numpy as np
+        import onnxruntime as ort
+
+        # exact MACs of the calibration net: 64*64 outputs per channel
+        macs = 64 * 64 * (32 * 16 * 9 + 32 * 32 * 9 + 16 * 32 * 9)
+        opts = ort.SessionOptions()
+        opts.intra_op_num_threads = 1      # one core: like one inference thread on the drone
+        opts.inter_op_num_threads = 1
+        opts.log_severity_level = 3
+        sess = ort.InferenceSession(_calibration_model_bytes(), opts,
+                                    providers=["CPUExecutionProvider"])
+        x = np.random.default_rng(0).standard_normal((1, 16, 64, 64)).astype(np.float32)
+        for _ in range(3):
+            sess.run(None, {"x": x})
+        times = []
+        for _ in range(max(3, int(runs))):
+            t0 = time.perf_counter()
+            sess.run(None, {"x": x})
+            times.append(time.perf_counter() - t0)
+        times = np.asarray(times)
+        med = float(np.median(times))
+        _CAL = Calibration(host_macs_per_s=macs / med, macs=macs, runs=len(times), median_s=med,
+                           p10_s=float(np.percentile(times, 10)),
+                           p90_s=float(np.percentile(times, 90)))
+        return _CAL
+
+
+def scale_to_device(wall_s: float, device, calibration: Calibration | None = None) -> float:
+    """Device seconds for an inference that took ``wall_s`` on this host."""
+    dev = resolve_device(device)
+    cal = calibration or calibrate()
+    return dev.overhead_s + float(wall_s) * cal.host_macs_per_s / dev.macs_per_s
+
+
+def measured_latency(fn, *args, device, calibration: Calibration | None = None):
+    """Run ``fn(*args)`` once, timing it on the host; return (result, device seconds, wall s).
+
+    Exceptions from ``fn`` propagate.
+    """
+    cal = calibration or calibrate()
+    t0 = time.perf_counter()
+    out = fn(*args)
+    wall = time.perf_counter() - t0
+    return out, scale_to_device(wall, device, cal), wall
+
+
+__all__ = ["LATENCY_MODES", "Calibration", "calibrate", "measured_latency", "modeled_latency",
+           "resolve_device", "scale_to_device"]
