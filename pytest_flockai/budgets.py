@@ -187,4 +187,53 @@ def _dim_name(dim) -> str:
     return _DIM_NAMES.get(dim, str(dim))
 
 
-__all__ = ["Budget", "OPERATORS", "UNITS", "kpi_unit", "parse", "parse_many"]
+class BudgetError(AssertionError):
+    """Raised by ``check`` when a budget is broken; the message is the budget table."""
+
+    def __init__(self, message, verdicts):
+        super().__init__(message)
+        self.verdicts = verdicts
+
+
+def evaluate(result, budgets: dict | None = None, **more) -> list[dict]:
+    """Evaluate budgets against a FlightResult (or a KPI dict) without pytest.
+
+    Returns one dict per budget: kpi, budget, limit, actual, passed, margin
+    (positive inside the budget) and rel_margin (margin / |limit|).
+    A budget on a KPI the flight did not produce raises ConfigError naming it.
+    """
+    kpis = getattr(result, "kpis", result)
+    spec = dict(budgets or {})
+    spec.update(more)
+    out = []
+    for b in parse_many(spec):
+        if b.kpi not in kpis:
+            raise ConfigError(f"budget on {b.kpi!r}: the flight did not produce this KPI; it has "
+                              f"{', '.join(sorted(kpis))}")
+        actual = kpis[b.kpi]
+        passed, margin = b.evaluate(actual)
+        scale = abs(b.limit) if b.limit else 1.0
+        out.append({"kpi": b.kpi, "budget": b.text, "limit": b.limit, "actual": actual,
+                    "passed": passed, "margin": margin, "rel_margin": margin / scale,
+                    "actual_text": b.format(actual), "margin_text": b.format(margin)})
+    return out
+
+
+def check(result, budgets: dict | None = None, **more) -> list[dict]:
+    """Like ``evaluate`` but raises BudgetError (an AssertionError) with a table
+    when a budget is broken: use it inside hypothesis ``@given`` tests, where
+    the failing example is then shrunk and shown."""
+    verdicts = evaluate(result, budgets, **more)
+    broken = [v for v in verdicts if not v["passed"]]
+    if broken:
+        width = max(len(v["kpi"]) for v in verdicts)
+        lines = [f"{len(broken)} of {len(verdicts)} KPI budget(s) broken:"]
+        for v in verdicts:
+            lines.append(f"  {v['kpi']:<{width}}  {v['budget']:<12}  actual {v['actual_text']:<14} "
+                         f"margin {v['margin_text']:<14} {'ok' if v['passed'] else 'BROKEN'}")
+        raise BudgetError("\n".join(lines), verdicts)
+    return verdicts
+
+
+__all__ = ["Budget", "BudgetError", "OPERATORS", "UNITS", "check", "evaluate", "kpi_unit", "parse",
+           "parse_many"]

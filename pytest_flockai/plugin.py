@@ -22,8 +22,8 @@ Markers
 Recording
     Every ``Mission.run()`` inside a test (the ``flight`` fixture or your own
     calls) is recorded for that test, named ``mission.name`` or ``"flight"``
-    (then ``"flight-2"``, ... for repeats). The plugin wraps
-    ``Mission.run`` once; outside a test the wrapper only calls the original.
+    (then ``"flight-2"``, ... for repeats), through the core's flight observers
+    (also a flight that ended in a SimulationError); outside a test nothing is recorded.
 
 Reports
     KPIs travel on the test reports (attribute ``flockai``, plain JSON data, so
@@ -38,7 +38,6 @@ Options (each also an ini option, same name with underscores)
 
 from __future__ import annotations
 
-import functools
 import math
 import os
 from dataclasses import dataclass, field
@@ -53,7 +52,7 @@ from . import report as _report
 from .airframe import drone as _make_drone
 from .control.pilots import Hover as _Hover
 from .errors import ConfigError, close_matches
-from .mission import Mission
+from .mission import FLIGHT_OBSERVERS, Mission
 from .result import FlightResult
 
 # ---------------------------------------------------------------------------
@@ -190,21 +189,17 @@ _RECORDING: list[TestState] = []
 _STATE = pytest.StashKey[TestState]()
 
 
+def _observe_flight(result, mission):
+    if _RECORDING:
+        _RECORDING[-1].record(mission, result)
+
+
 def _install_recorder():
-    run = Mission.run
-    if getattr(run, "_flockai_recorder", False):
-        return
-
-    @functools.wraps(run)
-    def run_recorded(self, *args, **kwargs):
-        result = run(self, *args, **kwargs)
-        if _RECORDING:
-            _RECORDING[-1].record(self, result)
-        return result
-
-    run_recorded._flockai_recorder = True
-    run_recorded._flockai_original = run
-    Mission.run = run_recorded
+    """Record every flight flown while a test runs, through the core's observer list
+    (``pytest_flockai.mission.FLIGHT_OBSERVERS``), so flights that end in a
+    SimulationError are recorded too."""
+    if _observe_flight not in FLIGHT_OBSERVERS:
+        FLIGHT_OBSERVERS.append(_observe_flight)
 
 
 def _state(item) -> TestState:

@@ -248,8 +248,9 @@ def count_macs(model, input_shapes: dict | None = None) -> MacReport:
             why = shape_error or "shapes unknown after shape inference"
             uncounted.append(f"{label}: {why}")
             continue
-        total += macs
-        by_op[op] = by_op.get(op, 0) + macs
+        if macs:
+            total += macs
+            by_op[op] = by_op.get(op, 0) + macs
     return MacReport(macs=int(total), params=_param_count(model), by_op=by_op, uncounted=uncounted)
 
 

@@ -1,0 +1,302 @@
+"""The rendered camera: MuJoCo frames of the world from a gimballed camera.
+
+Gimbal. The camera hangs under the drone at ``mount`` (body frame) and a
+gimbal keeps it level: its pitch relative to the horizon is ``pitch_deg``
+(-90 = straight down) whatever the drone's roll and pitch; it turns with the
+drone's yaw (looking down, the top of the image is where the nose points).
+At each frame the pose is computed from the body's position, rotation and yaw
+(``world.truth.gimbal_pose``) and written into the scene's GL camera after
+``mjv_updateScene``: the physics model is not touched, and nothing is
+computed between frames. ``add_to_spec`` also adds a MuJoCo camera named
+after the sensor to the drone body (body-fixed, at the gimbal's rest pose),
+for viewers and for users who want the raw body-fixed view; the rendered
+frames do not depend on it.
+
+Rendering. Only the static world is drawn (``mjCAT_STATIC``): the drone's own
+hull and propellers never enter the frame. Frames are rendered only when
+``read`` is called (the suite never polls a camera: ``on_demand``), into
+numpy ``uint8`` arrays of shape (height, width, 3), RGB, row 0 at the top.
+The GL context is created on the first frame (``_gl.create_context``: EGL,
+then OSMesa); code that never reads a frame never needs OpenGL.
+
+Ground truth. With each frame, ``camera.last_truth`` (a ``Truth``) lists the
+people in view and their pixel positions, by pinhole projection of
+``world.truth_points()`` (the figure centres) with the same pose and field of
+view as the render, less those hidden by buildings (``occlusion=True``, the
+world's axis-aligned boxes). ``camera.truth(t, data)`` gives the same without
+rendering (cheap: for telemetry).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from .. import _check
+from ..errors import ConfigError
+from ..world.truth import CameraModel, Truth, gimbal_pose
+from . import _gl
+from .base import DroneBody, Sensor
+
+NEAR_M = 0.05       # near clipping plane
+FAR_M = 5000.0      # far clipping plane
+
+
+def _size(field, value, where) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 < value <= 8192:
+        raise ConfigError(f"{where}: {field} = {value!r} is not allowed; expected an integer "
+                          f"number of pixels in 1..8192")
+    return int(value)
+
+
+class FrameRenderer:
+    """Offscreen renderer of a model's static scene from an arbitrary camera pose."""
+
+    def __init__(self, model, width: int, height: int):
+        self.model, self.width, self.height = model, width, height
+        self._ctx = _gl.create_context(width, height)
+        self._ctx.make_current()
+        vg = model.vis.global_
+        vg.offwidth = max(int(vg.offwidth), width)
+        vg.offheight = max(int(vg.offheight), height)
+        self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
+        self.scene = mujoco.MjvScene(model, maxgeom=model.ngeom + 64)
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
+        self.option = mujoco.MjvOption()
+        self._cam = mujoco.MjvCamera()
+        self._cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        self._rect = mujoco.MjrRect(0, 0, width, height)
+        self._buf = np.empty((height, width, 3), dtype=np.uint8)
+
+    def render(self, data, cam_pos, cam_mat, fov_deg: float, *,
+               catmask=mujoco.mjtCatBit.mjCAT_STATIC) -> np.ndarray:
+        self._ctx.make_current()
+        scn = self.scene
+        mujoco.mjv_updateScene(self.model, data, self.option, None, self._cam, int(catmask), scn)
+        R = np.asarray(cam_mat).reshape(3, 3)
+        up, fwd = R[:, 1], -R[:, 2]
+        half = NEAR_M * math.tan(math.radians(fov_deg) / 2.0)
+        for c in scn.camera:           # both eyes at the same place: mono view
+            c.pos[:] = cam_pos
+            c.forward[:] = fwd
+            c.up[:] = up
+            c.frustum_center = 0.0
+            c.frustum_width = 0.0          # 0: from the viewport's aspect ratio
+            c.frustum_bottom = -half
+            c.frustum_top = half
+            c.frustum_near = NEAR_M
+            c.frustum_far = FAR_M
+            c.orthographic = 0
+        mujoco.mjr_render(self._rect, scn, self._con)
+        mujoco.mjr_readPixels(self._buf, None, self._rect, self._con)
+        return self._buf[::-1].copy()       # OpenGL rows start at the bottom
+
+    def close(self):
+        if self._con is not None:
+            self._ctx.make_current()
+            self._con.free()
+            self._con = None
+        if self._ctx is not None:
+            self._ctx.free()
+            self._ctx = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+
+class Camera(Sensor):
+    """A rendered, gimballed camera: ``read(t, data)`` -> RGB frame, ``last_truth``.
+
+    width, height (pixels), fov_deg (vertical field of view), pitch_deg
+    (gimbal pitch, -90 straight down) as in a blueprint's [camera] section
+    (``Camera.from_blueprint(drone)``); rate_hz: frames per second a task may
+    ask for (the camera renders whenever ``read`` is called); world: the
+    World whose people are the ground truth (``SensorSuite.bind(...,
+    world=)`` sets it); occlusion: drop people hidden by buildings from the
+    truth. Power 0.9 W: a Raspberry Pi camera module streaming (Xtronix
+    measurements: a Pi 3B draws 320 mA headless and 500 mA with the camera
+    at 5 V).
+    """
+
+    on_demand = True
+
+    def __init__(self, width: int = 320, height: int = 240, fov_deg: float = 60.0,
+                 pitch_deg: float = -90.0, rate_hz: float = 1.0, *, name: str = "camera",
+                 power_w: float = 0.9, world=None, occlusion: bool = True,
+                 mount=(0.0, 0.0, -0.05), body_name: str = "drone"):
+        super().__init__(name, rate_hz=rate_hz, power_w=power_w)
+        w = f"Camera {name!r}"
+        self.width = _size("width", width, w)
+        self.height = _size("height", height, w)
+        self.fov_deg = _check.number("fov_deg", fov_deg, where=w, minimum=1.0, maximum=170.0)
+        self.pitch_deg = _check.number("pitch_deg", pitch_deg, where=w, minimum=-90.0, maximum=90.0)
+        self.mount = np.array(_check.vector("mount", mount, 3, where=w))
+        self.body_name = body_name
+        self.world = world
+        self.occlusion = bool(occlusion)
+        self.lens = CameraModel(self.width, self.height, self.fov_deg)
+        self.last_frame = None
+        self.last_truth = None
+        self.last_t = None
+        self.frames = 0
+        self._renderer = None
+        self.body = None
+
+    @classmethod
+    def from_blueprint(cls, camera, **kw) -> "Camera":
+        """From a blueprint's camera section (``drone.camera``) or a Drone having one."""
+        sec = getattr(camera, "camera", camera)
+        try:
+            args = dict(width=int(sec.width), height=int(sec.height), fov_deg=float(sec.fov_deg),
+                        pitch_deg=float(sec.pitch_deg))
+        except AttributeError:
+            raise ConfigError(f"Camera.from_blueprint: {camera!r} has no camera section "
+                              f"(width, height, fov_deg, pitch_deg)") from None
+        args.update(kw)
+        return cls(**args)
+
+    # -- composition ----------------------------------------------------------
+    def add_to_spec(self, spec, body_name: str | None = None) -> None:
+        """Add a body-fixed MuJoCo camera (the gimbal at rest) and size the framebuffer."""
+        body_name = body_name or self.body_name
+        self.body_name = body_name
+        body = spec.body(body_name)
+        if body is None:
+            raise ConfigError(f"Camera {self.name!r}: body_name = {body_name!r} is not a body "
+                              f"of the spec")
+        _, R = gimbal_pose((0, 0, 0), 0.0, self.pitch_deg)
+        q = np.zeros(4)
+        mujoco.mju_mat2Quat(q, R.reshape(-1))
+        body.add_camera(name=self.name, pos=list(self.mount), quat=list(q), fovy=self.fov_deg)
+        vg = spec.visual.global_
+        vg.offwidth = max(int(vg.offwidth), self.width)
+        vg.offheight = max(int(vg.offheight), self.height)
+
+    def bind(self, model, data, rng):
+        super().bind(model, data, rng)
+        self.body = DroneBody(model, self.body_name, f"Camera {self.name!r}")
+        if self.world is not None:
+            self._points = self.world.truth_points()
+            self._occ = self.world.occluders if self.occlusion else None
+        else:
+            self._points = people_in_model(model, data)
+            self._occ = None
+        if self._renderer is not None and self._renderer.model is not model:
+            self._renderer.close()
+            self._renderer = None
+        self.last_frame = self.last_truth = self.last_t = None
+        self.frames = 0
+
+    # -- pose and truth (no GL) ---------------------------------------------------
+    def pose(self, data) -> tuple[np.ndarray, np.ndarray]:
+        """(cam_pos, cam_mat) of the gimballed camera in the current state."""
+        b = self.body.id
+        R = data.xmat[b]
+        yaw = math.atan2(R[3], R[0])
+        pos = data.xpos[b] + R.reshape(3, 3) @ self.mount
+        return gimbal_pose(pos, yaw, self.pitch_deg)
+
+    def truth(self, t: float, data) -> Truth:
+        """The ground truth of a frame taken now, without rendering it."""
+        cam_pos, cam_mat = self.pose(data)
+        return self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ)
+
+    # -- frames ---------------------------------------------------------------
+    def read(self, t: float, data) -> np.ndarray:
+        if self.body is None:
+            raise ConfigError(f"Camera {self.name!r}: read before bind(model, data, rng)")
+        cam_pos, cam_mat = self.pose(data)
+        frame = self.render_pose(data, cam_pos, cam_mat)
+        self.last_truth = self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ)
+        self.last_frame, self.last_t = frame, float(t)
+        self.frames += 1
+        return frame
+
+    def render_pose(self, data, cam_pos, cam_mat) -> np.ndarray:
+        if self._renderer is None:
+            self._renderer = FrameRenderer(self.model, self.width, self.height)
+        return self._renderer.render(data, cam_pos, cam_mat, self.fov_deg)
+
+    def close(self):
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def to_dict(self):
+        return {**super().to_dict(), "width": self.width, "height": self.height,
+                "fov_deg": self.fov_deg, "pitch_deg": self.pitch_deg}
+
+    def __repr__(self):
+        return (f"Camera({self.width}x{self.height}, fov_deg={self.fov_deg:g}, "
+                f"pitch_deg={self.pitch_deg:g}, rate_hz={self.rate_hz:g})")
+
+
+def people_in_model(model, data) -> np.ndarray:
+    """People of a compiled model by name: geoms ``person*`` grouped up to the first ``_``."""
+    groups: dict[str, list] = {}
+    for g in range(model.ngeom):
+        base = (model.geom(g).name or "").rsplit("/", 1)[-1]
+        if base.startswith("person"):
+            groups.setdefault(base.split("_", 1)[0], []).append(data.geom_xpos[g].copy())
+    return np.array([np.mean(v, axis=0) for v in groups.values()]).reshape(-1, 3)
+
+
+def _camera_params(camera_params) -> Camera:
+    if isinstance(camera_params, Camera):
+        return camera_params
+    if isinstance(camera_params, dict):
+        return Camera(**camera_params)
+    if camera_params is None:
+        return Camera()
+    return Camera.from_blueprint(camera_params)
+
+
+def render_views(world, poses, camera_params=None) -> list:
+    """Render a World from camera poses, without a drone or a mission: [(frame, truth)].
+
+    poses: (x, y, z) or (x, y, z, yaw) rows (yaw in rad, 0 = the image top
+    points east when looking down); camera_params: a Camera, a dict of its
+    arguments, a blueprint camera section, or None (320x240, 60 deg, -90 deg).
+    Useful to build training data: frames and ground truth from the same
+    renderer the missions use.
+    """
+    cam = _camera_params(camera_params)
+    rows = []
+    for i, p in enumerate(poses):
+        try:
+            vals = [float(v) for v in p]
+        except (TypeError, ValueError):
+            raise ConfigError(f"render_views: poses[{i}] = {p!r} is not allowed; expected "
+                              f"(x, y, z) or (x, y, z, yaw)") from None
+        if len(vals) not in (3, 4) or not all(math.isfinite(v) for v in vals):
+            raise ConfigError(f"render_views: poses[{i}] = {p!r} is not allowed; expected "
+                              f"(x, y, z) or (x, y, z, yaw) finite numbers")
+        rows.append(vals + [0.0] * (4 - len(vals)))
+    spec = mujoco.MjSpec()
+    spec.modelname = "flockai_views"
+    world.add_to_spec(spec)
+    vg = spec.visual.global_
+    vg.offwidth = max(int(vg.offwidth), cam.width)
+    vg.offheight = max(int(vg.offheight), cam.height)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    points = world.truth_points()
+    occ = world.occluders if cam.occlusion else None
+    renderer = FrameRenderer(model, cam.width, cam.height)
+    try:
+        out = []
+        for x, y, z, yaw in rows:
+            cam_pos, cam_mat = gimbal_pose((x, y, z), yaw, cam.pitch_deg)
+            frame = renderer.render(data, cam_pos, cam_mat, cam.fov_deg)
+            out.append((frame, cam.lens.truth(0.0, points, cam_pos, cam_mat, occ)))
+        return out
+    finally:
+        renderer.close()

@@ -1,0 +1,179 @@
+"""Replayed camera: frames from a folder of images or a video file.
+
+``ReplayCamera(path, rate_hz=1.0, loop=True)`` has the camera's interface
+(``read(t, data) -> frame``, ``last_frame``, ``last_truth``, ``on_demand``):
+frame k of the recording is the one shown for simulated times
+``k / rate_hz <= t < (k + 1) / rate_hz`` (the stated rate, whatever the
+video's own frame rate). With ``loop`` the recording starts again after its
+last frame; without, ``read`` returns None after the end (``ended`` is True).
+
+Folder: the images (.png .jpg .jpeg .bmp .tif .tiff .webp) sorted by file
+name, decoded on demand (one frame cached). If the folder holds the
+``truth.json`` written by ``export_dataset``, ``last_truth`` replays it.
+Video: read in order with OpenCV; going back (a loop) reopens the file.
+Frames are RGB uint8 (OpenCV's BGR is converted), like the rendered camera.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..world.truth import Truth
+from .base import Sensor
+
+IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+
+
+class ReplayCamera(Sensor):
+    on_demand = True
+
+    def __init__(self, path, rate_hz: float = 1.0, loop: bool = True, *, name: str = "camera",
+                 power_w: float = 0.9):
+        super().__init__(name, rate_hz=rate_hz, power_w=power_w)
+        import cv2
+        self._cv2 = cv2
+        w = f"ReplayCamera {name!r}"
+        p = os.fspath(path)
+        self.path, self.loop = p, bool(loop)
+        self.files = None
+        self._cap = None
+        self._truth = None
+        if os.path.isdir(p):
+            self.files = sorted(os.path.join(p, f) for f in os.listdir(p)
+                                if f.lower().endswith(IMAGE_EXT))
+            if not self.files:
+                raise ConfigError(f"{w}: path = {p!r} holds no images; allowed extensions: "
+                                  f"{', '.join(IMAGE_EXT)}")
+            first = cv2.imread(self.files[0], cv2.IMREAD_COLOR)
+            if first is None:
+                raise ConfigError(f"{w}: image {self.files[0]!r} cannot be decoded")
+            self.n_frames = len(self.files)
+            self.height, self.width = first.shape[:2]
+            tj = os.path.join(p, "truth.json")
+            if os.path.isfile(tj):
+                self._truth = _load_truth(tj, w)
+        elif os.path.isfile(p):
+            cap = cv2.VideoCapture(p)
+            if not cap.isOpened():
+                raise ConfigError(f"{w}: path = {p!r} is not a readable video (OpenCV "
+                                  f"VideoCapture cannot open it)")
+            self.width = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH))
+            self.height = int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
+            n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+            cap.release()
+            self.n_frames = n if n > 0 else None     # unknown: found at the end
+        else:
+            raise ConfigError(f"{w}: path = {p!r}: no such folder or video file")
+        if self.width <= 0 or self.height <= 0:
+            raise ConfigError(f"{w}: path = {p!r} has resolution {self.width}x{self.height}; "
+                              f"expected width and height > 0")
+        self.last_frame = self.last_truth = self.last_t = None
+        self.frames = 0
+        self.ended = False
+        self._k = -1            # index of the cached frame
+        self._pos = 0           # next frame the video capture will decode
+
+    def bind(self, model, data, rng):
+        super().bind(model, data, rng)
+        self.last_frame = self.last_truth = self.last_t = None
+        self.frames = 0
+        self.ended = False
+
+    def frame_index(self, t: float) -> int | None:
+        """Index of the recording's frame shown at time t (None: after the end, no loop)."""
+        k = int(math.floor(t * self.rate_hz + 1e-9))
+        k = max(k, 0)
+        n = self.n_frames
+        if n is None:
+            return k
+        if k >= n:
+            return k % n if self.loop else None
+        return k
+
+    def read(self, t: float, data=None):
+        k = self.frame_index(t)
+        if k is not None and self.files is None:
+            frame = self._video_frame(k)
+            if frame is None:          # the video ended earlier than its header said
+                k = self.frame_index(t)
+                frame = self._video_frame(k) if k is not None else None
+        elif k is not None:
+            frame = self._image(k)
+        else:
+            frame = None
+        if frame is None:
+            self.ended = True
+            self.last_frame, self.last_t, self.last_truth = None, float(t), None
+            return None
+        self.last_frame, self.last_t = frame, float(t)
+        self.last_truth = None
+        if self._truth is not None and k < len(self._truth):
+            self.last_truth = self._truth[k]
+        self.frames += 1
+        return frame
+
+    # -- decoding -------------------------------------------------------------
+    def _image(self, k):
+        if k != self._k:
+            img = self._cv2.imread(self.files[k], self._cv2.IMREAD_COLOR)
+            if img is None:
+                raise ConfigError(f"ReplayCamera {self.name!r}: image {self.files[k]!r} cannot "
+                                  f"be decoded")
+            self._frame = self._cv2.cvtColor(img, self._cv2.COLOR_BGR2RGB)
+            self._k = k
+        return self._frame
+
+    def _video_frame(self, k):
+        if k == self._k:
+            return self._frame
+        cv2 = self._cv2
+        if self._cap is None or k < self._pos:
+            if self._cap is not None:
+                self._cap.release()
+            self._cap = cv2.VideoCapture(self.path)
+            self._pos = 0
+        img = None
+        while self._pos <= k:
+            ok, img = self._cap.read()
+            if not ok:
+                # the real length: remember it so the next index wraps (or ends)
+                self.n_frames = self._pos
+                self._cap.release()
+                self._cap = None
+                self._k = -1
+                if self._pos == 0:
+                    raise ConfigError(f"ReplayCamera {self.name!r}: video {self.path!r} has "
+                                      f"no readable frames")
+                return None
+            self._pos += 1
+        self._frame = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+        self._k = k
+        return self._frame
+
+    def close(self):
+        if self._cap is not None:
+            self._cap.release()
+            self._cap = None
+
+    def to_dict(self):
+        return {**super().to_dict(), "path": self.path, "loop": self.loop,
+                "frames": self.n_frames, "width": self.width, "height": self.height}
+
+    def __repr__(self):
+        return f"ReplayCamera({self.path!r}, rate_hz={self.rate_hz:g}, loop={self.loop})"
+
+
+def _load_truth(path, where):
+    try:
+        with open(path) as f:
+            rows = json.load(f)["frames"]
+        return [Truth(float(r.get("t", 0.0)), np.array(r["indices"], dtype=int),
+                      np.array(r["pixels"], dtype=float).reshape(-1, 2)) for r in rows]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ConfigError(f"{where}: {path!r} is not a truth file written by export_dataset: "
+                          f"{exc}") from None

@@ -1,0 +1,118 @@
+"""Hypothesis strategies for flight scenarios.
+
+The pattern for a fuzzed budget (no function-scoped fixture per example, so
+hypothesis' health checks pass; the failing scenario is shrunk and printed)::
+
+    from hypothesis import given, settings
+    import pytest_flockai as fa
+    from pytest_flockai import strategies as fst
+    from pytest_flockai.budgets import check
+
+    @settings(max_examples=25, deadline=None)
+    @given(wind=fst.winds(max_speed=10.0), battery_mah=fst.batteries(3000, 4500))
+    def test_flight_time_holds(wind, battery_mah):
+        d = fa.drone("dji-mavic-2-pro", battery_mah=battery_mah)
+        r = fa.Mission(d, fa.pilots.Hover(altitude=10, duration=20), wind=wind).run()
+        fst.target_margin(r, endurance_s=">= 24 min")     # steer the search to the edge
+        check(r, endurance_s=">= 24 min")                 # AssertionError with a table
+
+``missions()`` draws whole missions (drone overrides, pilot, wind, seed).
+"""
+
+from __future__ import annotations
+
+import math
+
+from hypothesis import strategies as st
+from hypothesis import target as _target
+
+from . import budgets as _budgets
+from .airframe.drone import G, drone as _drone
+from .control import pilots as _pilots
+from .mission import Mission
+from .world.wind import Wind
+
+
+def seeds() -> st.SearchStrategy[int]:
+    """Mission seeds (any non-negative 32-bit integer)."""
+    return st.integers(min_value=0, max_value=2 ** 32 - 1)
+
+
+def winds(max_speed: float = 12.0, *, gusts: bool = True, vertical: bool = False) -> st.SearchStrategy[Wind]:
+    """Wind: a horizontal mean of 0..max_speed m/s from any direction, with gusts
+    of 0..20 % of the mean speed (MIL-F-8785C light to moderate turbulence)."""
+    return st.builds(wind_from, speed_mps=st.floats(0.0, max_speed),
+                     heading_rad=st.floats(0.0, 2 * math.pi),
+                     gust_fraction=st.floats(0.0, 0.2) if gusts else st.just(0.0),
+                     vertical_mps=st.floats(-1.0, 1.0) if vertical else st.just(0.0))
+
+
+def wind_from(speed_mps: float, heading_rad: float = 0.0, gust_fraction: float = 0.1,
+              vertical_mps: float = 0.0) -> Wind:
+    """A Wind blowing towards ``heading_rad`` (0 = east) at ``speed_mps``, gusts
+    of ``gust_fraction`` x the speed. Named so failing examples read well."""
+    return Wind((speed_mps * math.cos(heading_rad), speed_mps * math.sin(heading_rad), vertical_mps),
+                gust_std=gust_fraction * speed_mps)
+
+
+def batteries(min_mah: float = 1000.0, max_mah: float = 6000.0) -> st.SearchStrategy[float]:
+    """Battery capacities in mAh (use as ``fa.drone(name, battery_mah=...)``)."""
+    return st.floats(min_mah, max_mah)
+
+
+def payloads(drone_name: str = "dji-mavic-2-pro", *, min_thrust_to_weight: float = 1.6) -> st.SearchStrategy[float]:
+    """Payloads in kg that keep the drone's thrust-to-weight above the given ratio."""
+    d = _drone(drone_name)
+    max_kg = max(0.0, d.max_thrust_n / (min_thrust_to_weight * G) - d.airframe.mass_kg)
+    return st.floats(0.0, max_kg)
+
+
+def link_quality() -> st.SearchStrategy[dict]:
+    """Radio conditions: distance to the ground station (m) and packet loss probability."""
+    return st.fixed_dictionaries({"distance_m": st.floats(1.0, 2000.0),
+                                  "packet_loss": st.floats(0.0, 0.3)})
+
+
+def pilot_areas(max_side: float = 300.0, min_side: float = 20.0, max_offset: float = 200.0):
+    """Survey boxes ((x0, y0), (x1, y1)) for ZigZag pilots."""
+    def build(x0, y0, w, h):
+        return ((x0, y0), (x0 + w, y0 + h))
+    return st.builds(build, st.floats(-max_offset, max_offset), st.floats(-max_offset, max_offset),
+                     st.floats(min_side, max_side), st.floats(min_side, max_side))
+
+
+def zigzags(max_side: float = 200.0) -> st.SearchStrategy[_pilots.ZigZag]:
+    return st.builds(lambda area, alt, spacing, speed: _pilots.ZigZag(area, alt, spacing, speed),
+                     pilot_areas(max_side=max_side), st.floats(10.0, 60.0), st.floats(10.0, 40.0),
+                     st.floats(3.0, 12.0))
+
+
+def hovers(max_duration: float = 60.0) -> st.SearchStrategy[_pilots.Hover]:
+    return st.builds(lambda alt, dur: _pilots.Hover(alt, dur), st.floats(2.0, 50.0),
+                     st.floats(1.0, max_duration))
+
+
+def missions(drone: str = "dji-mavic-2-pro", *, pilots=None, wind=True, battery=True,
+             payload=True, until="landed") -> st.SearchStrategy[Mission]:
+    """Whole missions: the named drone with drawn battery and payload, a drawn
+    pilot (hovers or zig-zags by default), wind and seed."""
+    pilots = pilots if pilots is not None else st.one_of(hovers(30.0), zigzags(120.0))
+    d0 = _drone(drone)
+    cap = d0.battery.capacity_mah
+
+    def build(pilot, w, mah, kg, seed):
+        d = _drone(drone, battery_mah=mah, payload_kg=kg)
+        return Mission(d, pilot, wind=w, seed=seed, until=until)
+    return st.builds(build, pilots, winds() if wind else st.none(),
+                     batteries(0.6 * cap, 1.4 * cap) if battery else st.just(cap),
+                     payloads(drone) if payload else st.just(0.0), seeds())
+
+
+def target_margin(result, budgets: dict | None = None, *, label: str = "worst budget margin", **more) -> float:
+    """Tell hypothesis to search towards the worst (lowest) relative budget margin.
+
+    Returns that margin (positive: every budget holds)."""
+    verdicts = _budgets.evaluate(result, budgets, **more)
+    worst = min(v["rel_margin"] for v in verdicts)
+    _target(-float(worst), label=label)
+    return worst

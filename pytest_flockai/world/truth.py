@@ -1,0 +1,153 @@
+"""Ground truth: which people a camera sees, and where in the image.
+
+Pinhole projection with MuJoCo's camera convention: a camera frame
+``cam_mat`` (3x3, columns = camera x, y, z in world coordinates, as
+``MjData.cam_xmat``) looks along its -z axis with y up in the image and x to
+the right. With the vertical field of view ``fovy`` and an image of
+``width x height`` pixels, the focal length in pixels is
+``f = (height / 2) / tan(fovy / 2)`` (square pixels, as MuJoCo renders, the
+horizontal extent following the aspect ratio) and a point at camera
+coordinates (x, y, z), z < 0, lands at::
+
+    u = width / 2  + f * x / -z        (column, 0 = left edge)
+    v = height / 2 - f * y / -z        (row, 0 = top edge)
+
+A point is *in view* when it is in front of the camera and 0 <= u < width,
+0 <= v < height; the pixel that shows it is (floor(v), floor(u)).
+
+Occlusion: ``visible_people`` can drop people hidden behind axis-aligned
+boxes (``occluders``, the urban world's buildings) with a vectorised
+slab test of the segment camera -> person. People do not occlude each other,
+and geometry of ``World.from_mjcf`` scenes other than axis-aligned boxes does
+not occlude (documented limitation).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def gimbal_pose(pos, yaw: float, pitch_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """(cam_pos, cam_mat) of a camera at ``pos`` levelled by a gimbal.
+
+    The camera keeps its pitch relative to the horizon (-90 = straight down)
+    and turns with the drone's yaw (rad, counter-clockwise from east, the
+    telemetry convention); the drone's roll and pitch do not reach it. Looking
+    straight down, the top of the image points where the drone's nose points.
+    """
+    p = math.radians(pitch_deg)
+    cp, sp = math.cos(p), math.sin(p)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    fwd = np.array([cp * cy, cp * sy, sp])
+    up = np.array([-sp * cy, -sp * sy, cp])
+    right = np.cross(fwd, up)
+    return np.asarray(pos, dtype=float).reshape(3), np.column_stack([right, up, -fwd])
+
+
+def focal_px(fov_deg: float, height: int) -> float:
+    return 0.5 * height / math.tan(math.radians(fov_deg) / 2.0)
+
+
+def project(points, cam_pos, cam_mat, fov_deg: float, width: int, height: int):
+    """(uv (N, 2), depth (N,)): pixel coordinates and distance along the view axis."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    R = np.asarray(cam_mat, dtype=float).reshape(3, 3)
+    c = (pts - np.asarray(cam_pos, dtype=float).reshape(1, 3)) @ R   # camera coordinates
+    depth = -c[:, 2]
+    f = focal_px(fov_deg, height)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = 0.5 * width + f * c[:, 0] / depth
+        v = 0.5 * height - f * c[:, 1] / depth
+    return np.column_stack([u, v]), depth
+
+
+def occluded(cam_pos, points, boxes) -> np.ndarray:
+    """Mask (N,): the segment cam_pos -> point crosses one of the boxes.
+
+    boxes: (M, 6) rows (xmin, ymin, zmin, xmax, ymax, zmax). A point inside a
+    box counts as occluded.
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    b = np.asarray(boxes, dtype=float).reshape(-1, 6)
+    if len(pts) == 0 or len(b) == 0:
+        return np.zeros(len(pts), dtype=bool)
+    o = np.asarray(cam_pos, dtype=float).reshape(1, 1, 3)
+    d = pts[:, None, :] - o                        # (N, 1, 3), segment t in [0, 1]
+    lo, hi = b[None, :, :3], b[None, :, 3:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / d
+        t1 = (lo - o) * inv
+        t2 = (hi - o) * inv
+    tmin = np.where(np.isnan(t1), -np.inf, np.minimum(t1, t2))
+    tmax = np.where(np.isnan(t1), np.inf, np.maximum(t1, t2))
+    # parallel to a slab and outside it: never inside
+    par = (d == 0.0) & ((o < lo) | (o > hi))
+    enter = tmin.max(axis=2)
+    leave = tmax.min(axis=2)
+    hit = (enter <= leave) & (leave >= 0.0) & (enter <= 1.0) & ~par.any(axis=2)
+    return hit.any(axis=1)
+
+
+def visible_people(world_people, cam_pos, cam_mat, fov_deg: float, width: int, height: int, *,
+                   occluders=None, near: float = 0.05):
+    """(indices (K,), uv (K, 2)): people whose point projects inside the image.
+
+    world_people: (N, 3) points to project (``World.truth_points()``: the
+    centre of each figure). occluders: optional (M, 6) boxes hiding people.
+    """
+    pts = np.asarray(world_people, dtype=float).reshape(-1, 3)
+    uv, depth = project(pts, cam_pos, cam_mat, fov_deg, width, height)
+    ok = ((depth > near) & (uv[:, 0] >= 0.0) & (uv[:, 0] < width)
+          & (uv[:, 1] >= 0.0) & (uv[:, 1] < height))
+    idx = np.flatnonzero(ok)
+    if occluders is not None and len(idx):
+        idx = idx[~occluded(cam_pos, pts[idx], occluders)]
+    return idx, uv[idx]
+
+
+@dataclass
+class Truth:
+    """Ground truth of one camera frame.
+
+    t: simulated time (s); indices: which of ``world.people`` are in view;
+    pixels: (K, 2) their (u, v) pixel coordinates (u = column, v = row,
+    origin at the top-left corner); cam_pos / cam_mat: the camera pose.
+    """
+
+    t: float
+    indices: np.ndarray
+    pixels: np.ndarray
+    cam_pos: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    cam_mat: np.ndarray = field(default_factory=lambda: np.eye(3))
+
+    @property
+    def count(self) -> int:
+        return int(len(self.indices))
+
+    def to_dict(self) -> dict:
+        return {"t": float(self.t), "count": self.count,
+                "indices": [int(i) for i in self.indices],
+                "pixels": [[round(float(u), 2), round(float(v), 2)] for u, v in self.pixels],
+                "cam_pos": [float(x) for x in self.cam_pos]}
+
+
+class CameraModel:
+    """Pinhole model of a camera: image size and vertical field of view."""
+
+    def __init__(self, width: int, height: int, fov_deg: float):
+        self.width, self.height, self.fov_deg = int(width), int(height), float(fov_deg)
+
+    @property
+    def focal_px(self) -> float:
+        return focal_px(self.fov_deg, self.height)
+
+    def project(self, points, cam_pos, cam_mat):
+        return project(points, cam_pos, cam_mat, self.fov_deg, self.width, self.height)
+
+    def truth(self, t, points, cam_pos, cam_mat, occluders=None) -> Truth:
+        idx, uv = visible_people(points, cam_pos, cam_mat, self.fov_deg, self.width, self.height,
+                                 occluders=occluders)
+        return Truth(float(t), idx, uv, np.array(cam_pos, dtype=float), np.array(cam_mat, dtype=float))

@@ -1,0 +1,233 @@
+"""Procedural urban layout: a street grid, box buildings in the blocks, people.
+
+Pure numpy (no MuJoCo): ``layout(...)`` returns the streets, buildings and
+people of an urban world; ``World.urban`` validates the arguments and turns the
+layout into MjSpec geoms. Every draw comes from ``numpy.random.SeedSequence(seed)``
+with one child stream per concern (buildings, scattered people, each crowd,
+colours), so adding people never moves a building and adding a crowd never
+moves the scattered people.
+
+Geometry (world frame: x east, y north, z up, home at (0, 0, 0)):
+
+- the area is ``[-W/2, W/2] x [-H/2, H/2]``; streets run along x and y every
+  ``BLOCK_PITCH`` m, with a street through home;
+- each block is split into 1, 2 or 4 lots; a lot gets a building with
+  probability ``building_density``, set back 1-3 m from the lot edges, height
+  6-45 m (mid-rise city); no building comes within ``clear_radius`` of home
+  (take-off and landing) nor within two spreads (+2 m) of a crowd centre (the
+  crowd gathers on a square); buildings never overlap each other (each one is
+  inside its own lot);
+- people stand on the ground outside the buildings (0.5 m margin): scattered
+  uniformly over the area, plus Gaussian clusters (per-axis standard deviation
+  = spread) around each crowd centre.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ConfigError
+
+BLOCK_PITCH = 40.0        # m, street centre to street centre
+STREET_WIDTH = 10.0       # m, carriageway plus sidewalks
+PERSON_AREA_M2 = 0.5      # m^2 per person: the densest crowd a cluster may hold
+PERSON_MARGIN = 0.5       # m kept between a person and a building wall
+HEIGHT_RANGE = (6.0, 45.0)
+
+# (streams of SeedSequence(seed)) -- fixed keys so streams never shift
+_S_BUILDINGS, _S_SCATTER, _S_CROWDS, _S_COLOURS = range(4)
+
+
+def _rng(seed: int, *key: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=tuple(key)))
+
+
+def crowd_capacity(spread: float) -> int:
+    """Most people a cluster of this spread may hold: disc of radius 2 spreads / 0.5 m^2."""
+    return int(math.pi * (2.0 * spread) ** 2 / PERSON_AREA_M2)
+
+
+def _lot_distance(lot, x, y) -> float:
+    """Distance from point (x, y) to the rectangle lot = (x0, y0, x1, y1)."""
+    x0, y0, x1, y1 = lot
+    dx = max(x0 - x, 0.0, x - x1)
+    dy = max(y0 - y, 0.0, y - y1)
+    return math.hypot(dx, dy)
+
+
+def streets(size) -> list[tuple[float, float, float, float]]:
+    """Street rectangles (x0, y0, x1, y1) clipped to the area."""
+    W, H = size
+    out = []
+    for axis, (half_along, half_across) in ((0, (W / 2, H / 2)), (1, (H / 2, W / 2))):
+        k0 = math.ceil(-half_across / BLOCK_PITCH)
+        k1 = math.floor(half_across / BLOCK_PITCH)
+        for k in range(k0, k1 + 1):
+            c = k * BLOCK_PITCH
+            a0, a1 = max(c - STREET_WIDTH / 2, -half_across), min(c + STREET_WIDTH / 2, half_across)
+            if a1 <= a0:
+                continue
+            if axis == 0:   # street along x at y = c
+                out.append((-W / 2, a0, W / 2, a1))
+            else:           # street along y at x = c
+                out.append((a0, -H / 2, a1, H / 2))
+    return out
+
+
+def buildings(seed: int, size, *, density: float, clear_radius: float,
+              keep_clear=()) -> np.ndarray:
+    """Buildings as rows (cx, cy, hx, hy, height): centre, half sizes, height (m).
+
+    keep_clear: (x, y, radius) discs no building may touch.
+    """
+    rng = _rng(seed, _S_BUILDINGS)
+    W, H = size
+    clears = [(0.0, 0.0, clear_radius)] + list(keep_clear)
+    rows = []
+    kx0, kx1 = math.floor(-W / 2 / BLOCK_PITCH), math.ceil(W / 2 / BLOCK_PITCH)
+    ky0, ky1 = math.floor(-H / 2 / BLOCK_PITCH), math.ceil(H / 2 / BLOCK_PITCH)
+    for i in range(kx0, kx1):
+        for j in range(ky0, ky1):
+            bx0 = max(i * BLOCK_PITCH + STREET_WIDTH / 2, -W / 2)
+            bx1 = min((i + 1) * BLOCK_PITCH - STREET_WIDTH / 2, W / 2)
+            by0 = max(j * BLOCK_PITCH + STREET_WIDTH / 2, -H / 2)
+            by1 = min((j + 1) * BLOCK_PITCH - STREET_WIDTH / 2, H / 2)
+            # the same number of draws for every block keeps the stream aligned
+            split = rng.integers(0, 3)             # 0: one lot, 1: two, 2: four
+            u = rng.random((4, 6))
+            if bx1 - bx0 < 6.0 or by1 - by0 < 6.0:
+                continue
+            nx, ny = ((1, 1), (2, 1), (2, 2))[split]
+            if split == 1 and u[0, 5] < 0.5:
+                nx, ny = 1, 2
+            lw, lh = (bx1 - bx0) / nx, (by1 - by0) / ny
+            for a in range(nx):
+                for b in range(ny):
+                    r = u[a * ny + b]
+                    if r[0] >= density:
+                        continue
+                    lot = (bx0 + a * lw, by0 + b * lh, bx0 + (a + 1) * lw, by0 + (b + 1) * lh)
+                    sb = 1.0 + 2.0 * r[1:5]          # setbacks: west, east, south, north
+                    x0, x1 = lot[0] + sb[0], lot[2] - sb[1]
+                    y0, y1 = lot[1] + sb[2], lot[3] - sb[3]
+                    if x1 - x0 < 3.0 or y1 - y0 < 3.0:
+                        continue
+                    if any(_lot_distance((x0, y0, x1, y1), cx, cy) < rad for cx, cy, rad in clears):
+                        continue
+                    h = HEIGHT_RANGE[0] + (HEIGHT_RANGE[1] - HEIGHT_RANGE[0]) * r[5] ** 2
+                    rows.append(((x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2, (y1 - y0) / 2, h))
+    return np.array(rows, dtype=float).reshape(-1, 5)
+
+
+def inside_buildings(xy: np.ndarray, bld: np.ndarray, margin: float = PERSON_MARGIN) -> np.ndarray:
+    """Boolean mask: which points (N, 2) are within ``margin`` of a building footprint."""
+    if len(bld) == 0 or len(xy) == 0:
+        return np.zeros(len(xy), dtype=bool)
+    dx = np.abs(xy[:, None, 0] - bld[None, :, 0]) - bld[None, :, 2]
+    dy = np.abs(xy[:, None, 1] - bld[None, :, 1]) - bld[None, :, 3]
+    return ((dx < margin) & (dy < margin)).any(axis=1)
+
+
+def _place(rng, n, draw, bld, size, what) -> np.ndarray:
+    """Rejection-sample n ground points with ``draw(rng, k) -> (k, 2)``; outside buildings."""
+    W, H = size
+    out = np.zeros((0, 2))
+    tries = 0
+    while len(out) < n:
+        tries += 1
+        if tries > 60:
+            raise ConfigError(f"World.urban: could not place {what} outside the buildings "
+                              f"(placed {len(out)} of {n}); allowed: fewer people, a larger "
+                              f"spread or a lower building_density")
+        k = max(16, 2 * (n - len(out)))
+        p = draw(rng, k)
+        ok = (np.abs(p[:, 0]) <= W / 2) & (np.abs(p[:, 1]) <= H / 2)
+        p = p[ok]
+        p = p[~inside_buildings(p, bld)]
+        out = np.concatenate([out, p[: n - len(out)]])
+    return out
+
+
+def people(seed: int, size, scattered: int, crowds, bld: np.ndarray) -> np.ndarray:
+    """Feet positions (N, 3): the scattered people first, then each crowd in order."""
+    W, H = size
+    parts = [_place(_rng(seed, _S_SCATTER), scattered,
+                    lambda r, k: r.uniform((-W / 2, -H / 2), (W / 2, H / 2), size=(k, 2)),
+                    bld, size, f"people = {scattered} scattered people")]
+    for i, (cx, cy, count, spread) in enumerate(crowds):
+        parts.append(_place(_rng(seed, _S_CROWDS, i), count,
+                            lambda r, k, c=(cx, cy), s=spread: r.normal(c, s, size=(k, 2)),
+                            bld, size, f"crowds[{i}] ({count} people)"))
+    xy = np.concatenate(parts) if parts else np.zeros((0, 2))
+    return np.column_stack([xy, np.zeros(len(xy))])
+
+
+# clothing: saturated colours that stand out from asphalt, concrete and grass
+CLOTHES = np.array([
+    (0.85, 0.10, 0.10), (0.10, 0.25, 0.85), (0.95, 0.80, 0.10), (0.90, 0.45, 0.05),
+    (0.55, 0.10, 0.70), (0.05, 0.65, 0.75), (0.90, 0.20, 0.55), (0.95, 0.95, 0.95),
+    (0.15, 0.15, 0.18), (0.20, 0.70, 0.20), (0.60, 0.30, 0.10), (0.10, 0.45, 0.45),
+])
+SKIN = np.array([(0.98, 0.84, 0.72), (0.90, 0.72, 0.57), (0.76, 0.57, 0.42),
+                 (0.55, 0.38, 0.26), (0.36, 0.24, 0.16)])
+
+
+def colours(seed: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(clothes index (N,), skin index (N,)) into CLOTHES and SKIN, drawn from the seed."""
+    rng = _rng(seed, _S_COLOURS)
+    return rng.integers(0, len(CLOTHES), n), rng.integers(0, len(SKIN), n)
+
+
+# -- figures as merged meshes ----------------------------------------------------
+# One mesh geom per colour (clothes palette + skin palette) holding every figure
+# of that colour: the physics model then carries ~17 people geoms instead of two
+# per person. MuJoCo computes the pose of every geom at every physics step, static
+# or not: 300 figure geoms doubled the cost of mj_step (see benchmarks/camera.py).
+
+def _prism(n, r, z0, z1):
+    a = 2 * np.pi * (np.arange(n) + 0.5) / n
+    ring = np.column_stack([r * np.cos(a), r * np.sin(a)])
+    v = np.vstack([np.column_stack([ring, np.full(n, z0)]), np.column_stack([ring, np.full(n, z1)]),
+                   [[0, 0, z0], [0, 0, z1]]])
+    f = []
+    for i in range(n):
+        j = (i + 1) % n
+        f += [(i, j, n + j), (i, n + j, n + i),          # side, outward (counter-clockwise)
+              (2 * n, j, i), (2 * n + 1, n + i, n + j)]  # bottom (facing down), top (up)
+    return v, np.array(f)
+
+
+def _sphere(n, rings, r, zc):
+    v = [[0, 0, zc - r], [0, 0, zc + r]]
+    for k in range(1, rings):
+        th = np.pi * k / rings - np.pi / 2
+        for i in range(n):
+            a = 2 * np.pi * i / n
+            v.append([r * np.cos(th) * np.cos(a), r * np.cos(th) * np.sin(a), zc + r * np.sin(th)])
+    f = []
+    idx = lambda k, i: 2 + (k - 1) * n + (i % n)   # noqa: E731  ring k (1..rings-1)
+    for i in range(n):
+        f.append((0, idx(1, i + 1), idx(1, i)))
+        f.append((1, idx(rings - 1, i), idx(rings - 1, i + 1)))
+        for k in range(1, rings - 1):
+            f += [(idx(k, i), idx(k, i + 1), idx(k + 1, i + 1)), (idx(k, i), idx(k + 1, i + 1), idx(k + 1, i))]
+    return np.array(v, dtype=float), np.array(f)
+
+
+def merged(template, positions):
+    """(vertices (K*V, 3), faces (K*F, 3)): the template copied at each (x, y, z)."""
+    v, f = template
+    k = len(positions)
+    verts = (v[None, :, :] + np.asarray(positions, dtype=float)[:, None, :]).reshape(-1, 3)
+    faces = (f[None, :, :] + (np.arange(k) * len(v))[:, None, None]).reshape(-1, 3)
+    return verts, faces
+
+
+def torso_template(radius, top):
+    return _prism(8, radius, 0.0, top)
+
+
+def head_template(radius, zc):
+    return _sphere(8, 4, radius, zc)
