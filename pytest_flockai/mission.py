@@ -515,8 +515,11 @@ class _Run:
         scen["control_hz"] = 1.0 / self.ctrl_dt
         scen["controller_gains"] = self.controller.gains
         events = sorted(self.events + self.hub.errors, key=lambda e: e["t"])
-        return FlightResult(kpis, tel, events, scen, self.meter.breakdown(), self.end_reason, wall,
-                            probe_samples=frames, probe_errors=list(self.hub.errors))
+        res = FlightResult(kpis, tel, events, scen, self.meter.breakdown(), self.end_reason, wall,
+                           probe_samples=frames, probe_errors=list(self.hub.errors))
+        w = self.mission.world
+        res.people = np.asarray(w.people) if w is not None and hasattr(w, "people") else np.zeros((0, 3))
+        return res
 
     def _kpis(self) -> dict:
         """Every KPI comes out of a probe: the final sample of each enabled probe."""

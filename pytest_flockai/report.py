@@ -266,6 +266,15 @@ def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     result.telemetry.to_csv(folder / f"{_safe(flight)}.telemetry.csv")
     write_json_atomic(folder / f"{_safe(flight)}.json", result.to_dict())
+    from . import plots
+    if plots.available():
+        plots.energy_figure(result, folder / f"{_safe(flight)}.energy.png")
+        plots.path_figure(result, folder / f"{_safe(flight)}.path.png")
+    else:
+        import warnings
+        warnings.warn("pytest-flockai: matplotlib is not installed, so --flockai-artifacts writes "
+                      "telemetry and JSON but no pictures (pip install 'pytest-flockai[plots]')",
+                      stacklevel=2)
     return folder
 
 

@@ -552,3 +552,24 @@ def test_help_works_with_bad_options_in_the_ini_file(pytester):
     res.stdout.fnmatch_lines(["*pytest-flockai*", "*--flockai-baseline=PATH*"])
     res = run(pytester)
     assert res.ret == pytest.ExitCode.USAGE_ERROR
+
+
+def test_artifacts_include_pictures_or_say_why_not(pytester, tmp_path):
+    pytest.importorskip("matplotlib")
+    pytester.makepyfile(
+        """
+        import pytest
+        import pytest_flockai as fa
+
+        @pytest.mark.flockai(drone="crazyflie-2-1", pilot=fa.pilots.Hover(1.0, 0.5))
+        def test_hover(flight):
+            pass
+        """
+    )
+    art = tmp_path / "art"
+    pytester.runpytest("-p", "no:cacheprovider", f"--flockai-artifacts={art}").assert_outcomes(passed=1)
+    names = sorted(p.name for p in art.rglob("*") if p.is_file())
+    assert names == ["flight.energy.png", "flight.json", "flight.path.png", "flight.telemetry.csv"]
+    import cv2
+    img = cv2.imread(str(next(art.rglob("flight.energy.png"))))
+    assert img is not None and img.shape[0] > 200 and img.shape[1] > 400

@@ -1,0 +1,104 @@
+"""Pictures of a flight (optional: needs matplotlib, ``pip install 'pytest-flockai[plots]'``).
+
+- ``energy_figure``: the energy breakdown as in the paper's Figures 5-8: the
+  share of motors, processing and communication, and each group's sub-components.
+- ``path_figure``: the flight path seen from above, coloured by flight phase,
+  over the world's people, with the ML detections when there are any.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def available() -> bool:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+    return plt
+
+
+_GROUP_COLOURS = {"motors": "#4C72B0", "proc": "#DD8452", "comm": "#55A868"}
+
+
+def energy_figure(result, path) -> Path:
+    plt = _plt()
+    b = result.energy_breakdown
+    tops = [k for k in b if "." not in k]
+    total = sum(b[k] for k in tops) or 1.0
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [1, 2]})
+    shares = [b[k] / total for k in tops]
+    ax0.bar(tops, [100 * s for s in shares], color=[_GROUP_COLOURS.get(k, "#8172B3") for k in tops])
+    for i, s in enumerate(shares):
+        ax0.text(i, 100 * s + 1, f"{100 * s:.1f}%", ha="center", fontsize=9)
+    ax0.set_ylabel("share of E_total (%)")
+    ax0.set_title(f"E_total = {total / 1000:.1f} kJ")
+    ax0.set_ylim(0, 105)
+    # sub-components of each group, as shares of that group (paper Fig. 7 style)
+    y = 0
+    labels = []
+    for g in tops:
+        parts = sorted(((k, v) for k, v in b.items() if k.startswith(g + ".") and k.count(".") == 1),
+                       key=lambda kv: -kv[1])
+        left = 0.0
+        for k, v in parts:
+            frac = v / b[g] if b[g] else 0.0
+            ax1.barh(y, 100 * frac, left=left, color=_GROUP_COLOURS.get(g, "#8172B3"),
+                     edgecolor="white", alpha=0.55 + 0.45 * frac)
+            if frac > 0.06:
+                ax1.text(left + 50 * frac, y, f"{k.split('.', 1)[1]}\n{100 * frac:.0f}%",
+                         ha="center", va="center", fontsize=8)
+            left += 100 * frac
+        labels.append(g)
+        y += 1
+    ax1.set_yticks(range(len(labels)), labels)
+    ax1.set_xlabel("share of the group's energy (%)")
+    ax1.set_title("sub-components")
+    ax1.set_xlim(0, 100)
+    scen = result.scenario
+    fig.suptitle(f"{scen.get('drone', {}).get('name', '')}  {scen.get('pilot', {}).get('type', '')}  "
+                 f"seed {scen.get('seed')}  flight {result.kpis.get('flight_time_s', 0):.0f} s")
+    fig.tight_layout()
+    p = Path(path)
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return p
+
+
+def path_figure(result, path) -> Path:
+    plt = _plt()
+    tel = result.telemetry
+    fig, ax = plt.subplots(figsize=(6.5, 6))
+    people = getattr(result, "people", None)
+    if people is not None and len(people):
+        ax.scatter(people[:, 0], people[:, 1], s=4, c="#999999", label="people")
+    colours = {"takeoff": "#55A868", "hover": "#8172B3", "move": "#4C72B0",
+               "accelerating": "#DD8452", "landing": "#C44E52", "landed": "#000000"}
+    if "phase" in tel:
+        for ph, c in colours.items():
+            sel = tel[tel.phase == ph]
+            if len(sel):
+                ax.scatter(sel.x, sel.y, s=3, c=c, label=ph)
+    det = [e for e in result.events if e.get("kind") == "inference" and e.get("detected")]
+    if det:
+        ax.scatter([e["x"] for e in det], [e["y"] for e in det], marker="*", s=80, c="red",
+                   label="detections")
+    ax.plot([0], [0], "k^", ms=9, label="home")
+    ax.set_xlabel("x east (m)")
+    ax.set_ylabel("y north (m)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(fontsize=8, markerscale=1.5, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.set_title("flight path")
+    fig.tight_layout()
+    p = Path(path)
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return p
