@@ -50,7 +50,7 @@ UNITS: dict[str, tuple[str, float]] = {
     # data (the registry counts kilobytes, 1 kB = 1000 bytes)
     "B": ("kB", 1e-3), "kB": ("kB", 1.0), "KB": ("kB", 1.0), "MB": ("kB", 1e3), "GB": ("kB", 1e6),
     # fractions
-    "%": ("1", 0.01),
+    "%": ("fraction", 0.01),
 }
 
 _DIMENSION_UNITS = {dim: [u for u, (d, _) in UNITS.items() if d == dim]
@@ -64,6 +64,10 @@ def _allowed_units(dim: str) -> str:
     units = _DIMENSION_UNITS.get(dim, [])
     if dim == "1":
         return "a bare number or %"
+    if dim == "fraction":
+        return "a bare number (0 to 1) or %"
+    if dim == "count":
+        return "a bare number (a count)"
     return ", ".join(units) + " or a bare number (" + dim + ")"
 
 
@@ -115,7 +119,7 @@ class Budget:
         if self.unit == "%":
             return f"{v:.4g}%"
         return f"{v:.4g} {self.unit}".rstrip() if self.unit else f"{v:.6g}" + (
-            f" {self.dimension}" if self.dimension != "1" else "")
+            f" {self.dimension}" if self.dimension not in ("1", "fraction", "count") else "")
 
     def __str__(self):
         return f"{self.kpi} {self.text.strip()}"
@@ -166,7 +170,7 @@ def parse(kpi: str, text) -> Budget:
         allowed = _allowed_units(dim) if dim is not None else ", ".join(UNITS)
         raise ConfigError(f"{where}: unknown unit {unit!r}{close_matches(unit, UNITS)}; "
                           f"allowed for {kpi}: {allowed}")
-    if dim is not None and udim != dim:
+    if dim is not None and udim != dim and not (dim == "1" and udim == "fraction"):
         raise ConfigError(f"{where}: unit {unit!r} measures {_dim_name(udim)}, but {kpi} is in "
                           f"{dim!r} ({_dim_name(dim)}); allowed units: {_allowed_units(dim)}")
     limit = value * factor
@@ -180,7 +184,8 @@ def parse_many(budgets: dict) -> list[Budget]:
 
 
 _DIM_NAMES = {"s": "time", "J": "energy", "W": "power", "m": "length", "m/s": "speed",
-              "kB": "data size", "1": "a fraction or count"}
+              "kB": "data size", "1": "a plain number", "fraction": "a fraction",
+              "count": "a count"}
 
 
 def _dim_name(dim) -> str:

@@ -15,7 +15,7 @@ from .errors import ConfigError
 @dataclass(frozen=True)
 class KPI:
     name: str
-    unit: str          # "s", "J", "W", "m", "m/s", "1" (fraction or count), "kB"
+    unit: str          # "s", "J", "W", "m", "m/s", "kB", "fraction" (0..1), "count", "1" (custom, unitless)
     better: str | None
     description: str
 
@@ -31,38 +31,38 @@ _ROWS = [
     ("distance_m", "m", None, "path length flown"),
     ("max_speed_mps", "m/s", None, "highest ground speed"),
     ("tracking_error_max_m", "m", "lower", "largest distance between the drone and the pilot's reference"),
-    ("crashed", "1", "lower", "1 if the flight ended in a crash, else 0"),
+    ("crashed", "count", "lower", "1 if the flight ended in a crash, else 0"),
     # energy
     ("energy_total_j", "J", "lower", "E_total = E_motors + E_proc + E_comm"),
     ("energy_motors_j", "J", "lower", "energy drawn by the motors"),
     ("energy_proc_j", "J", "lower", "energy drawn by processing (flight controller, SoC, I/O, sensors)"),
     ("energy_comm_j", "J", "lower", "energy drawn by the radio"),
-    ("energy_share_motors", "1", None, "E_motors / E_total"),
-    ("energy_share_proc", "1", "lower", "E_proc / E_total"),
-    ("energy_share_comm", "1", "lower", "E_comm / E_total"),
+    ("energy_share_motors", "fraction", None, "E_motors / E_total"),
+    ("energy_share_proc", "fraction", "lower", "E_proc / E_total"),
+    ("energy_share_comm", "fraction", "lower", "E_comm / E_total"),
     ("mean_power_w", "W", "lower", "mean electrical power over the flight"),
-    ("battery_remaining", "1", "higher", "usable battery energy left at the end, fraction"),
+    ("battery_remaining", "fraction", "higher", "usable battery energy left at the end, fraction"),
     ("endurance_s", "s", "higher", "projected flight time to depletion at the mission's mean power"),
     # compute
-    ("cpu_utilization", "1", "lower", "busy fraction of the on-board computer"),
+    ("cpu_utilization", "fraction", "lower", "busy fraction of the on-board computer"),
     ("cpu_time_s", "s", "lower", "busy time of the on-board computer"),
     ("io_time_s", "s", "lower", "time spent on storage I/O"),
-    ("mem_utilization", "1", "lower", "memory in use on the on-board computer, fraction"),
+    ("mem_utilization", "fraction", "lower", "memory in use on the on-board computer, fraction"),
     # comm
     ("kbytes_in", "kB", None, "kilobytes received by the drone"),
     ("kbytes_out", "kB", None, "kilobytes sent by the drone"),
-    ("packets_in", "1", None, "packets received by the drone"),
-    ("packets_out", "1", None, "packets sent by the drone"),
+    ("packets_in", "count", None, "packets received by the drone"),
+    ("packets_out", "count", None, "packets sent by the drone"),
     # ML
-    ("inference_count", "1", None, "inferences completed"),
+    ("inference_count", "count", None, "inferences completed"),
     ("inference_latency_p50_s", "s", "lower", "median inference latency, capture to result"),
     ("inference_latency_p95_s", "s", "lower", "95th percentile inference latency"),
     ("inference_latency_max_s", "s", "lower", "largest inference latency"),
-    ("frames_dropped", "1", "lower", "frames skipped because the model was busy"),
-    ("count_mae", "1", "lower", "mean absolute error of the people count"),
-    ("detection_precision", "1", "higher", "precision of crowd detection"),
-    ("detection_recall", "1", "higher", "recall of crowd detection"),
-    ("detection_delay_frames", "1", "lower", "frames from a crowd entering view until detected"),
+    ("frames_dropped", "count", "lower", "frames skipped because the model was busy"),
+    ("count_mae", "count", "lower", "mean absolute error of the people count"),
+    ("detection_precision", "fraction", "higher", "precision of crowd detection"),
+    ("detection_recall", "fraction", "higher", "recall of crowd detection"),
+    ("detection_delay_frames", "count", "lower", "frames from a crowd entering view until detected"),
 ]
 
 REGISTRY: dict[str, KPI] = {r[0]: KPI(*r) for r in _ROWS}

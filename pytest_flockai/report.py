@@ -292,7 +292,9 @@ def format_kpi(name: str, value) -> str:
         return "nan"
     info = _kpis.get(name)
     unit = info.unit if info is not None else ""
-    if unit == "1":
+    if unit == "fraction":
+        return f"{v * 100:.3g}%"
+    if unit in ("1", "count"):
         if name.startswith(_FRACTIONS):
             return f"{v * 100:.3g}%"
         return f"{v:.6g}"

@@ -161,3 +161,14 @@ def test_custom_dotted_kpi_after_registration_checks_the_unit():
     kpis.register("budgettest.temp", unit="degC")
     assert parse("budgettest.temp", "<= 70 degC").limit == 70.0
     assert parse("budgettest.temp", "<= 70").limit == 70.0
+
+
+def test_percent_only_for_fractions_not_counts():
+    from pytest_flockai.budgets import parse
+    from pytest_flockai import ConfigError
+    assert parse("energy_share_proc", "< 25%").limit == 0.25
+    assert parse("packets_out", "<= 100").limit == 100
+    with pytest.raises(ConfigError, match="packets_out.*count"):
+        parse("packets_out", "< 5%")
+    with pytest.raises(ConfigError, match="crashed"):
+        parse("crashed", "== 0 %")
