@@ -5,7 +5,7 @@ The public API (see DESIGN.md): ``blueprints``, ``drone``, ``pilots``,
 """
 
 from . import control as _control
-from . import kpis, probes
+from . import kpis, probes, sensors
 from .airframe import Drone, blueprints, drone
 from .compute import devices
 from .control import pilots
@@ -18,6 +18,6 @@ from .world import Wind, World
 __version__ = "0.1.0"
 
 __all__ = ["ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
-           "SimulationError", "Wind", "World", "blueprints", "devices", "drone", "kpis", "pilots", "probes",
+           "SimulationError", "Wind", "World", "blueprints", "devices", "drone", "kpis", "pilots", "probes", "sensors",
            "__version__"]
 del _control

@@ -21,8 +21,9 @@ import pandas as pd
 
 from . import _check
 from .airframe.drone import Drone, G
-from .airframe.model import build_model
+from .airframe.model import build_spec
 from .control.controller import CascadedController
+from .control.estimator import NavEstimator
 from .control.pilots import Pilot
 from .control.trajectory import Leg, Path
 from .energy.components import Usage
@@ -67,7 +68,7 @@ class Mission:
     def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
                  seed: int = 0, until="landed", *, return_home: bool = True,
                  max_time_s: float = 4 * 3600.0, telemetry_hz: float = 10.0,
-                 energy_hz: float = 20.0,
+                 energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
@@ -99,6 +100,12 @@ class Mission:
         self.climb_speed = _check.positive("climb_speed", climb_speed, where="Mission")
         self.descent_speed = _check.positive("descent_speed", descent_speed, where="Mission")
         self.name = name
+        self.sensors = list(sensors or ())
+        from .sensors import Sensor
+        for i, sn in enumerate(self.sensors):
+            if not isinstance(sn, Sensor):
+                raise ConfigError(f"Mission: sensors[{i}] = {sn!r} is not a Sensor")
+        self.fly_on = _check.choice("fly_on", fly_on, ("truth", "estimate"), where="Mission")
 
     def subscribe(self, target) -> "Mission":
         """Receive probe samples live: ``target`` is a callable ``fn(sample)`` or a
@@ -116,6 +123,8 @@ class Mission:
             "seed": self.seed, "until": self.until, "return_home": self.return_home,
             "tasks": [getattr(t, "to_dict", lambda: repr(t))() for t in self.tasks],
             "probes": [p.to_dict() for p in self.probes],
+            "sensors": [sn.name for sn in self.drone.extra_sensors + self.sensors],
+            "fly_on": self.fly_on,
         }
 
     def __repr__(self):
@@ -155,11 +164,19 @@ class _Run:
         self.substeps = max(1, int(round(sim.physics_hz / sim.control_hz)))
         physics_dt = 1.0 / sim.physics_hz
         self.ctrl_dt = physics_dt * self.substeps
-        self.model = build_model(drone, m.world, physics_dt=physics_dt)
+        self.suite = self._sensor_suite(m, drone)
+        spec = build_spec(drone, m.world, physics_dt=physics_dt)
+        self.suite.add_to_spec(spec, "drone")
+        self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
         mujoco.mj_forward(self.model, self.data)
+        self.battery_remaining = 1.0
+        if "battery" in self.suite and getattr(self.suite["battery"], "source", None) is None:
+            self.suite["battery"].source = lambda: self.battery_remaining
+        self.suite.bind(self.model, self.data, seed_sequence(m.seed, "sensors"), world=m.world)
+        self.estimator = NavEstimator() if m.fly_on == "estimate" else None
         self.controller = CascadedController(drone, self.ctrl_dt)
-        self.meter = Meter(drone.energy, drone)
+        self.meter = Meter(self._energy_model(drone), drone)
         self.usage = Usage(drone.airframe.rotor_count)
         self.events: list[dict] = []
         self.view = RunView(mission, self.meter)
@@ -226,6 +243,7 @@ class _Run:
         # bookkeeping (phases, distance, tracking error) at 50 Hz, or every tick if slower
         book_dt = self.book_dt = max(dt, 0.02 // dt * dt)
         hub = self.hub
+        suite, navest = self.suite, self.estimator
         next_book = 0.0
         t_book = 0.0
         a_filt = math.exp(-book_dt / 0.2)  # 0.2 s smoothing of |dv/dt|
@@ -257,17 +275,26 @@ class _Run:
                     f"simulation diverged at t = {t:.3f} s (position or velocity not finite: "
                     f"z = {z!r}, vx = {vx!r}); check the blueprint's inertia and rotor "
                     f"coefficients or lower the physics timestep")
+            # -- sensors (only those something reads) and the estimate ----------
+            if t >= suite.next_due:
+                suite.step(t, d)
+            # the pilot and controller fly on qc/vc (estimates or truth); everything
+            # measured (phases, distance, tracking, telemetry) uses the true state
+            if navest is not None:
+                qc, vc = navest.update(t, q, v, suite)
+            else:
+                qc, vc = q, v
             # -- setpoint by stage --------------------------------------
             if stage == _S_PILOT:
-                if pupdate(t, (q[0], q[1], z, vx, vy, vz), sp):
+                if pupdate(t, (qc[0], qc[1], qc[2], vc[0], vc[1], vc[2]), sp):
                     stage, path, t_stage = self._after_pilot(t, q, sp)
             elif stage != _S_DONE:
                 if path.fill(t - t_stage, sp):
                     if stage == _S_TAKEOFF:
                         stage = _S_PILOT
-                        pilot.start(t, (q[0], q[1], z), accel)
+                        pilot.start(t, (qc[0], qc[1], qc[2]), accel)
                         self._event(t, "stage", stage="pilot")
-                        pilot.update(t, (q[0], q[1], z, vx, vy, vz), sp)
+                        pilot.update(t, (qc[0], qc[1], qc[2], vc[0], vc[1], vc[2]), sp)
                     elif stage == _S_RETURN:
                         stage, t_stage = _S_LAND, t
                         path = Path([Leg((sp[0], sp[1], sp[2]), (sp[0], sp[1], ground_z - 0.5),
@@ -282,7 +309,7 @@ class _Run:
                 dctrl[:] = 0.0
                 airborne = False
             else:
-                f = cupdate(q, v, sp)
+                f = cupdate(qc, vc, sp)
                 if f[0] != f[0]:
                     raise SimulationError(
                         f"the controller produced NaN rotor thrust at t = {t:.3f} s (stage "
@@ -322,6 +349,7 @@ class _Run:
                 tx_b = tx_p = rx_b = rx_p = 0
                 power = mstep(u)
                 energy_j += power * edt
+                self.battery_remaining = max(0.0, 1.0 - energy_j / e_usable)
                 t_e = t
                 next_e += e_period
             # -- phases and flight KPIs, on the bookkeeping clock -----------------
@@ -409,6 +437,45 @@ class _Run:
         self._record(t, q, qvel.tolist(), sp, w, _LANDED if not airborne else phase, stage,
                      meter.last_power, energy_j, e_usable)
 
+    @staticmethod
+    def _sensor_suite(m, drone):
+        """The sensors read in this flight: the ones added to the drone or the
+        mission, GPS and barometer when flying on estimates, and the blueprint's
+        camera (rendered only when something asks for a frame). The blueprint's
+        other sensors draw power through the energy model but are not read."""
+        from .sensors import GPS, Barometer, Camera, SensorSuite
+        chosen = list(drone.extra_sensors) + list(m.sensors)
+        names = {sn.name for sn in chosen}
+        if m.fly_on == "estimate":
+            for cls, name in ((GPS, "gps"), (Barometer, "barometer")):
+                if name not in names:
+                    chosen.append(cls())
+                    names.add(name)
+        if drone.camera is not None and "camera" in drone.sensors and "camera" not in names:
+            chosen.append(Camera.from_blueprint(drone))
+        return SensorSuite(chosen)
+
+    def _energy_model(self, drone):
+        """The drone's energy model, plus the power of sensors added to the drone or
+        mission (in ``proc.sensors``), for this flight only."""
+        from .energy import Constant, Group
+        extra = [sn for sn in list(drone.extra_sensors) + list(self.mission.sensors)
+                 if getattr(sn, "power_w", 0.0) > 0.0]
+        if not extra:
+            return drone.energy
+        model = drone.energy.copy()
+        proc = model.component("proc") if "proc" in model else None
+        if proc is None:
+            proc = Group("proc")
+            model.add(proc)
+        if "sensors" not in proc:
+            proc.add(Group("sensors"))
+        group = proc.component("sensors")
+        for sn in extra:
+            if sn.name not in group:
+                group.add(Constant(sn.name, sn.power_w, f"{type(sn).__name__} sensor"))
+        return model
+
     def _sync_view(self, t, q, v, stage):
         vw = self.view
         vw.t = t
@@ -453,6 +520,10 @@ class _Run:
                   "battery_remaining")
 
     def _rec_alloc(self, rows, n_rot):
+        # readings of the polled, numeric sensors, sampled at the telemetry rate
+        polled = [sn.name for sn in self.suite.sensors if not getattr(sn, "on_demand", False)]
+        self._sensor_hist = {n: [] for n in polled} if polled else None
+        self._est_hist = []
         self._cols = list(self._BASE_COLS) + [f"thrust_{i}" for i in range(n_rot)] + \
             [f"energy_{k}_j" for k in ("motors", "proc", "comm")]
         self._buf = np.empty((max(rows, 16), len(self._cols)))
@@ -487,6 +558,12 @@ class _Run:
                         sp[0], sp[1], sp[2], w[0], w[1], w[2], power, energy_j,
                         max(0.0, 1.0 - energy_j / e_usable), *self.data.act.tolist(), em, ep, ec)
         self._t[i] = t
+        if self._sensor_hist is not None:
+            latest = self.suite.latest
+            for name, rows in self._sensor_hist.items():
+                rows.append(latest.get(name))
+            if self.estimator is not None and self.estimator.p is not None:
+                self._est_hist.append(tuple(self.estimator.p))
         self._phase[i] = phase
         self._stage[i] = stage
         self._n = i + 1
@@ -500,6 +577,7 @@ class _Run:
                            index=pd.Index(self._t[:n].copy(), name="t"))
         tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(PHASES))
         tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(STAGES))
+        self._sensor_columns(tel, n)
         kpis = self._kpis()
         frames = self.hub.frames()
         for name, df in frames.items():   # probe metrics into the telemetry, as of each row
@@ -520,6 +598,29 @@ class _Run:
         w = self.mission.world
         res.people = np.asarray(w.people) if w is not None and hasattr(w, "people") else np.zeros((0, 3))
         return res
+
+    def _sensor_columns(self, tel, n):
+        """Sensor readings as telemetry columns ``sensor.<name>`` (vectors: ``.0``, ``.1``...)."""
+        if self._sensor_hist:
+            for name, rows in self._sensor_hist.items():
+                rows = rows[:n]
+                first = next((r for r in rows if r is not None), None)
+                try:
+                    arr = np.asarray(first, dtype=float)
+                except (TypeError, ValueError):
+                    continue
+                if arr.ndim == 0:
+                    tel[f"sensor.{name}"] = [np.nan if r is None else float(r) for r in rows]
+                elif arr.ndim == 1 and arr.size <= 16:
+                    vals = np.full((len(rows), arr.size), np.nan)
+                    for i, r in enumerate(rows):
+                        if r is not None:
+                            vals[i] = r
+                    for j in range(arr.size):
+                        tel[f"sensor.{name}.{j}"] = vals[:, j]
+        if self._est_hist and len(self._est_hist) >= n:
+            e = np.asarray(self._est_hist[:n])
+            tel["est_x"], tel["est_y"], tel["est_z"] = e[:, 0], e[:, 1], e[:, 2]
 
     def _kpis(self) -> dict:
         """Every KPI comes out of a probe: the final sample of each enabled probe."""

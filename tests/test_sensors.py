@@ -121,7 +121,7 @@ def test_noise_is_reproducible_from_the_mission_seed(model):
         for k in range(300):
             suite.step(k * 0.01, d)
             out.append(np.r_[suite.latest["gps"], suite.latest["imu"], suite.latest["compass"],
-                             suite.latest["baro"], suite.latest["temperature"]])
+                             suite.latest["barometer"], suite.latest["temperature"]])
         return np.array(out)
     a, b, c = run(5), run(5), run(6)
     assert np.array_equal(a, b)

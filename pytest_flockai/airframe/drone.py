@@ -84,6 +84,7 @@ class Drone:
         _no_unknown(sensors, {"names"}, f"{where} [sensors]")
         self.sensors = list(sensors.get("names", []))
         self.payload_kg = 0.0
+        self.extra_sensors = []
         energy = EnergyParams(data["energy"], where=f"{where} [energy]")
         from ..energy import EnergyModel
         self.energy = EnergyModel.from_params(energy, self)
@@ -132,6 +133,23 @@ class Drone:
             out.append((r * math.cos(a), r * math.sin(a), 1.0 if i % 2 == 0 else -1.0))
         return out
 
+    def add_sensor(self, sensor) -> "Drone":
+        """Attach a sensor (paper Listing 2: ``mydrone.addSensor(temp)``): a
+        ``fa.sensors`` object or a Sensor subclass. It is read at its rate in every
+        flight and its power is added to the energy model's ``proc.sensors``."""
+        from ..sensors import Sensor
+        if not isinstance(sensor, Sensor):
+            raise ConfigError(f"{self.name}: add_sensor({sensor!r}): expected a Sensor "
+                              f"(fa.sensors.GPS(), TemperatureSensor(...), a Sensor subclass)")
+        names = {getattr(s, "name", None) for s in self.extra_sensors} | set(self.sensors)
+        if sensor.name in names:
+            raise ConfigError(f"{self.name}: a sensor named {sensor.name!r} is already on the drone; "
+                              f"give it another name")
+        self.extra_sensors.append(sensor)
+        return self
+
+    addSensor = add_sensor
+
     def check(self, where: str | None = None) -> None:
         """Cross-field checks (thrust-to-weight); run again before every flight."""
         where = where or self.source
@@ -150,7 +168,8 @@ class Drone:
         """JSON-ready description, as it goes into a flight's scenario."""
         return {
             "name": self.name, "source": self.source, "payload_kg": self.payload_kg,
-            "mass_kg": self.mass_kg, "device": self.device, "sensors": list(self.sensors),
+            "mass_kg": self.mass_kg, "device": self.device,
+            "sensors": list(self.sensors) + [s.name for s in self.extra_sensors],
             "airframe": self.airframe.to_dict(), "rotor": self.rotor.to_dict(),
             "battery": self.battery.to_dict(), "sim": self.sim.to_dict(),
             "energy": self.energy.describe(),

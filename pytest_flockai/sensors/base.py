@@ -195,6 +195,11 @@ class SensorSuite:
         self.bound = True
 
     # -- the loop -------------------------------------------------------------
+    @property
+    def next_due(self) -> float:
+        """Simulated time at which the next polled sensor is due (inf if none)."""
+        return self._next
+
     def step(self, t: float, data) -> None:
         """Read the sensors due at simulated time t; one comparison when none is."""
         if t < self._next:

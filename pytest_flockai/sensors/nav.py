@@ -156,7 +156,7 @@ class Barometer(_BodySensor):
     """
 
     def __init__(self, rate_hz: float = 50.0, noise_std: float = 0.1, *, bias_std: float = 0.0,
-                 name: str = "baro", power_w: float = 0.001, body_name: str = "drone"):
+                 name: str = "barometer", power_w: float = 0.001, body_name: str = "drone"):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w, body_name=body_name)
         w = f"Barometer {name!r}"
         self.noise_std = _check.non_negative("noise_std", noise_std, where=w)
