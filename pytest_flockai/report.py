@@ -64,6 +64,7 @@ from importlib import metadata
 from pathlib import Path
 
 from . import kpis as _kpis
+from ._io import atomic_write
 
 SCHEMA = "pytest-flockai/1"
 BASELINE_SCHEMA = "pytest-flockai-baseline/1"
@@ -140,19 +141,7 @@ def write_json_atomic(path: Path, data) -> None:
     """Write ``data`` as JSON to ``path`` through a temporary file and ``os.replace``."""
     path = Path(path)
     text = json.dumps(jsonable(data), indent=2, sort_keys=False, allow_nan=False) + "\n"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    atomic_write(path, lambda fh: fh.write(text))
 
 
 # -- the JSON report -------------------------------------------------------------------

@@ -13,12 +13,11 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import pandas as pd
 
+from ._io import atomic_write
 from .errors import ConfigError
 
 FORMAT = "pytest-flockai-flight/1"
@@ -187,14 +186,4 @@ def _sidecar(p: Path) -> Path:
 
 
 def _atomic(path: Path, write, *, text: bool):
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w" if text else "wb") as fh:
-            write(fh)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    atomic_write(path, write, text=text)
