@@ -5,19 +5,20 @@ The public API (see DESIGN.md): ``blueprints``, ``drone``, ``pilots``,
 """
 
 from . import control as _control
-from . import kpis, probes, sensors
+from . import kpis, ml, probes, sensors
 from .airframe import Drone, blueprints, drone
 from .compute import devices
 from .control import pilots
 from .energy import EnergyModel
 from .errors import ConfigError, FlockAIError, SimulationError
 from .mission import Mission
+from .ml import Task
 from .result import FlightResult
 from .world import Wind, World
 
 __version__ = "0.1.0"
 
 __all__ = ["ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
-           "SimulationError", "Wind", "World", "blueprints", "devices", "drone", "kpis", "pilots", "probes", "sensors",
+           "SimulationError", "Task", "Wind", "World", "blueprints", "devices", "drone", "kpis", "ml", "pilots", "probes", "sensors",
            "__version__"]
 del _control

@@ -59,6 +59,7 @@ _ROWS = [
     ("inference_latency_p95_s", "s", "lower", "95th percentile inference latency"),
     ("inference_latency_max_s", "s", "lower", "largest inference latency"),
     ("frames_dropped", "count", "lower", "frames skipped because the model was busy"),
+    ("inference_failures", "count", "lower", "inferences whose model raised (the flight went on)"),
     ("count_mae", "count", "lower", "mean absolute error of the people count"),
     ("detection_precision", "fraction", "higher", "precision of crowd detection"),
     ("detection_recall", "fraction", "higher", "recall of crowd detection"),

@@ -34,6 +34,8 @@ from .probes.hub import ProbeHub, RunView, resolve_probes
 from .world.wind import Wind
 
 UNTIL = ("landed", "battery_depleted", "battery_reserve")
+_NAV_SENSORS = {"gps", "imu", "compass", "barometer", "rangefinder", "battery"}
+OS_MEMORY_MB = 250.0     # estimate: Raspberry Pi OS Lite + flight software resident set
 PHASES = ("takeoff", "hover", "move", "accelerating", "landing", "landed")
 _TAKEOFF, _HOVER, _MOVE, _ACCEL, _LANDING, _LANDED = range(6)
 # mission stages (what the drone is commanded to do)
@@ -69,6 +71,7 @@ class Mission:
                  seed: int = 0, until="landed", *, return_home: bool = True,
                  max_time_s: float = 4 * 3600.0, telemetry_hz: float = 10.0,
                  energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
+                 dataset_dir=None, dataset_period_s: float = 1.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
@@ -87,7 +90,7 @@ class Mission:
         self.drone = drone
         self.pilot = pilot
         self.world = world
-        self.tasks = tuple(tasks or ())
+        self.tasks = _check_tasks(tasks, drone, sensors)
         self.probes = resolve_probes(probes)
         self.subscribers: list = []
         self.wind = Wind.coerce(wind)
@@ -106,6 +109,11 @@ class Mission:
             if not isinstance(sn, Sensor):
                 raise ConfigError(f"Mission: sensors[{i}] = {sn!r} is not a Sensor")
         self.fly_on = _check.choice("fly_on", fly_on, ("truth", "estimate"), where="Mission")
+        self.dataset_dir = dataset_dir
+        self.dataset_period_s = _check.positive("dataset_period_s", dataset_period_s, where="Mission")
+        if dataset_dir is not None and drone.camera is None:
+            raise ConfigError(f"Mission: dataset_dir = {str(dataset_dir)!r} needs a camera, and "
+                              f"{drone.name} has no [camera] section")
 
     def subscribe(self, target) -> "Mission":
         """Receive probe samples live: ``target`` is a callable ``fn(sample)`` or a
@@ -145,6 +153,41 @@ class Mission:
         return result
 
 
+def _check_tasks(tasks, drone, sensors):
+    from .ml import Task
+    from .probes.builtin import BUILTIN
+    tasks = tuple(tasks or ())
+    names = set()
+    reserved = {cls.name for cls in BUILTIN}
+    extra = {sn.name for sn in list(drone.extra_sensors) + list(sensors or ())}
+    for i, tk in enumerate(tasks):
+        if not isinstance(tk, Task):
+            raise ConfigError(f"Mission: tasks[{i}] = {tk!r} is not a Task; use "
+                              f"fa.Task(model, sensor='camera', period_s=5.0, ...)")
+        if tk.name in names:
+            raise ConfigError(f"Mission: two tasks are named {tk.name!r}; give them name=... "
+                              f"(task names prefix their KPIs)")
+        if tk.name in reserved:
+            raise ConfigError(f"Mission: task name {tk.name!r} clashes with a built-in probe; "
+                              f"give the task another name=")
+        names.add(tk.name)
+        if tk.sensor == "camera":
+            if drone.camera is None and "camera" not in extra:
+                raise ConfigError(f"task {tk.name!r} reads sensor 'camera', but {drone.name} has no "
+                                  f"[camera] section; add one to the blueprint or add a camera "
+                                  f"sensor (drone.add_sensor(fa.sensors.ReplayCamera(...)))")
+        elif tk.sensor not in extra and tk.sensor not in _NAV_SENSORS:
+            raise ConfigError(f"task {tk.name!r} reads sensor {tk.sensor!r}, which is not on "
+                              f"{drone.name}; add it with drone.add_sensor(...) or "
+                              f"Mission(sensors=[...]); built in: camera, "
+                              f"{', '.join(sorted(_NAV_SENSORS))}")
+    onboard = {tk.device.name for tk in tasks if tk.execution == "onboard"}
+    if len(onboard) > 1:
+        raise ConfigError(f"Mission: on-board tasks name different computers ({', '.join(sorted(onboard))}); "
+                          f"a drone has one on-board computer: give them the same device")
+    return tasks
+
+
 def _notify(result, mission):
     for fn in list(FLIGHT_OBSERVERS):
         fn(result, mission)
@@ -177,10 +220,27 @@ class _Run:
         self.estimator = NavEstimator() if m.fly_on == "estimate" else None
         self.controller = CascadedController(drone, self.ctrl_dt)
         self.meter = Meter(self._energy_model(drone), drone)
+        # ML tasks: one runner each, seeded per task from the mission seed
+        self.runners = []
+        children = seed_sequence(m.seed, "tasks").spawn(len(m.tasks)) if m.tasks else []
+        for tk, child in zip(m.tasks, children):
+            r = tk.runner()
+            r.bind(np.random.default_rng(child), t0=0.0)
+            self.runners.append(r)
+        self.recorder = _DatasetRecorder(m.dataset_period_s) if m.dataset_dir is not None else None
+        self.cpu_time_s = 0.0
+        self.in_view: list = []          # (t, people in view) at every rendered frame
+        self.capture_pos: dict = {}      # t -> drone (x, y, z) at captures
+        dev = self._onboard_device(m, drone)
+        mem = OS_MEMORY_MB + sum(4e-6 * float(getattr(tk.model, "params", 0) or 0) for tk in m.tasks
+                                 if tk.execution == "onboard")
+        self.mem_utilization = min(1.0, mem / dev.memory_mb) if dev is not None else 0.0
         self.usage = Usage(drone.airframe.rotor_count)
         self.events: list[dict] = []
         self.view = RunView(mission, self.meter)
-        self.hub = ProbeHub(mission.probes, mission.subscribers)
+        from .probes.builtin import TaskProbe
+        task_probes = [TaskProbe(tk.name) for tk in mission.tasks]
+        self.hub = ProbeHub(list(mission.probes) + task_probes, mission.subscribers)
         self.hub.bind(self.view)
         self.phase_ticks = [0] * 6
         self.book_dt = self.ctrl_dt
@@ -244,6 +304,8 @@ class _Run:
         book_dt = self.book_dt = max(dt, 0.02 // dt * dt)
         hub = self.hub
         suite, navest = self.suite, self.estimator
+        consumers = list(self.runners) + ([self.recorder] if self.recorder is not None else [])
+        task_next = min((c.next_frame_t for c in consumers), default=math.inf)
         next_book = 0.0
         t_book = 0.0
         a_filt = math.exp(-book_dt / 0.2)  # 0.2 s smoothing of |dv/dt|
@@ -278,6 +340,10 @@ class _Run:
             # -- sensors (only those something reads) and the estimate ----------
             if t >= suite.next_due:
                 suite.step(t, d)
+            # ML tasks and the dataset recorder take frames when due, while the
+            # drone surveys (pilot and return stages; not on the ground)
+            if t >= task_next - CLOCK_EPS and (stage == _S_PILOT or stage == _S_RETURN):
+                task_next = self._feed(t, q, consumers)
             # the pilot and controller fly on qc/vc (estimates or truth); everything
             # measured (phases, distance, tracking, telemetry) uses the true state
             if navest is not None:
@@ -341,6 +407,13 @@ class _Run:
                 u.v_rel_body = (R[0] * rvx + R[3] * rvy + R[6] * rvz,
                                 R[1] * rvx + R[4] * rvy + R[7] * rvz,
                                 R[2] * rvx + R[5] * rvy + R[8] * rvz)
+                if self.runners:
+                    busy, tb, tp, rb, rp = self._task_usage(t)
+                    tx_b += tb
+                    tx_p += tp
+                    rx_b += rb
+                    rx_p += rp
+                    u.soc_busy = min(1.0, busy / edt) if edt > 0 else 0.0
                 u.tx_bytes, u.tx_packets, u.rx_bytes, u.rx_packets = tx_b, tx_p, rx_b, rx_p
                 self.bytes_out += tx_b
                 self.bytes_in += rx_b
@@ -420,6 +493,10 @@ class _Run:
                     f"MuJoCo reset the simulation at t = {t:.3f} s (unstable physics: "
                     f"{_warnings(d)}); check the blueprint or lower the physics timestep")
         t = d.time
+        if self.runners:
+            busy, tb, tp, rb, rp = self._task_usage(t)
+            tx_b, tx_p, rx_b, rx_p = tx_b + tb, tx_p + tp, rx_b + rb, rx_p + rp
+            u.soc_busy = min(1.0, busy / (t - t_e)) if t > t_e else 0.0
         if t > t_e:   # charge the last partial energy interval
             u.dt, u.t, u.airborne = t - t_e, t, airborne
             u.thrust = act.tolist()
@@ -446,24 +523,104 @@ class _Run:
         from .sensors import GPS, Barometer, Camera, SensorSuite
         chosen = list(drone.extra_sensors) + list(m.sensors)
         names = {sn.name for sn in chosen}
+        from .sensors import IMU, BatterySensor, Compass, Rangefinder
+        nav = {"gps": GPS, "barometer": Barometer, "imu": IMU, "compass": Compass,
+               "rangefinder": Rangefinder, "battery": BatterySensor}
+        wanted = [tk.sensor for tk in m.tasks if tk.sensor in nav]
         if m.fly_on == "estimate":
-            for cls, name in ((GPS, "gps"), (Barometer, "barometer")):
-                if name not in names:
-                    chosen.append(cls())
-                    names.add(name)
-        if drone.camera is not None and "camera" in drone.sensors and "camera" not in names:
+            wanted += ["gps", "barometer"]
+        for name in wanted:
+            if name not in names:
+                chosen.append(nav[name]())
+                names.add(name)
+        if drone.camera is not None and "camera" not in names and (
+                "camera" in drone.sensors or m.dataset_dir is not None
+                or any(tk.sensor == "camera" for tk in m.tasks)):
             chosen.append(Camera.from_blueprint(drone))
         return SensorSuite(chosen)
 
+    def _feed(self, t, q, consumers):
+        """Give a frame (rendered once per tick) or sensor value to every due consumer."""
+        cache = {}
+        pos = (q[0], q[1], q[2])
+        for c in consumers:
+            if not c.due(t):
+                continue
+            name = getattr(c, "sensor", None) or c.task.sensor
+            if name not in cache:
+                if name not in self.suite:
+                    cache[name] = (None, None)
+                else:
+                    value = self.suite.read(name, t, self.data)
+                    truth = getattr(self.suite[name], "last_truth", None)
+                    if truth is not None:
+                        self.in_view.append((t, truth.count))
+                    cache[name] = (value, truth)
+                self.capture_pos[round(t, 6)] = pos
+            value, truth = cache[name]
+            c.on_frame(t, value, truth if not hasattr(truth, "count") else truth.count, pos) \
+                if not isinstance(c, _DatasetRecorder) else c.on_frame(t, value, truth, pos)
+        return min((c.next_frame_t for c in consumers), default=math.inf)
+
+    def _task_usage(self, t):
+        busy = 0.0
+        tb = tp = rb = rp = 0
+        for r in self.runners:
+            r.advance(t)
+            b, a1, a2, a3, a4 = r.take_usage()
+            busy += b
+            tb += a1
+            tp += a2
+            rb += a3
+            rp += a4
+        self.cpu_time_s += busy
+        return busy, tb, tp, rb, rp
+
+    def _task_kpis(self):
+        """Combined KPIs over all tasks and each task's own."""
+        by = {r.task.name: r.kpis() for r in self.runners}
+        if len(self.runners) == 1:
+            return next(iter(by.values())), by
+        from .ml.metrics import percentile
+        lat = [e.latency_s for r in self.runners for e in r.events if e.ok]
+        comb = {"inference_count": float(len(lat)),
+                "inference_latency_p50_s": percentile(lat, 50),
+                "inference_latency_p95_s": percentile(lat, 95),
+                "inference_latency_max_s": max(lat) if lat else math.nan,
+                "frames_dropped": sum(k["frames_dropped"] for k in by.values()),
+                "inference_failures": sum(k["inference_failures"] for k in by.values())}
+        return comb, by
+
+    @staticmethod
+    def _onboard_device(m, drone):
+        """The on-board computer: the on-board tasks' device, else the blueprint's."""
+        from .compute import device
+        for tk in m.tasks:
+            if tk.execution == "onboard":
+                return tk.device
+        return device(drone.device) if drone.device != "none" else None
+
     def _energy_model(self, drone):
-        """The drone's energy model, plus the power of sensors added to the drone or
-        mission (in ``proc.sensors``), for this flight only."""
-        from .energy import Constant, Group
+        """The drone's energy model for this flight: plus the power of sensors added
+        to the drone or mission (in ``proc.sensors``), and with the on-board tasks'
+        computer as ``proc.soc`` when it differs from the blueprint's."""
+        from .energy import Constant, Group, SoC
         extra = [sn for sn in list(drone.extra_sensors) + list(self.mission.sensors)
                  if getattr(sn, "power_w", 0.0) > 0.0]
-        if not extra:
+        dev = self._onboard_device(self.mission, drone)
+        swap_soc = dev is not None and dev.name != drone.device
+        if not extra and not swap_soc:
             return drone.energy
         model = drone.energy.copy()
+        if swap_soc and "proc" in model:
+            proc = model.component("proc")
+            soc = SoC("soc", dev.idle_w, dev.active_w, f"on-board computer {dev.name}")
+            if "soc" in proc:
+                proc.replace("soc", soc)
+            else:
+                proc.add(soc)
+        if not extra:
+            return model
         proc = model.component("proc") if "proc" in model else None
         if proc is None:
             proc = Group("proc")
@@ -488,6 +645,11 @@ class _Run:
         vw.crashed = self.crashed
         vw.bytes_in, vw.bytes_out = self.bytes_in, self.bytes_out
         vw.packets_in, vw.packets_out = self.pkts_in, self.pkts_out
+        vw.cpu_time_s = self.cpu_time_s
+        vw.mem_utilization = self.mem_utilization
+        vw.sensors = self.suite.latest
+        if self.runners:
+            vw.task_kpis, vw.task_kpis_by_task = self._task_kpis()
 
     def _after_pilot(self, t, q, sp, force_home=False):
         ms = self.mission
@@ -592,7 +754,26 @@ class _Run:
         scen["physics_hz"] = self.mission.drone.sim.physics_hz
         scen["control_hz"] = 1.0 / self.ctrl_dt
         scen["controller_gains"] = self.controller.gains
-        events = sorted(self.events + self.hub.errors, key=lambda e: e["t"])
+        inf_events = []
+        for r in self.runners:
+            thr = r.task.crowd_threshold
+            for e in r.events:
+                d = e.to_dict()
+                d["t"] = round(float(e.t_done if e.t_done is not None else e.t_capture), 6)
+                pos = self.capture_pos.get(round(float(e.t_capture), 6))
+                if pos is not None:
+                    d["x"], d["y"], d["z"] = pos
+                d["detected"] = bool(e.ok and e.count is not None and e.count >= thr)
+                inf_events.append(d)
+        events = sorted(self.events + self.hub.errors + inf_events, key=lambda e: e["t"])
+        if self.in_view and len(tel):
+            iv = pd.DataFrame(self.in_view, columns=["t", "people_in_view"]).drop_duplicates("t")
+            merged = pd.merge_asof(tel[[]].reset_index(), iv, on="t", direction="nearest",
+                                   tolerance=0.5 / self.mission.telemetry_hz)
+            tel["people_in_view"] = merged["people_in_view"].to_numpy(dtype=float)
+        if self.recorder is not None and self.recorder.records:
+            from .sensors import export_dataset
+            export_dataset(self.recorder.records, self.mission.dataset_dir)
         res = FlightResult(kpis, tel, events, scen, self.meter.breakdown(), self.end_reason, wall,
                            probe_samples=frames, probe_errors=list(self.hub.errors))
         w = self.mission.world
@@ -635,3 +816,23 @@ def _warnings(d) -> str:
     names = [w.name for w in mujoco.mjtWarning if w.name != "mjNWARNING"]
     hits = [n for n in names if d.warning[getattr(mujoco.mjtWarning, n)].number > 0]
     return ", ".join(hits) or "no MuJoCo warning recorded"
+
+
+class _DatasetRecorder:
+    """Takes camera frames and their truth every ``period_s`` for ``export_dataset``."""
+
+    sensor = "camera"
+
+    def __init__(self, period_s: float):
+        self.period_s = period_s
+        self.next_frame_t = 0.0
+        self.records: list = []
+
+    def due(self, t: float) -> bool:
+        return t >= self.next_frame_t - CLOCK_EPS
+
+    def on_frame(self, t, frame, truth, pos):
+        if frame is not None:
+            self.records.append((t, frame, truth))
+        while self.next_frame_t <= t + CLOCK_EPS:
+            self.next_frame_t += self.period_s

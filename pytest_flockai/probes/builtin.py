@@ -84,7 +84,42 @@ class CommProbe(Probe):
                 "packets_in": float(v.packets_in), "packets_out": float(v.packets_out)}
 
 
-BUILTIN = (FlightProbe, EnergyProbe, ComputeProbe, CommProbe)
+ML_METRICS = (_metrics("inference_count", "frames_dropped", "inference_failures", kind="counter")
+              + _metrics("inference_latency_p50_s", "inference_latency_p95_s",
+                         "inference_latency_max_s", kind="timer")
+              + _metrics("count_mae", "detection_delay_frames")
+              + _metrics("detection_precision", "detection_recall", kind="ratio"))
+
+
+def _finite(d: dict, names) -> dict:
+    return {k: float(d[k]) for k in names if k in d and d[k] == d[k]}
+
+
+class MLProbe(Probe):
+    """The ML tasks together (latency over all inferences, summed counts); the
+    KPIs of each task are also published under the task's name by a TaskProbe."""
+
+    name = "ml"
+    builtin = True
+    metrics = ML_METRICS
+
+    def collect(self, v):
+        return _finite(v.task_kpis, self._metric_names)
+
+
+class TaskProbe(Probe):
+    """One ML task's KPIs, as ``<task>.<kpi>`` (added by the mission per task)."""
+
+    metrics = ML_METRICS + _metrics("cpu_time_s", kind="timer")
+
+    def __init__(self, task_name: str, **kw):
+        super().__init__(name=task_name, **kw)
+
+    def collect(self, v):
+        return _finite(v.task_kpis_by_task.get(self.name, {}), self._metric_names)
+
+
+BUILTIN = (FlightProbe, EnergyProbe, ComputeProbe, CommProbe, MLProbe)
 
 
 def default_probes() -> list[Probe]:

@@ -49,6 +49,7 @@ class RunView:
         self.mem_utilization = 0.0
         self.bytes_in = self.bytes_out = self.packets_in = self.packets_out = 0
         self.task_kpis: dict = {}
+        self.task_kpis_by_task: dict = {}
         self.sensors: dict = {}
 
     def energy_by_top(self) -> dict:

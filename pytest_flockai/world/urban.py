@@ -77,6 +77,7 @@ def streets(size) -> list[tuple[float, float, float, float]]:
 
 
 def buildings(seed: int, size, *, density: float, clear_radius: float,
+              max_height: float | None = None,
               keep_clear=()) -> np.ndarray:
     """Buildings as rows (cx, cy, hx, hy, height): centre, half sizes, height (m).
 
@@ -116,7 +117,8 @@ def buildings(seed: int, size, *, density: float, clear_radius: float,
                         continue
                     if any(_lot_distance((x0, y0, x1, y1), cx, cy) < rad for cx, cy, rad in clears):
                         continue
-                    h = HEIGHT_RANGE[0] + (HEIGHT_RANGE[1] - HEIGHT_RANGE[0]) * r[5] ** 2
+                    top = HEIGHT_RANGE[1] if max_height is None else max(HEIGHT_RANGE[0], max_height)
+                    h = HEIGHT_RANGE[0] + (top - HEIGHT_RANGE[0]) * r[5] ** 2
                     rows.append(((x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2, (y1 - y0) / 2, h))
     return np.array(rows, dtype=float).reshape(-1, 5)
 

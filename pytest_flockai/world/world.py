@@ -74,7 +74,8 @@ class World:
 
     @classmethod
     def urban(cls, seed: int = 0, size=(200.0, 200.0), people: int = 100, crowds=(), *,
-              building_density: float = 0.7, clear_radius: float = 15.0) -> "World":
+              building_density: float = 0.7, clear_radius: float = 15.0,
+              max_building_height: float | None = None) -> "World":
         """A procedural city of ``size = (east-west, north-south)`` metres centred on home.
 
         people: scattered people (uniform over the area, outside buildings);
@@ -82,7 +83,9 @@ class World:
         (Gaussian, per-axis standard deviation spread_m; at most one person per
         0.5 m^2 of the disc of radius 2 spreads). building_density: the
         probability that a lot holds a building; clear_radius: no building
-        within this distance of home (0, 0).
+        within this distance of home (0, 0); max_building_height: cap on the
+        tallest building (m; default: the built-in range's top). Buildings are
+        obstacles: fly above them or around them.
         """
         where = "World.urban"
         if isinstance(seed, bool) or not isinstance(seed, Integral) or seed < 0:
@@ -93,19 +96,21 @@ class World:
         people = _count("people", people, where)
         density = _check.fraction("building_density", building_density, where=where)
         clear = _check.non_negative("clear_radius", clear_radius, where=where)
+        hmax = (None if max_building_height is None
+                else _check.positive("max_building_height", max_building_height, where=where))
         cr = _crowds(crowds, size, where)
         keep = [(x, y, 2.0 * s + 2.0) for x, y, _, s in cr]
         w = cls("urban")
         w.seed, w.size, w.crowds, w.scattered = int(seed), size, cr, people
         w.buildings = _urban.buildings(int(seed), size, density=density, clear_radius=clear,
-                                       keep_clear=keep)
+                                       keep_clear=keep, max_height=hmax)
         w.streets = _urban.streets(size)
         w.people = _urban.people(int(seed), size, people, cr, w.buildings)
         w.clothes_idx, w.skin_idx = _urban.colours(int(seed), len(w.people))
         b = w.buildings
         w.occluders = np.column_stack([b[:, 0] - b[:, 2], b[:, 1] - b[:, 3], np.zeros(len(b)),
                                        b[:, 0] + b[:, 2], b[:, 1] + b[:, 3], b[:, 4]])
-        w._info = {"building_density": density, "clear_radius": clear}
+        w._info = {"building_density": density, "clear_radius": clear, "max_building_height": hmax}
         return w
 
     @classmethod
