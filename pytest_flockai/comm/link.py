@@ -266,6 +266,19 @@ LINKS: dict[str, Link] = {lk.name: lk for lk in (
         # connected ~1.06 W (check)
         tx_w=3.76, rx_w=1.95, idle_w=1.06,
         source="Huang et al. MobiSys 2012 (LTE throughput, RTT, power model); 3GPP HARQ"),
+    Link(
+        "sik-915", rates=((-106.0, 64.0e3),),
+        # the 3DR/ArduPilot SiK telemetry radio (HopeRF RFM26W, 915 MHz): default
+        # air data rate 64 kbit/s, 20 dBm transmit power (ArduPilot "SiK Telemetry
+        # Radio" documentation); sensitivity at 64 kbit/s about -106 dBm (RFM26W /
+        # Si4463 data sheet curves) (check). Frames of at most 252 bytes, TDM
+        # duplex, so the downlink shares the air time.
+        tx_power_dbm=20.0, frequency_hz=915e6, path_loss_exponent=2.2,
+        payload_per_packet=252, header_bytes=13, per_packet_s=4e-3, latency_s=0.03,
+        jitter_s=0.01, loss_floor=0.02, retry_limit=3, retry_penalty_s=10e-3, rto_s=0.5,
+        # ~100 mA at 5 V transmitting at 20 dBm, ~25 mA receiving (SiK docs / RFM26W) (check)
+        tx_w=0.5, rx_w=0.12, idle_w=0.12,
+        source="ArduPilot SiK telemetry radio documentation; HopeRF RFM26W / Si4463 data sheet"),
 )}
 
 
