@@ -1,21 +1,62 @@
-"""Shared settings of the example suite: the paper's drone and flight plan.
+"""The example suite's shared setup: the paper's scenarios, flown once per session.
 
-The paper (FlockAI, Future Internet 2021) flies a DJI Mavic 2 Pro over an
-urban area with a bounding-box zig-zag pilot. Default runs are short missions
-gated on ``endurance_s`` (projected flight time at the mission's mean power),
-so the whole directory runs in seconds.
+Default runs are short surveys (about 4 min simulated) gated on
+``endurance_s`` (the projected flight time at the mission's mean power);
+``--flockai-full`` flies every scenario until the battery is depleted, as the
+paper did, and gates ``flight_time_s`` instead.
 """
 
 import pytest
 
-import pytest_flockai as fa
+import scenarios
 
 
-def zigzag():
-    """A 200 m x 120 m survey at 30 m, 25 m between legs, 8 m/s (about 3.5 min)."""
-    return fa.pilots.ZigZag(area=((0, 0), (200, 120)), altitude=30, spacing=25, speed=8)
+def pytest_addoption(parser):
+    parser.addoption("--flockai-full", action="store_true", default=False,
+                     help="fly full-endurance missions (until the battery is depleted)")
 
 
-@pytest.fixture
-def pilot():
-    return zigzag()
+@pytest.fixture(scope="session")
+def full(request):
+    return request.config.getoption("--flockai-full")
+
+
+@pytest.fixture(scope="session")
+def models():
+    return {"cnn": scenarios.cnn(), "cheap": scenarios.cheap()}
+
+
+@pytest.fixture(scope="session")
+def city():
+    return scenarios.world()
+
+
+def _fly(name, models, city, full):
+    return scenarios.mission(name, models, full=full, w=city).run()
+
+
+# One session fixture per scenario: a test that uses it has that flight recorded
+# for its kpi budgets, the JSON report and JUnit properties.
+@pytest.fixture(scope="session")
+def sc_1a(models, city, full):
+    return _fly("1-A", models, city, full)
+
+
+@pytest.fixture(scope="session")
+def sc_1b(models, city, full):
+    return _fly("1-B", models, city, full)
+
+
+@pytest.fixture(scope="session")
+def sc_2(models, city, full):
+    return _fly("2", models, city, full)
+
+
+@pytest.fixture(scope="session")
+def sc_2slow(models, city, full):
+    return _fly("2-slow", models, city, full)
+
+
+@pytest.fixture(scope="session")
+def sc_3b(models, city, full):
+    return _fly("3-B", models, city, full)
