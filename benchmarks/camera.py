@@ -74,7 +74,8 @@ def main():
     ap.add_argument("--frames", type=int, default=60)
     ap.add_argument("--steps", type=int, default=20000)
     a = ap.parse_args()
-    urban = fa.World.urban(seed=0, size=(200.0, 200.0), people=100, crowds=[(60.0, 40.0, 50, 5.0)])
+    urban = fa.World.urban(seed=0, size=(200.0, 200.0), people=100, crowds=[(60.0, 40.0, 50, 5.0)],
+                           max_building_height=35.0)
     print(f"urban world: {len(urban.buildings)} buildings, {len(urban.people)} people")
     print("\nrendered camera (gimballed, urban world, crowd in view)")
     print(f"{'size':>10} {'frames/s':>10} {'ms/frame':>10} {'truth ms':>10}")
@@ -89,6 +90,25 @@ def main():
         for state, z in (("hover", 30.0), ("ground", 0.2)):
             c, ng = step_cost(world, a.steps, z)
             print(f"{name:>8} {state:>10} {ng:6d} {1e6 * c:9.2f}")
+    print("\nmission RTF, Mavic 2 Pro ZigZag over the urban world, 300 s simulated (median of 3)")
+    print(f"{'camera':>22} {'RTF':>8} {'frames':>8}")
+    for label, period in (("none", None), ("1 Hz, 320x240", 1.0)):
+        rtfs, frames = [], 0
+        for _ in range(3):
+            r = mission_with_camera(urban, period)
+            rtfs.append(r.rtf)
+            frames = int(r.kpis.get("inference_count", 0))
+        rtfs.sort()
+        print(f"{label:>22} {rtfs[1]:8.0f} {frames:8d}")
+
+
+def mission_with_camera(world, period):
+    """A survey whose only task reads the camera every ``period`` s (a no-op model)."""
+    tasks = []
+    if period is not None:
+        tasks = [fa.Task(fa.ml.PythonModel(lambda frame: 0.0, macs=1, name="noop"), period_s=period)]
+    pilot = fa.pilots.ZigZag(area=((-90, -90), (90, 90)), altitude=40, spacing=30, speed=8)
+    return fa.Mission(fa.drone("dji-mavic-2-pro"), pilot, world=world, tasks=tasks, until=300.0).run()
 
 
 if __name__ == "__main__":
