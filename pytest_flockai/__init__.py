@@ -5,7 +5,7 @@ The public API (see DESIGN.md): ``blueprints``, ``drone``, ``pilots``,
 """
 
 from . import control as _control
-from . import kpis, ml, probes, sensors
+from . import comm, kpis, ml, probes, sensors
 from .airframe import Drone, blueprints, drone
 from .compute import devices
 from .control import pilots
@@ -19,6 +19,6 @@ from .world import Wind, World
 __version__ = "0.1.0"
 
 __all__ = ["ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
-           "SimulationError", "Task", "Wind", "World", "blueprints", "devices", "drone", "kpis", "ml", "pilots", "probes", "sensors",
+           "SimulationError", "Task", "Wind", "World", "blueprints", "devices", "drone", "comm", "kpis", "ml", "pilots", "probes", "sensors",
            "__version__"]
 del _control
