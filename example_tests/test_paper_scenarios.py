@@ -60,7 +60,7 @@ def test_q3_remote_saves_flight_time_but_latency_depends_on_the_link(sc_1b, sc_2
     onb, wifi, slow = sc_1b.kpis, sc_2.kpis, sc_2slow.kpis
     assert wifi["endurance_s"] > onb["endurance_s"]
     assert wifi["energy_proc_j"] < onb["energy_proc_j"]
-    assert wifi["kbytes_out"] > 5 * onb["kbytes_out"]
+    assert wifi["kbytes_out"] > onb["kbytes_out"] and wifi["energy_comm_j"] > onb["energy_comm_j"]
     assert slow["inference_latency_p50_s"] > onb["inference_latency_p50_s"]
     assert wifi["inference_latency_p50_s"] < onb["inference_latency_p50_s"]
 
