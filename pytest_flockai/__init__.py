@@ -4,7 +4,41 @@ The public API (see DESIGN.md): ``blueprints``, ``drone``, ``pilots``,
 ``Mission``, ``FlightResult``, ``World``, ``Wind``, ``devices`` and the errors.
 """
 
-from . import control as _control
+import os as _os
+import sys as _sys
+
+
+def _import_mujoco():
+    """Import MuJoCo even when ``MUJOCO_GL`` names a GL backend that cannot load.
+
+    MuJoCo loads the backend named by ``MUJOCO_GL`` at import time, and a
+    missing library (say OSMesa) breaks the import itself, although physics
+    needs no GL at all. Then MuJoCo is imported with GL disabled, the user's
+    setting is kept, and the camera reports the problem when it is first used.
+    """
+    try:
+        import mujoco  # noqa: F401
+        return None
+    except Exception as exc:
+        gl = _os.environ.get("MUJOCO_GL", "")
+        if not gl.strip():
+            raise
+        for name in [m for m in _sys.modules if m.split(".")[0] in ("mujoco", "OpenGL")]:
+            del _sys.modules[name]
+        saved_platform = _os.environ.pop("PYOPENGL_PLATFORM", None)
+        _os.environ["MUJOCO_GL"] = "disable"
+        try:
+            import mujoco  # noqa: F401,F811
+        finally:
+            _os.environ["MUJOCO_GL"] = gl
+            if saved_platform is not None:
+                _os.environ["PYOPENGL_PLATFORM"] = saved_platform
+        return f"MUJOCO_GL={gl!r} could not be loaded: {type(exc).__name__}: {exc}"
+
+
+GL_IMPORT_ERROR = _import_mujoco()
+
+from . import control as _control  # noqa: E402
 from . import comm, kpis, ml, probes, sensors
 from .airframe import Drone, blueprints, drone
 from .compute import devices
@@ -19,6 +53,6 @@ from .world import Wind, World
 __version__ = "0.1.0"
 
 __all__ = ["ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
-           "SimulationError", "Task", "Wind", "World", "blueprints", "devices", "drone", "comm", "kpis", "ml", "pilots", "probes", "sensors",
-           "__version__"]
+           "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
+           "kpis", "ml", "pilots", "probes", "sensors", "__version__"]
 del _control

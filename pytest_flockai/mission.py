@@ -293,6 +293,7 @@ class _Run:
         next_hb = 0.0
         # phase bookkeeping (whole ticks, so times add up exactly)
         phase_ticks = self.phase_ticks
+        last_phase = -1
         phase = _TAKEOFF
         self._event(0.0, "stage", stage="takeoff")
         dist = 0.0
@@ -446,6 +447,9 @@ class _Run:
                     else:
                         phase = _MOVE
                     phase_ticks[phase] += 1
+                    if phase != last_phase:
+                        self._event(t, "phase", phase=PHASES[phase])
+                        last_phase = phase
                     dist += speed * book_dt
                     if speed > vmax:
                         vmax = speed
@@ -456,6 +460,9 @@ class _Run:
                             track_max = e
                 else:
                     phase = _LANDED
+                    if last_phase != _LANDED:
+                        self._event(t, "phase", phase="landed")
+                        last_phase = _LANDED
                 pvx, pvy, pvz = vx, vy, vz
             # -- probes, each on its own period ----------------------------------
             if t >= hub.next_due - CLOCK_EPS:

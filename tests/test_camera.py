@@ -225,3 +225,30 @@ def test_camera_from_blueprint():
     cam = Camera.from_blueprint(d)
     assert (cam.width, cam.height, cam.fov_deg, cam.pitch_deg) == (
         d.camera.width, d.camera.height, d.camera.fov_deg, d.camera.pitch_deg)
+
+
+def test_no_working_gl_gives_a_clear_error_only_when_a_camera_is_used(tmp_path):
+    """With a GL backend that cannot start (OSMesa is not installed on the CI
+    image; skipped where it is), camera-less flights still fly and the first
+    camera use raises FlockAIError saying what to install."""
+    import ctypes.util
+    import subprocess
+    import sys
+    if ctypes.util.find_library("OSMesa"):
+        pytest.skip("OSMesa is installed here: it would work")
+    script = tmp_path / "nogl.py"
+    script.write_text(
+        "import pytest_flockai as fa\n"
+        "r = fa.Mission(fa.drone('crazyflie-2-1'), fa.pilots.Hover(1.0, 0.5)).run()\n"
+        "print('camera-less flight', r.end_reason)\n"
+        "task = fa.Task(fa.ml.PythonModel(lambda f: 0.0, macs=1), period_s=1.0)\n"
+        "try:\n"
+        "    fa.Mission(fa.drone('dji-mavic-2-pro'), fa.pilots.Hover(5.0, 3.0), tasks=[task]).run()\n"
+        "except fa.FlockAIError as e:\n"
+        "    print('ERROR', e)\n")
+    env = dict(os.environ, MUJOCO_GL="osmesa")
+    out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True,
+                         timeout=120)
+    assert "camera-less flight landed" in out.stdout, out.stderr
+    assert "ERROR the camera cannot render" in out.stdout
+    assert "osmesa" in out.stdout.lower() and "install" in out.stdout.lower()

@@ -119,3 +119,14 @@ def test_dataset_export_from_a_flight(world, tmp_path):
     pngs = [f for f in files if f.suffix == ".png"]
     assert len(pngs) >= 8 and any(f.suffix == ".csv" for f in files)
     assert r.kpis["crashed"] == 0
+
+
+def test_several_tasks_with_different_periods(world):
+    fast = fa.Task(PythonModel(_count_bright, macs=2e6, name="fast"), period_s=1.0)
+    slow = fa.Task(PythonModel(_count_bright, macs=CNN_MACS, name="slow"), period_s=5.0)
+    r = _fly(world, [fast, slow], until=60.0)
+    k = r.kpis
+    assert k["fast.inference_count"] > 4 * k["slow.inference_count"] > 0
+    assert k["inference_count"] == k["fast.inference_count"] + k["slow.inference_count"]
+    assert k["slow.inference_latency_p50_s"] > k["fast.inference_latency_p50_s"]
+    assert k["cpu_time_s"] == pytest.approx(k["fast.cpu_time_s"] + k["slow.cpu_time_s"])

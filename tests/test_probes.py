@@ -134,3 +134,10 @@ def test_bad_probe_definitions():
                    probes=[FunctionProbe("energy", lambda v: {}, [Metric("x")])])
     with pytest.raises(ConfigError, match="kind"):
         Metric("x", kind="histogram")
+
+
+def test_phase_changes_are_events(flown):
+    phases = [e["phase"] for e in flown.events if e["kind"] == "phase"]
+    assert phases[0] == "takeoff" and phases[-1] == "landed"
+    assert {"move", "accelerating", "landing"} <= set(phases)
+    assert all(a != b for a, b in zip(phases, phases[1:]))
