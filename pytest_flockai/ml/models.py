@@ -3,7 +3,8 @@
 Every model has ``macs`` (multiply-accumulates per inference, int, or None
 when unknown), ``params`` (parameter count) and ``name``. ``macs_for(frame)``
 gives the MACs for a given frame (fully-convolutional ONNX models fed at the
-frame's native size cost more on bigger frames).
+frame's native size cost more on bigger frames; their ``macs`` is the cost at
+the reference 320 x 240 frame, ``REFERENCE_HW``, and latency uses ``macs_for``).
 
 - ``OnnxModel``: an ONNX file run with ONNX Runtime; the frame is preprocessed
   from what the model's input declares (size, layout, dtype).
@@ -27,6 +28,10 @@ from ..errors import ConfigError
 _FLOAT_TYPES = {"tensor(float)": np.float32, "tensor(float16)": np.float16,
                 "tensor(double)": np.float64}
 _INT_TYPES = {"tensor(uint8)": np.uint8}
+
+
+#: (height, width) at which a model with a dynamic input size reports ``macs``
+REFERENCE_HW = (240, 320)
 
 
 def _check_macs(macs, where: str, *, allow_none: bool):
@@ -220,7 +225,9 @@ class OnnxModel(Model):
             if self.input_size is not None:
                 self.macs = self._count(self.input_size)
             else:
-                self.macs = None            # known after the first frame (macs_for)
+                # dynamic height/width: report the cost at the reference frame size
+                # (the blueprints' 320x240 camera); latency uses macs_for(frame)
+                self.macs = self._count(REFERENCE_HW)
             from .macs import _param_count
             self.params = _param_count(self._proto)
 
