@@ -35,28 +35,18 @@ def _fly(name, models, city, full):
     return scenarios.mission(name, models, full=full, w=city).run()
 
 
-# One session fixture per scenario: a test that uses it has that flight recorded
-# for its kpi budgets, the JSON report and JUnit properties.
-@pytest.fixture(scope="session")
-def sc_1a(models, city, full):
-    return _fly("1-A", models, city, full)
+def _scenario(name):
+    """One session fixture per scenario: a test that uses it has that flight
+    recorded for its kpi budgets, the JSON report and JUnit properties."""
+    @pytest.fixture(scope="session")
+    def fixture(models, city, full):
+        return _fly(name, models, city, full)
+    fixture.__doc__ = f"Scenario {name} of the paper, flown once per session."
+    return fixture
 
 
-@pytest.fixture(scope="session")
-def sc_1b(models, city, full):
-    return _fly("1-B", models, city, full)
-
-
-@pytest.fixture(scope="session")
-def sc_2(models, city, full):
-    return _fly("2", models, city, full)
-
-
-@pytest.fixture(scope="session")
-def sc_2slow(models, city, full):
-    return _fly("2-slow", models, city, full)
-
-
-@pytest.fixture(scope="session")
-def sc_3b(models, city, full):
-    return _fly("3-B", models, city, full)
+sc_1a = _scenario("1-A")
+sc_1b = _scenario("1-B")
+sc_2 = _scenario("2")
+sc_2slow = _scenario("2-slow")
+sc_3b = _scenario("3-B")

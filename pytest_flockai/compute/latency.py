@@ -88,7 +88,6 @@ _CAL_LOCK = threading.Lock()
 def _calibration_model_bytes() -> bytes:
     """Three 3x3 convolutions + ReLU on a 1x16x64x64 tensor; fixed seed weights."""
     import numpy as np
-    import onnx
     from onnx import TensorProto, helper, numpy_helper
 
     rng = np.random.default_rng(12345)

@@ -55,7 +55,7 @@ from __future__ import annotations
 import bisect
 import math
 import time
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 
@@ -64,7 +64,7 @@ from ..compute.devices import Device
 from ..compute.latency import LATENCY_MODES, calibrate, resolve_device
 from ..errors import ConfigError
 from .metrics import count_of, crowd_metrics, percentile, truth_count
-from .models import Model, OnnxModel, as_model
+from .models import OnnxModel, as_model
 
 EXECUTIONS = ("onboard", "remote")
 ON_BUSY = ("drop", "queue")
