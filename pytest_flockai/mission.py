@@ -515,8 +515,6 @@ class _Run:
             energy_j += meter.step(u) * (t - t_e)
         self.t_final = t
         self.dist, self.vmax, self.track_max = dist, vmax, track_max
-        self.energy_j = energy_j
-        self.e_usable = e_usable
         q = qpos.tolist()
         self._record(t, q, qvel.tolist(), sp, w, _LANDED if not airborne else phase, stage,
                      meter.last_power, energy_j, e_usable)
