@@ -31,6 +31,7 @@ from .energy.model import Meter
 from .errors import ConfigError, SimulationError
 from .result import FlightResult
 from .probes.hub import ProbeHub, RunView, resolve_probes
+from .probes.telemetry import TelemetryRecorder
 from .world.wind import Wind
 
 UNTIL = ("landed", "battery_depleted", "battery_reserve")
@@ -249,7 +250,6 @@ class _Run:
         self.end_reason = "running"
         self.crashed = False
         self.t_land = None
-        self._rec = None
 
     # -- the loop --------------------------------------------------------
     def loop(self):
@@ -314,7 +314,9 @@ class _Run:
         rec_dt = 1.0 / ms.telemetry_hz
         next_rec = 0.0
         est = (float(until) if not isinstance(until, str) else 1800.0)
-        self._rec_alloc(int(min(est, ms.max_time_s) * ms.telemetry_hz) + 16, n_rot)
+        self.rec = TelemetryRecorder(int(min(est, ms.max_time_s) * ms.telemetry_hz) + 16, n_rot,
+                                     meter, d, self.suite, self.estimator)
+        record = self.rec.record
         energy_j = 0.0
         e_period = 1.0 / ms.energy_hz
         next_e = e_period        # the first interval (0, e_period] is charged at its end
@@ -472,7 +474,7 @@ class _Run:
             # -- telemetry ------------------------------------------------
             if t >= next_rec - CLOCK_EPS:
                 next_rec += rec_dt
-                self._record(t, q, v, sp, w, phase, stage, power, energy_j, e_usable)
+                record(t, q, v, sp, w, phase, stage, power, energy_j, e_usable)
             # -- end conditions -------------------------------------------
             if stage == _S_DONE:
                 self.end_reason = "landed"
@@ -516,7 +518,7 @@ class _Run:
         self.t_final = t
         self.dist, self.vmax, self.track_max = dist, vmax, track_max
         q = qpos.tolist()
-        self._record(t, q, qvel.tolist(), sp, w, _LANDED if not airborne else phase, stage,
+        record(t, q, qvel.tolist(), sp, w, _LANDED if not airborne else phase, stage,
                      meter.last_power, energy_j, e_usable)
 
     @staticmethod
@@ -681,70 +683,11 @@ class _Run:
     def _event(self, t, kind, **info):
         self.events.append({"t": round(float(t), 6), "kind": kind, **info})
 
-    # -- telemetry storage -------------------------------------------------
-    _BASE_COLS = ("x", "y", "z", "vx", "vy", "vz", "roll", "pitch", "yaw", "wx", "wy", "wz",
-                  "sp_x", "sp_y", "sp_z", "wind_x", "wind_y", "wind_z", "power_w", "energy_j",
-                  "battery_remaining")
-
-    def _rec_alloc(self, rows, n_rot):
-        # readings of the polled, numeric sensors, sampled at the telemetry rate
-        polled = [sn.name for sn in self.suite.sensors if not getattr(sn, "on_demand", False)]
-        self._sensor_hist = {n: [] for n in polled} if polled else None
-        self._est_hist = []
-        self._cols = list(self._BASE_COLS) + [f"thrust_{i}" for i in range(n_rot)] + \
-            [f"energy_{k}_j" for k in ("motors", "proc", "comm")]
-        self._buf = np.empty((max(rows, 16), len(self._cols)))
-        self._t = np.empty(self._buf.shape[0])
-        self._phase = np.empty(self._buf.shape[0], dtype=np.int8)
-        self._stage = np.empty(self._buf.shape[0], dtype=np.int8)
-        self._n = 0
-
-    def _record(self, t, q, v, sp, w, phase, stage, power, energy_j, e_usable):
-        i = self._n
-        if i >= self._buf.shape[0]:   # grow by doubling: amortised, not per tick
-            k = self._buf.shape[0]
-            self._buf = np.concatenate([self._buf, np.empty_like(self._buf)])
-            self._t = np.concatenate([self._t, np.empty(k)])
-            self._phase = np.concatenate([self._phase, np.empty(k, dtype=np.int8)])
-            self._stage = np.concatenate([self._stage, np.empty(k, dtype=np.int8)])
-        qw, qx, qy, qz = q[3], q[4], q[5], q[6]
-        roll = math.atan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
-        pitch = math.asin(max(-1.0, min(1.0, 2 * (qw * qy - qz * qx))))
-        yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
-        e = self.meter.energy
-        top = self.meter.top
-        em = ep = ec = 0.0
-        for name, val in zip(top, e):
-            if name == "motors":
-                em += val
-            elif name == "proc":
-                ep += val
-            elif name == "comm":
-                ec += val
-        self._buf[i] = (q[0], q[1], q[2], v[0], v[1], v[2], roll, pitch, yaw, v[3], v[4], v[5],
-                        sp[0], sp[1], sp[2], w[0], w[1], w[2], power, energy_j,
-                        max(0.0, 1.0 - energy_j / e_usable), *self.data.act.tolist(), em, ep, ec)
-        self._t[i] = t
-        if self._sensor_hist is not None:
-            latest = self.suite.latest
-            for name, rows in self._sensor_hist.items():
-                rows.append(latest.get(name))
-            if self.estimator is not None and self.estimator.p is not None:
-                self._est_hist.append(tuple(self.estimator.p))
-        self._phase[i] = phase
-        self._stage[i] = stage
-        self._n = i + 1
-
     # -- result --------------------------------------------------------------
     def result(self, wall, end_reason=None) -> FlightResult:
         if end_reason:
             self.end_reason = end_reason
-        n = self._n if self._buf is not None else 0
-        tel = pd.DataFrame(self._buf[:n].copy(), columns=self._cols,
-                           index=pd.Index(self._t[:n].copy(), name="t"))
-        tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(PHASES))
-        tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(STAGES))
-        self._sensor_columns(tel, n)
+        tel = self.rec.frame(PHASES, STAGES)
         kpis = self._kpis()
         frames = self.hub.frames()
         for name, df in frames.items():   # probe metrics into the telemetry, as of each row
@@ -784,29 +727,6 @@ class _Run:
         w = self.mission.world
         res.people = np.asarray(w.people) if w is not None and hasattr(w, "people") else np.zeros((0, 3))
         return res
-
-    def _sensor_columns(self, tel, n):
-        """Sensor readings as telemetry columns ``sensor.<name>`` (vectors: ``.0``, ``.1``...)."""
-        if self._sensor_hist:
-            for name, rows in self._sensor_hist.items():
-                rows = rows[:n]
-                first = next((r for r in rows if r is not None), None)
-                try:
-                    arr = np.asarray(first, dtype=float)
-                except (TypeError, ValueError):
-                    continue
-                if arr.ndim == 0:
-                    tel[f"sensor.{name}"] = [np.nan if r is None else float(r) for r in rows]
-                elif arr.ndim == 1 and arr.size <= 16:
-                    vals = np.full((len(rows), arr.size), np.nan)
-                    for i, r in enumerate(rows):
-                        if r is not None:
-                            vals[i] = r
-                    for j in range(arr.size):
-                        tel[f"sensor.{name}.{j}"] = vals[:, j]
-        if self._est_hist and len(self._est_hist) >= n:
-            e = np.asarray(self._est_hist[:n])
-            tel["est_x"], tel["est_y"], tel["est_z"] = e[:, 0], e[:, 1], e[:, 2]
 
     def _kpis(self) -> dict:
         """Every KPI comes out of a probe: the final sample of each enabled probe."""

@@ -1,0 +1,104 @@
+"""The telemetry store: preallocated numpy rows written on the telemetry clock,
+turned into one pandas DataFrame at the end of the flight.
+
+Each row holds the state (position, velocity, attitude, body rates), the
+setpoint, the wind, power and energy (total and per top component), battery
+remaining, each rotor's thrust, the flight phase and the mission stage; the
+readings of the polled sensors and the navigation estimate are sampled at the
+same rows. The arrays grow by doubling (amortised), never per tick.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+BASE_COLS = ("x", "y", "z", "vx", "vy", "vz", "roll", "pitch", "yaw", "wx", "wy", "wz",
+             "sp_x", "sp_y", "sp_z", "wind_x", "wind_y", "wind_z", "power_w", "energy_j",
+             "battery_remaining")
+
+
+class TelemetryRecorder:
+    def __init__(self, rows: int, n_rotors: int, meter, data, suite=None, estimator=None):
+        self.meter, self.data, self.suite, self.estimator = meter, data, suite, estimator
+        polled = ([sn.name for sn in suite.sensors if not getattr(sn, "on_demand", False)]
+                  if suite is not None else [])
+        self._sensor_hist = {n: [] for n in polled} if polled else None
+        self._est_hist: list = []
+        self.columns = list(BASE_COLS) + [f"thrust_{i}" for i in range(n_rotors)] + \
+            [f"energy_{k}_j" for k in ("motors", "proc", "comm")]
+        rows = max(rows, 16)
+        self._buf = np.empty((rows, len(self.columns)))
+        self._t = np.empty(rows)
+        self._phase = np.empty(rows, dtype=np.int8)
+        self._stage = np.empty(rows, dtype=np.int8)
+        self.n = 0
+
+    def record(self, t, q, v, sp, w, phase, stage, power, energy_j, e_usable):
+        i = self.n
+        if i >= self._buf.shape[0]:   # grow by doubling: amortised, not per tick
+            k = self._buf.shape[0]
+            self._buf = np.concatenate([self._buf, np.empty_like(self._buf)])
+            self._t = np.concatenate([self._t, np.empty(k)])
+            self._phase = np.concatenate([self._phase, np.empty(k, dtype=np.int8)])
+            self._stage = np.concatenate([self._stage, np.empty(k, dtype=np.int8)])
+        qw, qx, qy, qz = q[3], q[4], q[5], q[6]
+        roll = math.atan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
+        pitch = math.asin(max(-1.0, min(1.0, 2 * (qw * qy - qz * qx))))
+        yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+        em = ep = ec = 0.0
+        for name, val in zip(self.meter.top, self.meter.energy):
+            if name == "motors":
+                em += val
+            elif name == "proc":
+                ep += val
+            elif name == "comm":
+                ec += val
+        self._buf[i] = (q[0], q[1], q[2], v[0], v[1], v[2], roll, pitch, yaw, v[3], v[4], v[5],
+                        sp[0], sp[1], sp[2], w[0], w[1], w[2], power, energy_j,
+                        max(0.0, 1.0 - energy_j / e_usable), *self.data.act.tolist(), em, ep, ec)
+        self._t[i] = t
+        if self._sensor_hist is not None:
+            latest = self.suite.latest
+            for name, hist in self._sensor_hist.items():
+                hist.append(latest.get(name))
+            if self.estimator is not None and self.estimator.p is not None:
+                self._est_hist.append(tuple(self.estimator.p))
+        self._phase[i] = phase
+        self._stage[i] = stage
+        self.n = i + 1
+
+    def frame(self, phases, stages) -> pd.DataFrame:
+        """The DataFrame (index: simulated time ``t``), built once."""
+        n = self.n
+        tel = pd.DataFrame(self._buf[:n].copy(), columns=self.columns,
+                           index=pd.Index(self._t[:n].copy(), name="t"))
+        tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(phases))
+        tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(stages))
+        self._sensor_columns(tel, n)
+        return tel
+
+    def _sensor_columns(self, tel, n):
+        """Sensor readings as columns ``sensor.<name>`` (vectors: ``.0``, ``.1``...)."""
+        if self._sensor_hist:
+            for name, hist in self._sensor_hist.items():
+                hist = hist[:n]
+                first = next((r for r in hist if r is not None), None)
+                try:
+                    arr = np.asarray(first, dtype=float)
+                except (TypeError, ValueError):
+                    continue
+                if arr.ndim == 0:
+                    tel[f"sensor.{name}"] = [np.nan if r is None else float(r) for r in hist]
+                elif arr.ndim == 1 and arr.size <= 16:
+                    vals = np.full((len(hist), arr.size), np.nan)
+                    for i, r in enumerate(hist):
+                        if r is not None:
+                            vals[i] = r
+                    for j in range(arr.size):
+                        tel[f"sensor.{name}.{j}"] = vals[:, j]
+        if self._est_hist and len(self._est_hist) >= n:
+            e = np.asarray(self._est_hist[:n])
+            tel["est_x"], tel["est_y"], tel["est_z"] = e[:, 0], e[:, 1], e[:, 2]
