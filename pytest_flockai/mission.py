@@ -224,9 +224,11 @@ class _Run:
         # ML tasks: one runner each, seeded per task from the mission seed
         self.runners = []
         children = seed_sequence(m.seed, "tasks").spawn(len(m.tasks)) if m.tasks else []
+        from .ml.task import DeviceClock
+        onboard_clock = DeviceClock()          # one on-board computer, shared by its tasks
         for tk, child in zip(m.tasks, children):
             r = tk.runner()
-            r.bind(np.random.default_rng(child), t0=0.0)
+            r.bind(np.random.default_rng(child), t0=0.0, device_clock=onboard_clock)
             self.runners.append(r)
         self.recorder = _DatasetRecorder(m.dataset_period_s) if m.dataset_dir is not None else None
         self.cpu_time_s = 0.0

@@ -130,3 +130,19 @@ def test_several_tasks_with_different_periods(world):
     assert k["inference_count"] == k["fast.inference_count"] + k["slow.inference_count"]
     assert k["slow.inference_latency_p50_s"] > k["fast.inference_latency_p50_s"]
     assert k["cpu_time_s"] == pytest.approx(k["fast.cpu_time_s"] + k["slow.cpu_time_s"])
+
+
+def test_on_board_tasks_share_one_computer(world):
+    """Two heavy on-board tasks cannot both run on one Raspberry Pi at once: one
+    waits for the other, the busy time never exceeds the flight time, and as the
+    waiting makes each task slower than its period, frames are dropped."""
+    a = fa.Task(PythonModel(lambda f: 0.0, macs=1.2e9, name="a"), period_s=1.0)
+    b = fa.Task(PythonModel(lambda f: 0.0, macs=1.2e9, name="b"), period_s=1.0)
+    r = _fly(world, [a, b], until=60.0)
+    k = r.kpis
+    assert k["cpu_utilization"] <= 1.0
+    assert k["cpu_time_s"] <= r.sim_time_s
+    assert k["frames_dropped"] > 0
+    inf = sorted((e["t_start"], e["t_start"] + e["compute_s"]) for e in r.events
+                 if e["kind"] == "inference" and e["ok"])
+    assert all(s2 >= e1 - 1e-9 for (_, e1), (s2, _) in zip(inf, inf[1:]))   # no overlap

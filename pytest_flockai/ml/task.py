@@ -175,6 +175,17 @@ class Task:
                 f"execution={self.execution!r}, device={self.device.name!r})")
 
 
+class DeviceClock:
+    """When a shared on-board computer is next free: the on-board tasks of one
+    drone share one, so one task's inference waits for another's to finish
+    (a frame is dropped only while its own task's model is still busy)."""
+
+    __slots__ = ("free_at",)
+
+    def __init__(self):
+        self.free_at = -math.inf
+
+
 class InferenceEvent:
     """One inference, as returned by ``TaskRunner.advance``."""
 
@@ -236,11 +247,12 @@ class TaskRunner:
 
     # -- set-up ----------------------------------------------------------------
     def bind(self, rng, *, device=None, ground_device=None, link=None, t0: float = 0.0,
-             calibration=None) -> "TaskRunner":
+             calibration=None, device_clock: DeviceClock | None = None) -> "TaskRunner":
         """Reset for a flight. ``rng``: a numpy Generator (or seed) spawned from the
         mission seed, used for the link's loss and jitter. ``device`` /
         ``ground_device`` / ``link`` override the task's (e.g. the drone's own
-        computer from its blueprint). ``t0``: the flight's start time."""
+        computer from its blueprint). ``t0``: the flight's start time.
+        ``device_clock``: a DeviceClock shared by the on-board tasks of one drone."""
         from ..comm.link import link as _link
         t = self.task
         self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
@@ -256,6 +268,7 @@ class TaskRunner:
         self._clock = self._t0
         self._usage_t = self._t0
         self._free_at = -math.inf
+        self._shared = device_clock if t.execution == "onboard" else None
         self._starts: list[float] = []         # start times of scheduled jobs (queue mode)
         self._pending: list = []                # [(t_done, seq, event)] sorted
         self._next_done = math.inf
@@ -303,7 +316,7 @@ class TaskRunner:
         tc = truth_count(truth)
         self._truth.append(math.nan if tc is None else tc)
         self._pred.append(math.nan)
-        if self._free_at > t + 1e-12:
+        if self._free_at > t + 1e-12:      # this task's model is still busy
             if task.on_busy == "drop":
                 self.frames_dropped += 1
                 return
@@ -314,6 +327,8 @@ class TaskRunner:
                 self.frames_dropped += 1
                 return
         start = max(t, self._free_at)
+        if self._shared is not None:       # wait for another task on the same computer
+            start = max(start, self._shared.free_at)
         if task.on_busy == "queue":
             self._starts.append(start)
         pos = np.asarray(drone_pos, dtype=np.float64)
@@ -323,6 +338,8 @@ class TaskRunner:
         else:
             ev, free_at = self._remote(idx, t, start, frame, tc, dist)
         self._free_at = free_at
+        if self._shared is not None:
+            self._shared.free_at = max(self._shared.free_at, free_at)
         self._schedule(ev)
 
     def advance(self, t: float):
