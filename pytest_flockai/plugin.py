@@ -5,7 +5,8 @@ Fixtures
     ``pilot`` (``fa.pilots.Hover(altitude=10.0, duration=30.0)``), ``tasks``
     (``()``), ``probes`` (None), ``mission`` (a ``Mission`` assembled from
     those, not flown) and ``flight`` (the mission flown: a ``FlightResult``).
-    Override any of them in a conftest.py or a test module.
+    Override any of them in a conftest.py or a test module, or parametrize them
+    indirectly (``@pytest.mark.parametrize("drone", ["crazyflie-2-1"], indirect=True)``).
 
 Markers
     ``@pytest.mark.flockai(drone=..., pilot=..., world=..., tasks=...,
@@ -590,6 +591,11 @@ def _budget_table(verdicts: list, indent: str = "  ") -> str:
 # fixtures
 # ---------------------------------------------------------------------------
 def _setting(request, key, default=None):
+    """The value for one of the provisioning fixtures: an indirect parametrization
+    of that fixture (``@pytest.mark.parametrize("drone", [...], indirect=True)``)
+    first, then the closest ``flockai`` marker, then the default."""
+    if getattr(request, "fixturename", None) == key and hasattr(request, "param"):
+        return request.param
     for mark in request.node.iter_markers("flockai"):   # closest first
         if key in mark.kwargs:
             return mark.kwargs[key]

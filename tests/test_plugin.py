@@ -573,3 +573,22 @@ def test_artifacts_include_pictures_or_say_why_not(pytester, tmp_path):
     import cv2
     img = cv2.imread(str(next(art.rglob("flight.energy.png"))))
     assert img is not None and img.shape[0] > 200 and img.shape[1] > 400
+
+
+def test_fixtures_parametrized_indirectly(pytester):
+    pytester.makepyfile(
+        """
+        import pytest
+        import pytest_flockai as fa
+
+        @pytest.mark.parametrize("drone", ["crazyflie-2-1", "generic-hexa-680"], indirect=True)
+        @pytest.mark.parametrize("pilot", [fa.pilots.Hover(1.0, 0.5)], indirect=True)
+        def test_each_drone(drone, flight):
+            assert flight.scenario["drone"]["name"] == drone.name
+            assert flight.scenario["pilot"]["altitude"] == 1.0
+        """
+    )
+    res = pytester.runpytest("-p", "no:cacheprovider", "-v")
+    res.assert_outcomes(passed=2)
+    res.stdout.fnmatch_lines(["*test_each_drone*crazyflie-2-1*PASSED*",
+                              "*test_each_drone*generic-hexa-680*PASSED*"])
