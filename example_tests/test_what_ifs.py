@@ -42,12 +42,14 @@ def test_payload_costs_flight_time(payload_kg, budget, request):
     assert fa.Mission(d, scenarios.survey(), seed=0, **SHORT).run().kpis["crashed"] == 0
 
 
-@settings(max_examples=12, deadline=None, database=None)
+@settings(max_examples=12, deadline=None, database=None, derandomize=True)
 @given(wind=fst.winds(max_speed=9.0), mah=fst.batteries(3400.0, 4500.0))
 def test_fuzz_wind_and_battery_against_a_flight_time_budget(wind, mah):
-    """Hypothesis looks for a wind and battery that break a 25-minute budget;
-    with up to 9 m/s of wind the Mavic keeps it (a failure would print the
-    minimal wind and battery)."""
+    """Hypothesis looks for a wind and battery that break a 25-minute budget
+    (derandomized: the same examples on every run, so CI is deterministic).
+    The hardest case is still air with the smallest battery (25.5 min): wind
+    lowers hover power through translational lift. A failure would print the
+    minimal wind and battery."""
     d = fa.drone("dji-mavic-2-pro", battery_mah=mah)
     r = fa.Mission(d, fa.pilots.Hover(altitude=20.0, duration=20.0), wind=wind, seed=0).run()
     fst.target_margin(r, endurance_s=">= 25 min")
