@@ -10,8 +10,10 @@ Fixtures
 
 Markers
     ``@pytest.mark.flockai(drone=..., pilot=..., world=..., tasks=...,
-    probes=..., seed=..., until=..., wind=..., name=...)``: quick settings read
-    by the fixtures (``drone`` may be a blueprint name or a path).
+    probes=..., seed=..., until=..., wind=..., name=..., max_regression=...)``:
+    quick settings read by the fixtures (``drone`` may be a blueprint name or a
+    path); ``max_regression`` (a percent, or ``{kpi: percent}``) overrides
+    ``--flockai-max-regression`` for this test.
 
     ``@pytest.mark.kpi(flight_time_s=">= 24 min", ..., flight=None)``: KPI
     budgets (see ``budgets.py``), checked after the test body against every
@@ -75,7 +77,8 @@ _OPTIONS = [
 ]
 DEFAULT_MAX_REGRESSION = 5.0
 
-FLOCKAI_MARKER_KEYS = ("drone", "pilot", "world", "tasks", "probes", "seed", "until", "wind", "name")
+FLOCKAI_MARKER_KEYS = ("drone", "pilot", "world", "tasks", "probes", "seed", "until", "wind", "name",
+                       "max_regression")
 DEFAULT_DRONE = "dji-mavic-2-pro"
 HEADLINE_KPIS = ("flight_time_s", "energy_total_j", "mean_power_w", "battery_remaining",
                  "inference_latency_p50_s")
@@ -141,6 +144,7 @@ class TestState:
     flights: list = field(default_factory=list)       # [Flight]
     verdicts: list = field(default_factory=list)      # budget rows (dicts)
     regressions: list = field(default_factory=list)
+    max_regression: object = None                      # per-test override: % or {kpi: %}
     problems: list = field(default_factory=list)      # kpi marker misuse found after the body
     _props: list = field(default_factory=list)        # user_properties we added
 
@@ -423,6 +427,45 @@ def _parse_markers(item, st: TestState) -> None:
                                          f"{close_matches(key, FLOCKAI_MARKER_KEYS)}; allowed: "
                                          f"{', '.join(FLOCKAI_MARKER_KEYS)}")
                 return
+    try:
+        st.max_regression = _regression_setting(_closest(item, "max_regression"))
+    except ConfigError as exc:
+        st.error = _marker_error(item, "flockai", str(exc))
+
+
+def _limit_text(session, st) -> str:
+    m = st.max_regression
+    if isinstance(m, dict):
+        extra = ", ".join(f"{k} {v:g}%" for k, v in m.items())
+        return f"{session.max_regression:g}%, {extra}"
+    return f"{(session.max_regression if m is None else m):g}%"
+
+
+def _closest(item, key):
+    for mark in item.iter_markers("flockai"):
+        if key in mark.kwargs:
+            return mark.kwargs[key]
+    return None
+
+
+def _regression_setting(value):
+    """``max_regression``: None, a percent for every KPI, or ``{kpi: percent}``."""
+    def pct(field, v):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+            raise ConfigError(f"{field} = {v!r} is not allowed; expected a percentage >= 0 "
+                              f"(e.g. 2.5 for 2.5 %)")
+        return float(v)
+    if value is None:
+        return None
+    if isinstance(value, dict):
+        out = {}
+        for kpi, v in value.items():
+            if _kpis.get(kpi) is None and "." not in str(kpi):
+                raise ConfigError(f"max_regression: unknown KPI {kpi!r}"
+                                  f"{close_matches(str(kpi), _kpis.names())}")
+            out[kpi] = pct(f"max_regression[{kpi!r}]", v)
+        return out
+    return pct("max_regression", value)
 
 
 def pytest_collection_modifyitems(session, config, items):
@@ -560,8 +603,14 @@ def _check(item, st: TestState) -> str | None:
     if session.baseline is not None and st.flights:
         base = session.baseline.get(item.nodeid)
         if base:
+            limit = session.max_regression
+            per_kpi = None
+            if isinstance(st.max_regression, dict):
+                per_kpi = st.max_regression
+            elif st.max_regression is not None:
+                limit = st.max_regression
             st.regressions = _report.regressions({f.name: f.kpis for f in st.flights}, base,
-                                                 session.max_regression)
+                                                 limit, per_kpi=per_kpi)
     parts = list(st.problems)
     broken = [v for v in st.verdicts if v["verdict"] != "pass"]
     if broken:
@@ -572,7 +621,7 @@ def _check(item, st: TestState) -> str | None:
                  _report.format_kpi(r["kpi"], r["actual"]), f"{r['change_pct']:+.2f}%",
                  r["better"]] for r in st.regressions]
         parts.append(f"pytest-flockai: {len(st.regressions)} KPI regression(s) against baseline "
-                     f"{session.baseline_path} (max {session.max_regression:g}%) in "
+                     f"{session.baseline_path} (max {_limit_text(session, st)}) in "
                      f"{item.nodeid}:\n"
                      + _report.table(["flight", "KPI", "baseline", "actual", "change",
                                       "better"], rows))

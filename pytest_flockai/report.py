@@ -214,14 +214,16 @@ def load_baseline(path: Path) -> dict:
     return data
 
 
-def regressions(flights: dict, base: dict, max_regression_pct: float) -> list[dict]:
+def regressions(flights: dict, base: dict, max_regression_pct: float, *,
+                per_kpi: dict | None = None) -> list[dict]:
     """KPIs of ``flights`` ({flight: kpis}) worse than ``base`` ({flight: kpis}) by
-    more than ``max_regression_pct`` percent, in each KPI's ``better`` direction.
+    more than ``max_regression_pct`` percent (or ``per_kpi[kpi]`` percent), in
+    each KPI's ``better`` direction.
 
     KPIs without a better direction, missing on either side or non-finite are
     not compared."""
     out = []
-    frac = max_regression_pct / 100.0
+    per_kpi = per_kpi or {}
     for fname, kp in flights.items():
         bk = base.get(fname)
         if not bk:
@@ -234,6 +236,7 @@ def regressions(flights: dict, base: dict, max_regression_pct: float) -> list[di
             a, b = float(a), float(b)
             if not (math.isfinite(a) and math.isfinite(b)):
                 continue
+            frac = per_kpi.get(kpi, max_regression_pct) / 100.0
             tol = abs(b) * frac + 1e-9 * max(1.0, abs(b))
             worse = a < b - tol if info.better == "higher" else a > b + tol
             if worse:

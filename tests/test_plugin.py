@@ -592,3 +592,32 @@ def test_fixtures_parametrized_indirectly(pytester):
     res.assert_outcomes(passed=2)
     res.stdout.fnmatch_lines(["*test_each_drone*crazyflie-2-1*PASSED*",
                               "*test_each_drone*generic-hexa-680*PASSED*"])
+
+
+def test_per_test_and_per_kpi_regression_thresholds(pytester):
+    """pytest-benchmark can only gate the whole session; here each test (and each
+    KPI of a test) may set its own regression threshold."""
+    make(pytester, '''
+@cf(max_regression=1.0)
+def test_strict(flight):
+    pass
+
+@cf(max_regression={"energy_total_j": 50.0})
+def test_lenient_on_energy(flight):
+    pass
+
+@cf(max_regression="lots")
+def test_bad_setting(flight):
+    pass
+''')
+    run(pytester, "--flockai-save", "base.json")
+    base = load(pytester.path / "base.json")
+    for name in ("test_strict", "test_lenient_on_energy"):
+        base["tests"][f"test_flights.py::{name}"]["flight"]["energy_total_j"] *= 0.97   # 3% worse now
+    (pytester.path / "base.json").write_text(json.dumps(base))
+    res = run(pytester, "--flockai-baseline", "base.json")
+    # default 5%: the 3% change passes, except in the test that allows only 1%
+    res.assert_outcomes(passed=1, failed=1, errors=1)
+    res.stdout.fnmatch_lines(["*max_regression = 'lots' is not allowed*",
+                              "*KPI regression(s) against baseline *base.json (max 1%) in "
+                              "test_flights.py::test_strict:*"])
