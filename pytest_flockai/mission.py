@@ -55,6 +55,17 @@ SEEDS = {"wind": 0, "sensors": 1, "tasks": 2, "link": 3, "world": 4, "probes": 5
 FLIGHT_OBSERVERS: list = []
 
 
+def to_body(q, x, y, z):
+    """A world-frame vector in the body frame of the attitude quaternion q[3:7] (R^T v)."""
+    qw, qx, qy, qz = q[3], q[4], q[5], q[6]
+    xx, yy, zz = qx * qx, qy * qy, qz * qz
+    xy, xz, yz = qx * qy, qx * qz, qy * qz
+    wx, wy, wz = qw * qx, qw * qy, qw * qz
+    return ((1 - 2 * (yy + zz)) * x + 2 * (xy + wz) * y + 2 * (xz - wy) * z,
+            2 * (xy - wz) * x + (1 - 2 * (xx + zz)) * y + 2 * (yz + wx) * z,
+            2 * (xz + wy) * x + 2 * (yz - wx) * y + (1 - 2 * (xx + yy)) * z)
+
+
 def seed_sequence(seed: int, component: str) -> np.random.SeedSequence:
     """The SeedSequence of one component of a mission (fixed spawn keys)."""
     return np.random.SeedSequence(seed, spawn_key=(SEEDS[component],))
@@ -407,11 +418,7 @@ class _Run:
                 u.t = t
                 u.airborne = airborne
                 u.thrust = act.tolist()
-                rvx, rvy, rvz = vx - w[0], vy - w[1], vz - w[2]
-                R = ctrl.R
-                u.v_rel_body = (R[0] * rvx + R[3] * rvy + R[6] * rvz,
-                                R[1] * rvx + R[4] * rvy + R[7] * rvz,
-                                R[2] * rvx + R[5] * rvy + R[8] * rvz)
+                u.v_rel_body = to_body(q, vx - w[0], vy - w[1], vz - w[2])
                 if self.runners:
                     busy, tb, tp, rb, rp = self._task_usage(t)
                     tx_b += tb

@@ -48,8 +48,6 @@ def test_unknown_blueprint_lists_names_and_close_match():
 
 @pytest.mark.parametrize("value", [-1.0, 0.0, float("nan")])
 def test_bad_mass_names_file_field_value(tmp_path, value):
-    src = (fa.drone("crazyflie-2-1").source, None)
-    del src
     from importlib import resources
     text = (resources.files("pytest_flockai.airframe") / "blueprints" / "crazyflie-2-1.toml").read_text()
     bad = text.replace("mass_kg = 0.027", f"mass_kg = {'nan' if math.isnan(value) else value}")

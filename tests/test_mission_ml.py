@@ -61,7 +61,8 @@ def test_remote_moves_cost_to_comm_with_higher_latency_over_a_slow_link(three_ru
 def test_inference_events_telemetry_and_kpis(three_runs):
     _, onboard, _ = three_runs
     inf = [e for e in onboard.events if e["kind"] == "inference"]
-    assert len(inf) == onboard.kpis["inference_count"] + onboard.kpis["frames_dropped"] * 0
+    # one event per inference started: the successful ones and the failed ones
+    assert len(inf) == onboard.kpis["inference_count"] + onboard.kpis["inference_failures"] > 0
     assert all("x" in e and e["latency_s"] > 0 for e in inf)
     assert "people_in_view" in onboard.telemetry and onboard.telemetry.people_in_view.max() > 10
     assert "cnn.inference_count" in onboard.kpis

@@ -74,7 +74,6 @@ class CascadedController:
         self.reset()
 
     def reset(self):
-        self.R = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
         self.ix = self.iy = self.iz = 0.0
         self.collective = 0.0
         self.f = [0.0] * self.n
@@ -152,8 +151,6 @@ class CascadedController:
         tx = Jx * kr * (-ka * erx - wx) + (Jz - Jy) * wy * wz
         ty = Jy * kr * (-ka * ery - wy) + (Jx - Jz) * wz * wx
         tz = Jz * self.k_yaw_rate * (-self.k_yaw * erz - wz) + (Jy - Jx) * wx * wy
-        # row-major rotation matrix, shared with the mission (drag) to avoid recomputing it
-        self.R = (r0x, r1x, r2x, r0y, r1y, r2y, r0z, r1z, r2z)
         # collective thrust along the current body z
         m = self.mass
         T = m * (ax * r2x + ay * r2y + fz * r2z)

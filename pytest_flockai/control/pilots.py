@@ -102,7 +102,6 @@ class Waypoints(Pilot):
         self._accel = accel
         self.path = waypoint_path(position, self.points, self.speed, accel)
         self.path_length = self.path.length
-        self._loop_start = self.points[-1]
 
     def update(self, t, state, sp):
         done = self.path.fill(t - self.t0, sp)

@@ -102,7 +102,6 @@ def _builtin_metric_names():
 class ProbeHub:
     def __init__(self, probes: list[Probe], subscribers=()):
         self.probes = [p for p in probes if p.enabled]
-        self.all_probes = list(probes)
         self._next = [p.period_s for p in self.probes]   # first sample one period in
         self.next_due = min(self._next) if self._next else math.inf
         self.samples = {p.name: ([], []) for p in self.probes}
