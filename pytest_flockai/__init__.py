@@ -46,6 +46,7 @@ from .control import pilots
 from .energy import EnergyModel
 from .errors import ConfigError, FlockAIError, SimulationError
 from .mission import Mission
+from .recording import recording
 from .ml import Task
 from .result import FlightResult
 from .world import Wind, World
@@ -54,5 +55,5 @@ __version__ = "0.1.0"
 
 __all__ = ["ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
-           "kpis", "ml", "pilots", "probes", "sensors", "__version__"]
+           "kpis", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
 del _control

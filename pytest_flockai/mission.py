@@ -32,6 +32,7 @@ from .errors import ConfigError, SimulationError
 from .result import FlightResult
 from .probes.hub import ProbeHub, RunView, resolve_probes
 from .probes.telemetry import TelemetryRecorder
+from .recording import publish
 from .world.wind import Wind
 
 UNTIL = ("landed", "battery_depleted", "battery_reserve")
@@ -48,11 +49,6 @@ ACCEL_THRESHOLD = 0.5    # m/s^2: above this it is accelerating
 CRASH_SPEED = 2.0        # m/s: touching anything faster than this is a crash
 CLOCK_EPS = 1e-6         # s: tolerance of the sub-clocks against the summed physics time
 SEEDS = {"wind": 0, "sensors": 1, "tasks": 2, "link": 3, "world": 4, "probes": 5}
-
-#: callables ``fn(result, mission)`` called after every flight, also one that
-#: ended in a SimulationError (then ``result`` is the partial result). The pytest
-#: plugin records flights this way; notebooks can log them.
-FLIGHT_OBSERVERS: list = []
 
 
 def to_body(q, x, y, z):
@@ -158,10 +154,10 @@ class Mission:
             run.loop()
         except SimulationError as exc:
             exc.result = run.result(_time.perf_counter() - wall0, end_reason="diverged")
-            _notify(exc.result, self)
+            publish(exc.result, self)
             raise
         result = run.result(_time.perf_counter() - wall0)
-        _notify(result, self)
+        publish(result, self)
         return result
 
 
@@ -198,11 +194,6 @@ def _check_tasks(tasks, drone, sensors):
         raise ConfigError(f"Mission: on-board tasks name different computers ({', '.join(sorted(onboard))}); "
                           f"a drone has one on-board computer: give them the same device")
     return tasks
-
-
-def _notify(result, mission):
-    for fn in list(FLIGHT_OBSERVERS):
-        fn(result, mission)
 
 
 class _Run:

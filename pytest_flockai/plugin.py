@@ -55,7 +55,8 @@ from . import report as _report
 from .airframe import drone as _make_drone
 from .control.pilots import Hover as _Hover
 from .errors import ConfigError, close_matches
-from .mission import FLIGHT_OBSERVERS, Mission
+from .mission import Mission
+from .recording import recording
 from .result import FlightResult
 
 # ---------------------------------------------------------------------------
@@ -188,23 +189,7 @@ class TestState:
                                  "error": self.error or ("\n".join(self.problems) or None)})
 
 
-# stack of the tests running now (nested sessions, e.g. pytester, push on top)
-_RECORDING: list[TestState] = []
-
 _STATE = pytest.StashKey[TestState]()
-
-
-def _observe_flight(result, mission):
-    if _RECORDING:
-        _RECORDING[-1].record(mission, result)
-
-
-def _install_recorder():
-    """Record every flight flown while a test runs, through the core's observer list
-    (``pytest_flockai.mission.FLIGHT_OBSERVERS``), so flights that end in a
-    SimulationError are recorded too."""
-    if _observe_flight not in FLIGHT_OBSERVERS:
-        FLIGHT_OBSERVERS.append(_observe_flight)
 
 
 def _state(item) -> TestState:
@@ -373,7 +358,6 @@ def pytest_configure(config):
     session = FlockSession(config)   # raises UsageError before anything flies
     config.stash[_SESSION] = session
     config.pluginmanager.register(session, "flockai-session")
-    _install_recorder()
 
 
 def pytest_unconfigure(config):
@@ -479,14 +463,8 @@ def pytest_collection_modifyitems(session, config, items):
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     st = _state(item)
-    _RECORDING.append(st)
-    try:
+    with recording(lambda result, mission: st.record(mission, result)):
         return (yield)
-    finally:
-        for i in range(len(_RECORDING) - 1, -1, -1):
-            if _RECORDING[i] is st:
-                del _RECORDING[i]
-                break
 
 
 @pytest.hookimpl(tryfirst=True)
