@@ -108,13 +108,49 @@ def visible_people(world_people, cam_pos, cam_mat, fov_deg: float, width: int, h
     return idx, uv[idx]
 
 
+#: object classes of the simulated worlds; a COCO category id is the index + 1
+CLASSES = ("person", "vehicle")
+
+
+def _empty(shape, dtype=float):
+    return np.zeros(shape, dtype=dtype)
+
+
+@dataclass
+class Objects:
+    """Per-object ground truth of one frame: K objects, one row each.
+
+    ids: (K,) int, the object's index in its world's object table (stable
+    over a flight, so an object can be followed from frame to frame; -1 when
+    unknown, e.g. labels read from a file); cls: (K,) int, an index into
+    ``classes``; boxes: (K, 4) float, the tight box ``x0, y0, x1, y1`` in
+    pixels (origin top-left, x1/y1 exclusive edges), clipped to the image;
+    visible: (K,) visible fraction in [0, 1] (occlusion by buildings and other
+    objects, and the part outside the image); distance_m: (K,) camera to
+    object centre; gsd_m: (K,) ground sample distance at the object, metres
+    per pixel (NaN when unknown).
+    """
+
+    ids: np.ndarray = field(default_factory=lambda: _empty(0, int))
+    cls: np.ndarray = field(default_factory=lambda: _empty(0, int))
+    boxes: np.ndarray = field(default_factory=lambda: _empty((0, 4)))
+    visible: np.ndarray = field(default_factory=lambda: _empty(0))
+    distance_m: np.ndarray = field(default_factory=lambda: _empty(0))
+    gsd_m: np.ndarray = field(default_factory=lambda: _empty(0))
+    classes: tuple = CLASSES
+
+    def __len__(self) -> int:
+        return int(len(self.cls))
+
+
 @dataclass
 class Truth:
     """Ground truth of one camera frame.
 
     t: simulated time (s); indices: which of ``world.people`` are in view;
     pixels: (K, 2) their (u, v) pixel coordinates (u = column, v = row,
-    origin at the top-left corner); cam_pos / cam_mat: the camera pose.
+    origin at the top-left corner); cam_pos / cam_mat: the camera pose;
+    objects: per-object truth (boxes, classes, visibility) of every object in view.
     """
 
     t: float
@@ -122,6 +158,7 @@ class Truth:
     pixels: np.ndarray
     cam_pos: np.ndarray = field(default_factory=lambda: np.zeros(3))
     cam_mat: np.ndarray = field(default_factory=lambda: np.eye(3))
+    objects: Objects = field(default_factory=Objects)
 
     @property
     def count(self) -> int:
