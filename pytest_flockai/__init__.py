@@ -45,6 +45,7 @@ from .compute import devices
 from .control import pilots
 from .energy import EnergyModel
 from .errors import ConfigError, FlockAIError, SimulationError
+from .clock import Clocked
 from .mission import Mission
 from .recording import recording
 from .ml import Task
@@ -53,7 +54,7 @@ from .world import Wind, World
 
 __version__ = "0.1.0"
 
-__all__ = ["ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
+__all__ = ["Clocked", "ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
            "kpis", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
 del _control

@@ -19,10 +19,10 @@ import pandas as pd
 
 from ._io import atomic_write
 from .errors import ConfigError
+from .phases import PHASES, STAGES
 
 FORMAT = "pytest-flockai-flight/1"
-_CATEGORIES = {"phase": ("takeoff", "hover", "move", "accelerating", "landing", "landed"),
-               "stage": ("takeoff", "pilot", "return", "landing", "done")}
+_CATEGORIES = {"phase": PHASES, "stage": STAGES}
 
 
 class FlightResult:

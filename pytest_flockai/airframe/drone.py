@@ -15,10 +15,13 @@ from importlib import resources
 from pathlib import Path
 
 from .. import _check
+from ..compute import device as _device
+from ..energy import EnergyModel
 from ..errors import ConfigError, close_matches
+from ..physics import G  # noqa: F401  (re-exported: airframe.drone.G)
+from ..sensors import Sensor
 from .params import Airframe, Battery, Camera, EnergyParams, Radio, Rotor, Sim
 
-G = 9.81  # m/s^2, standard gravity rounded as in most flight-control code
 MIN_THRUST_TO_WEIGHT = 1.3
 
 _TOP_KEYS = {"name", "description", "airframe", "rotor", "battery", "energy", "radio",
@@ -86,8 +89,8 @@ class Drone:
         self.payload_kg = 0.0
         self.extra_sensors = []
         energy = EnergyParams(data["energy"], where=f"{where} [energy]")
-        from ..energy import EnergyModel
-        self.energy = EnergyModel.from_params(energy, self)
+        self.energy = EnergyModel.from_params(
+            energy, device=_device(self.device) if self.device != "none" else None, radio=self.radio)
         object.__setattr__(self, "_ready", True)
         self.check(where)
 
@@ -137,7 +140,6 @@ class Drone:
         """Attach a sensor (paper Listing 2: ``mydrone.addSensor(temp)``): a
         ``fa.sensors`` object or a Sensor subclass. It is read at its rate in every
         flight and its power is added to the energy model's ``proc.sensors``."""
-        from ..sensors import Sensor
         if not isinstance(sensor, Sensor):
             raise ConfigError(f"{self.name}: add_sensor({sensor!r}): expected a Sensor "
                               f"(fa.sensors.GPS(), TemperatureSensor(...), a Sensor subclass)")

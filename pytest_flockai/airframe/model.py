@@ -28,8 +28,7 @@ import mujoco
 
 import math
 
-from ..airframe.drone import G
-from ..energy.components import RHO_SEA_LEVEL
+from ..physics import G, RHO_SEA_LEVEL
 
 
 def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:

@@ -13,7 +13,7 @@ import copy
 import math
 
 from .. import _check
-from ..errors import ConfigError
+from ..errors import ConfigError, close_matches
 
 
 class Field:
@@ -84,7 +84,6 @@ class Section:
         values = dict(values or {})
         unknown = sorted(set(values) - set(self.FIELDS))
         if unknown:
-            from ..errors import close_matches
             raise ConfigError(
                 f"{self._where}: unknown key {unknown[0]!r}"
                 f"{close_matches(unknown[0], self.FIELDS)}; allowed keys: {', '.join(self.FIELDS)}")
@@ -99,7 +98,6 @@ class Section:
     def __setattr__(self, name, value):
         f = self.FIELDS.get(name)
         if f is None:
-            from ..errors import close_matches
             raise ConfigError(f"{self._where}: unknown field {name!r}{close_matches(name, self.FIELDS)}; "
                               f"allowed: {', '.join(self.FIELDS)}")
         object.__setattr__(self, name, f.check(name, value, self._where))

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..airframe.drone import G
+from ..physics import G, RHO_SEA_LEVEL
 
 CASCADE_RATIO = 3.0
 
@@ -57,7 +57,6 @@ class CascadedController:
         self.i_lim = 0.3 * G
         # drag feed-forward: the reference velocity's expected body drag (still air),
         # 1/2 rho CdA / m with the frontal CdA horizontally and the top CdA vertically
-        from ..energy.components import RHO_SEA_LEVEL
         self.kd_h = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[0] / self.mass
         self.kd_v = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[2] / self.mass
         # allocation: [T, tau_x, tau_y, tau_z] = A f

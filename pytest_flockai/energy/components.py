@@ -21,8 +21,9 @@ from __future__ import annotations
 import math
 
 from .. import _check
+from ..errors import ConfigError
+from ..physics import G, RHO_SEA_LEVEL
 
-RHO_SEA_LEVEL = 1.225  # kg/m^3, ISA sea level
 
 
 class Usage:
@@ -49,7 +50,6 @@ class Component:
 
     def __init__(self, name: str, description: str = ""):
         if not isinstance(name, str) or not name or "." in name:
-            from ..errors import ConfigError
             raise ConfigError(f"component name = {name!r} is not allowed; expected a non-empty "
                               f"string without '.'")
         self.name = name
@@ -224,7 +224,6 @@ class HoverPower(Component):
         if eta is None:
             eta = (m.figure_of_merit * m.motor_efficiency * m.esc_efficiency
                    if isinstance(m, Motors) else 0.4)
-        from ..airframe.drone import G
         area = drone.airframe.rotor_count * drone.rotor.disc_area_m2
         self._p = (drone.mass_kg * G) ** 1.5 / math.sqrt(2.0 * RHO_SEA_LEVEL * area) / eta
 
@@ -274,7 +273,6 @@ class Motors(Component):
                                                minimum=0.0, maximum=1.0)
         self.rho = _check.positive("rho", rho, where=w)
         if self.figure_of_merit * self.induced_power_factor >= 1.0:
-            from ..errors import ConfigError
             raise ConfigError(f"{w}: figure_of_merit x induced_power_factor = "
                               f"{self.figure_of_merit * self.induced_power_factor:.3f} must be < 1 "
                               f"(the rest is profile power)")

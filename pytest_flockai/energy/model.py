@@ -129,21 +129,22 @@ class EnergyModel(Group):
         super().__init__("total", children, description)
 
     @classmethod
-    def from_params(cls, p, drone) -> "EnergyModel":
-        from ..compute import device as get_device
+    def from_params(cls, p, *, device, radio) -> "EnergyModel":
+        """The model built from a blueprint's ``[energy]`` parameters ``p``, its
+        on-board computer ``device`` (a ``compute.Device`` or None) and its
+        ``radio`` section."""
         motors = Motors("motors", figure_of_merit=p.figure_of_merit,
                         induced_power_factor=p.induced_power_factor,
                         motor_efficiency=p.motor_efficiency, esc_efficiency=p.esc_efficiency,
                         wake_interference=p.wake_interference)
         proc = Group("proc", description="processing: flight controller, SoC, I/O, sensors")
         proc.add(Constant("fc", p.flight_controller_w, "flight controller"))
-        if drone.device != "none":
-            dev = get_device(drone.device)
-            proc.add(SoC("soc", dev.idle_w, dev.active_w, f"on-board computer {dev.name}"))
+        if device is not None:
+            proc.add(SoC("soc", device.idle_w, device.active_w, f"on-board computer {device.name}"))
         proc.add(Constant("io", p.io_w, "storage and buses"))
         proc.add(Group("sensors", [Constant(k, v, f"{k} sensor") for k, v in p.sensors.items()],
                        "sensor power"))
-        r = drone.radio
+        r = radio
         comm = Group("comm", [RadioLinear(
             "radio", tx_uj_per_byte=r.tx_uj_per_byte, tx_uj_per_packet=r.tx_uj_per_packet,
             rx_uj_per_byte=r.rx_uj_per_byte, rx_uj_per_packet=r.rx_uj_per_packet,

@@ -33,9 +33,9 @@ class RunView:
     readings by sensor name), ``drone`` and ``mission``.
     """
 
-    def __init__(self, mission, meter):
+    def __init__(self, drone, meter, *, mission=None):
         self.mission = mission
-        self.drone = mission.drone
+        self.drone = drone
         self._meter = meter
         self.t = 0.0
         self.position = (0.0, 0.0, 0.0)
@@ -44,7 +44,7 @@ class RunView:
         self.phase_time = [0.0] * 6
         self.distance_m = self.max_speed_mps = self.tracking_error_max_m = 0.0
         self.crashed = False
-        self.battery_usable_j = mission.drone.battery.energy_j
+        self.battery_usable_j = drone.battery.energy_j
         self.cpu_time_s = self.io_time_s = 0.0
         self.mem_utilization = 0.0
         self.bytes_in = self.bytes_out = self.packets_in = self.packets_out = 0

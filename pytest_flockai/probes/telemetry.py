@@ -15,6 +15,11 @@ import math
 import numpy as np
 import pandas as pd
 
+from ..clock import CLOCK_EPS, Clocked
+from ..phases import PHASES, STAGES, Phase
+
+LANDED = int(Phase.LANDED)
+
 BASE_COLS = ("x", "y", "z", "vx", "vy", "vz", "roll", "pitch", "yaw", "wx", "wy", "wz",
              "sp_x", "sp_y", "sp_z", "wind_x", "wind_y", "wind_z", "power_w", "energy_j",
              "battery_remaining")
@@ -70,13 +75,13 @@ class TelemetryRecorder:
         self._stage[i] = stage
         self.n = i + 1
 
-    def frame(self, phases, stages) -> pd.DataFrame:
+    def frame(self) -> pd.DataFrame:
         """The DataFrame (index: simulated time ``t``), built once."""
         n = self.n
         tel = pd.DataFrame(self._buf[:n].copy(), columns=self.columns,
                            index=pd.Index(self._t[:n].copy(), name="t"))
-        tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(phases))
-        tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(stages))
+        tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(PHASES))
+        tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(STAGES))
         self._sensor_columns(tel, n)
         return tel
 
@@ -102,3 +107,26 @@ class TelemetryRecorder:
         if self._est_hist and len(self._est_hist) >= n:
             e = np.asarray(self._est_hist[:n])
             tel["est_x"], tel["est_y"], tel["est_z"] = e[:, 0], e[:, 1], e[:, 2]
+
+
+class TelemetryStep(Clocked):
+    """The telemetry recorder as a clocked component (``telemetry_hz``); ``finish``
+    records the final state."""
+
+    def __init__(self, recorder: TelemetryRecorder, state, data, hz: float):
+        self.rec, self.st, self.data = recorder, state, data
+        self.period_s = 1.0 / hz
+        self._t_next = 0.0
+        self.next_due = -CLOCK_EPS
+
+    def step(self, t: float) -> None:
+        self._t_next += self.period_s
+        self.next_due = self._t_next - CLOCK_EPS
+        s = self.st
+        self.rec.record(t, s.q, s.v, s.sp, s.w, s.phase, s.stage, s.power, s.energy_j, s.e_usable)
+
+    def finish(self, t: float) -> None:
+        s, d = self.st, self.data
+        self.rec.record(t, d.qpos.tolist(), d.qvel.tolist(), s.sp, s.w,
+                        s.phase if s.airborne else LANDED, s.stage, self.rec.meter.last_power,
+                        s.energy_j, s.e_usable)

@@ -33,6 +33,7 @@ from numbers import Integral
 import numpy as np
 
 from .. import _check
+from ..clock import Clocked
 from ..errors import ConfigError
 
 _EPS = 1e-9       # s: a reading due at t fires at t - eps (float time from MuJoCo)
@@ -176,7 +177,7 @@ class SensorSuite:
             if add is not None:
                 add(spec, body_name)
 
-    def bind(self, model, data, seed, *, world=None) -> None:
+    def bind(self, model, data, seed, *, world=None, battery=None) -> None:
         """Bind every sensor; seed: the mission's sensors SeedSequence (or int / Generator).
 
         Each sensor gets its own Generator, keyed by its name. ``world`` is
@@ -187,6 +188,8 @@ class SensorSuite:
             if world is not None and hasattr(s, "world") and s.world is None:
                 s.world = world
             s.bind(model, data, np.random.default_rng(_child_seed(seed, s.name)))
+            if battery is not None and hasattr(s, "bind_battery"):
+                s.bind_battery(battery)
         t0 = float(data.time)
         self._due = [t0] * len(self._polled)
         self._next = t0 - _EPS if self._polled else math.inf
@@ -268,3 +271,15 @@ class SensorSuite:
 
 def _duck_sensor(s) -> bool:
     return all(hasattr(s, a) for a in ("name", "rate_hz", "power_w", "bind", "read"))
+
+
+class Sensing(Clocked):
+    """The polled sensors as a clocked component: reads those that are due."""
+
+    def __init__(self, suite: SensorSuite, data):
+        self.suite, self.data = suite, data
+        self.next_due = suite._next
+
+    def step(self, t: float) -> None:
+        self.suite._poll(t, self.data)
+        self.next_due = self.suite._next

@@ -209,9 +209,9 @@ class Rangefinder(_BodySensor):
 class BatterySensor(Sensor):
     """The battery's state as the mission knows it: ``source()`` or a value.
 
-    source: a callable with no arguments (the mission passes e.g.
-    ``lambda: remaining_fraction``), a number, or None (reads nan) until the
-    mission sets ``sensor.source``. The reading is the source's value plus
+    source: a callable with no arguments, a number, or None: then, in a
+    flight, the battery's remaining fraction (0..1) of that flight (the
+    mission binds it anew for every flight; outside a flight it reads nan). The reading is the source's value plus
     N(0, noise_std). The quantity (state of charge 0..1, volts, ...) is
     whatever the source returns.
     """
@@ -221,6 +221,7 @@ class BatterySensor(Sensor):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w)
         self.noise_std = _check.non_negative("noise_std", noise_std, where=f"BatterySensor {name!r}")
         self.source = source
+        self._flight_source = None
 
     @property
     def source(self):
@@ -232,8 +233,12 @@ class BatterySensor(Sensor):
             value = _check.number("source", value, where=f"BatterySensor {self.name!r}")
         self._source = value
 
+    def bind_battery(self, source) -> None:
+        """Per flight: the flight's own battery state, read when ``source`` is None."""
+        self._flight_source = source
+
     def read(self, t, data):
-        s = self._source
+        s = self._source if self._source is not None else self._flight_source
         v = math.nan if s is None else float(s() if callable(s) else s)
         if self.noise_std:
             v += self.noise_std * float(self.rng.standard_normal())

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from .. import _check
+from ..clock import Clocked
 
 
 class Wind:
@@ -74,3 +75,20 @@ class WindSampler:
         g[2] = a * g[2] + b * buf[k + 2]
         self._k = k + 3
         return (m[0] + g[0], m[1] + g[1], m[2] + 0.5 * g[2])
+
+
+class WindStep(Clocked):
+    """The wind as a clocked component (every control tick): steps the gusts and
+    sets MuJoCo's ``opt.wind``, against which MuJoCo applies body drag every
+    substep; the vehicle state's ``w`` is the air velocity of this tick."""
+
+    def __init__(self, wind: Wind, state, model, rng, dt: float):
+        self.st = state
+        self.sampler = wind.sampler(rng, dt)
+        self._mwind = model.opt.wind
+        self._mwind[:] = wind.mean
+
+    def step(self, t: float) -> None:
+        w = self.sampler.step()
+        self._mwind[0], self._mwind[1], self._mwind[2] = w
+        self.st.w = w

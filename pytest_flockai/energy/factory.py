@@ -1,0 +1,43 @@
+"""The energy model of one flight, built from the drone's own model.
+
+The drone's model (``drone.energy``, built from its blueprint's parameters)
+is left untouched; a flight gets a copy when it differs: the power of sensors
+added to the drone or the mission goes into ``proc.sensors``, and the on-board
+tasks' computer becomes ``proc.soc`` when it is not the blueprint's.
+"""
+
+from __future__ import annotations
+
+from .components import Constant, SoC
+from .model import Group
+
+
+def flight_energy_model(base, *, extra_sensors=(), device=None, blueprint_device: str = "none"):
+    """``base``: the drone's EnergyModel; ``extra_sensors``: sensor objects with a
+    ``power_w``; ``device``: the on-board computer of this flight (a compute
+    Device) or None; ``blueprint_device``: the blueprint's device name."""
+    extra = [sn for sn in extra_sensors if getattr(sn, "power_w", 0.0) > 0.0]
+    swap_soc = device is not None and device.name != blueprint_device
+    if not extra and not swap_soc:
+        return base
+    model = base.copy()
+    if swap_soc and "proc" in model:
+        proc = model.component("proc")
+        soc = SoC("soc", device.idle_w, device.active_w, f"on-board computer {device.name}")
+        if "soc" in proc:
+            proc.replace("soc", soc)
+        else:
+            proc.add(soc)
+    if not extra:
+        return model
+    proc = model.component("proc") if "proc" in model else None
+    if proc is None:
+        proc = Group("proc")
+        model.add(proc)
+    if "sensors" not in proc:
+        proc.add(Group("sensors"))
+    group = proc.component("sensors")
+    for sn in extra:
+        if sn.name not in group:
+            group.add(Constant(sn.name, sn.power_w, f"{type(sn).__name__} sensor"))
+    return model

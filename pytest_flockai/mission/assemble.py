@@ -1,0 +1,143 @@
+"""Build one flight from its plan: the MuJoCo model, the vehicle's state and
+its clocked components, in the order the loop steps them each tick."""
+
+from __future__ import annotations
+
+import copy
+
+import mujoco
+import numpy as np
+
+from ..airframe.model import build_spec
+from ..clock import Clocked
+from ..comm.traffic import Heartbeats, Traffic
+from ..control.controller import CascadedController
+from ..control.estimator import NavEstimator
+from ..control.stages import StageMachine
+from ..control.steps import Control, Navigation
+from ..energy.factory import flight_energy_model
+from ..energy.integrator import EnergyIntegrator
+from ..energy.model import Meter
+from ..ml.scheduler import DatasetRecorder, TaskScheduler, memory_utilization
+from ..physics import G
+from ..probes.builtin import TaskProbe
+from ..probes.hub import ProbeHub, RunView
+from ..probes.telemetry import TelemetryRecorder, TelemetryStep
+from ..sensors import (IMU, GPS, Barometer, BatterySensor, Camera, Compass, Rangefinder,
+                       SensorSuite)
+from ..sensors.base import Sensing
+from ..world.wind import WindStep
+from .book import FlightBook
+from .ending import EndConditions
+from .plan import FlightPlan, seed_sequence
+from .probing import ProbeStep
+from .state import EventLog, VehicleState
+
+_NAV = {"gps": GPS, "barometer": Barometer, "imu": IMU, "compass": Compass,
+        "rangefinder": Rangefinder, "battery": BatterySensor}
+#: s: telemetry rows are preallocated for this long when the end time is open
+TELEMETRY_ROWS_S = 1800.0
+
+
+def sensor_suite(plan: FlightPlan) -> SensorSuite:
+    """The sensors read in this flight: the ones added to the drone or the
+    mission, GPS and barometer when flying on estimates, and the blueprint's
+    camera (rendered only when something asks for a frame). The blueprint's
+    other sensors draw power through the energy model but are not read."""
+    drone = plan.drone
+    chosen = list(drone.extra_sensors) + list(plan.sensors)
+    names = {sn.name for sn in chosen}
+    wanted = [tk.sensor for tk in plan.tasks if tk.sensor in _NAV]
+    if plan.fly_on == "estimate":
+        wanted += ["gps", "barometer"]
+    for name in wanted:
+        if name not in names:
+            chosen.append(_NAV[name]())
+            names.add(name)
+    if drone.camera is not None and "camera" not in names and (
+            "camera" in drone.sensors or plan.dataset_dir is not None
+            or any(tk.sensor == "camera" for tk in plan.tasks)):
+        chosen.append(Camera.from_blueprint(drone))
+    return SensorSuite(chosen)
+
+
+class Run:
+    """One flight being flown: its MuJoCo model and data, the vehicle's state,
+    the event log and the clocked components in stepping order. It is also
+    what a user component's ``bind(run)`` receives."""
+
+    def __init__(self, plan: FlightPlan, mission=None, subscribers=(), probes=()):
+        self.plan, self.mission = plan, mission
+        drone = plan.drone
+        self.suite = sensor_suite(plan)
+        spec = build_spec(drone, plan.world, physics_dt=plan.physics_dt)
+        self.suite.add_to_spec(spec, "drone")
+        self.model = spec.compile()
+        self.data = mujoco.MjData(self.model)
+        mujoco.mj_forward(self.model, self.data)
+        self.events = EventLog()
+        self.vehicle = st = VehicleState("drone", 0, e_usable=drone.battery.energy_j)
+        st.home = (0.0, 0.0, float(self.data.qpos[2]))
+        self.suite.bind(self.model, self.data, seed_sequence(plan.seed, "sensors"), world=plan.world,
+                        battery=lambda: st.battery_remaining)
+        self.controller = CascadedController(drone, plan.ctrl_dt)
+        self.meter = Meter(flight_energy_model(
+            drone.energy, extra_sensors=list(drone.extra_sensors) + list(plan.sensors),
+            device=plan.onboard_device, blueprint_device=drone.device), drone)
+        self.components = self._components(plan, subscribers, probes)
+
+    def _components(self, plan, subscribers, probes) -> list:
+        drone, st, d = plan.drone, self.vehicle, self.data
+        n_rot = drone.airframe.rotor_count
+        # trajectories' acceleration limit: a quarter of the thrust margin, at most 2.5 m/s^2,
+        # and no more than the velocity loop can follow (1.5 x its bandwidth)
+        accel = min(2.5, 0.25 * (drone.thrust_to_weight - 1.0) * G, 1.5 * self.controller.k_vel)
+        self.stages = StageMachine(st, copy.deepcopy(plan.pilot), self.events, d, accel=accel,
+                                   climb_speed=plan.climb_speed, descent_speed=plan.descent_speed,
+                                   return_home=plan.return_home)
+        recorder = DatasetRecorder(plan.dataset_period_s) if plan.dataset_dir is not None else None
+        seeds = seed_sequence(plan.seed, "tasks").spawn(len(plan.tasks)) if plan.tasks else []
+        self.scheduler = TaskScheduler(st, plan.tasks, seeds, self.suite, d, recorder=recorder)
+        tasks = self.scheduler if self.scheduler.runners else None
+        self.traffic = Traffic()
+        self.book = FlightBook(st, self.events, plan.ctrl_dt)
+        self.view = RunView(plan.drone, self.meter, mission=self.mission)
+        self.hub = ProbeHub(list(probes) + [TaskProbe(tk.name) for tk in plan.tasks], subscribers)
+        self.hub.bind(self.view)
+        self.probing = ProbeStep(self.hub, self.view, st, self.book, self.traffic, self.suite, tasks,
+                                 memory_utilization(plan.tasks, plan.onboard_device))
+        rows = int(min(plan.t_end if not isinstance(plan.until, str) else TELEMETRY_ROWS_S,
+                       plan.t_end) * plan.telemetry_hz) + 16
+        estimator = NavEstimator() if plan.fly_on == "estimate" else None
+        self.telemetry = TelemetryRecorder(rows, n_rot, self.meter, d, self.suite, estimator)
+        comps: list[Clocked] = [Sensing(self.suite, d)]
+        if self.scheduler.consumers:
+            comps.append(self.scheduler)
+        if estimator is not None:
+            comps.append(Navigation(st, estimator, self.suite))
+        comps += [self.stages, Control(st, self.controller, d, n_rot)]
+        if plan.wind is not None:
+            rng = seed_sequence(plan.seed, "wind")
+            comps.append(WindStep(plan.wind, st, self.model, np.random.default_rng(rng), plan.ctrl_dt))
+        comps += [Heartbeats(self.traffic, drone.radio),
+                  EnergyIntegrator(st, self.meter, d, self.traffic, tasks,
+                                   energy_hz=plan.energy_hz, n_rotors=n_rot),
+                  self.book, self.probing,
+                  TelemetryStep(self.telemetry, st, d, plan.telemetry_hz)]
+        for c in plan.components:
+            c.bind(self)
+            comps.append(c)
+        comps.append(EndConditions(
+            st, self.events, self.stages, t_end=plan.t_end, dt=plan.ctrl_dt,
+            timed=not isinstance(plan.until, str), use_reserve=plan.use_reserve,
+            reserve_j=drone.battery.reserve_fraction * st.e_usable, energy_hz=plan.energy_hz))
+        return comps
+
+    # -- for user components ---------------------------------------------------
+    def event(self, t: float, kind: str, **info) -> None:
+        """Log an event of the flight (it appears in ``result.events``)."""
+        self.events.add(t, kind, **info)
+
+    def stop(self, reason: str) -> None:
+        """End the flight after this tick; ``reason`` becomes ``result.end_reason``."""
+        self.vehicle.end_reason = str(reason)

@@ -1,0 +1,42 @@
+"""When a flight ends on the battery or the clock: the last component of a tick.
+
+The stage machine ends a flight that landed. This component ends it when the
+battery is depleted, sends the drone home to land when the battery falls to
+its reserve (``until="battery_reserve"``), and ends it at the time limit
+(``until`` seconds, or the mission's ``max_time_s`` cap). The energy used
+changes only on the energy integrator's clock, so it runs on that clock (the
+same grid) and, near the time limit, every tick.
+"""
+
+from __future__ import annotations
+
+from ..clock import CLOCK_EPS, Clocked
+from ..control.stages import PILOT
+
+
+class EndConditions(Clocked):
+    def __init__(self, state, events, stages, *, t_end: float, dt: float, timed: bool,
+                 use_reserve: bool, reserve_j: float, energy_hz: float):
+        self.st, self.events, self.stages = state, events, stages
+        self.t_end, self.dt, self.timed = t_end, dt, timed
+        self.use_reserve, self.reserve_j = use_reserve, reserve_j
+        self.period_s = 1.0 / energy_hz
+        self._t_next = self.period_s
+        self.next_due = min(self._t_next - CLOCK_EPS, t_end - dt)
+
+    def step(self, t: float) -> None:
+        if t >= self._t_next - CLOCK_EPS:
+            self._t_next += self.period_s
+        self.next_due = min(self._t_next - CLOCK_EPS, self.t_end - self.dt)
+        s = self.st
+        if s.end_reason is not None:      # landed, or a user component stopped the flight
+            return
+        if s.energy_j >= s.e_usable:
+            s.end_reason = "battery_depleted"
+            self.events.add(t, "battery_depleted")
+            return
+        if self.use_reserve and s.stage == PILOT and s.e_usable - s.energy_j <= self.reserve_j:
+            self.events.add(t, "battery_reserve", remaining=(s.e_usable - s.energy_j) / s.e_usable)
+            self.stages.go_home(t)
+        if t + 0.5 * self.dt >= self.t_end:
+            s.end_reason = "time" if self.timed else "time_cap"

@@ -1,0 +1,115 @@
+"""Mission: drones, pilots, a world and tasks, flown on one simulated clock.
+
+``Mission(...)`` validates its inputs and resolves them into a flight plan at
+once (every ``ConfigError`` is raised here, before anything flies);
+``run()`` builds the flight (``assemble.Run``), flies it (``loop.fly``) and
+returns the ``FlightResult`` (``result.build``). It also hands the result to
+the recording sink of the current context (``pytest_flockai.recording``), so
+the pytest plugin sees every flight flown inside a test, also one that ended
+in a ``SimulationError`` (then with the partial result).
+"""
+
+from __future__ import annotations
+
+import time as _time
+
+import numpy as np
+
+from .. import _check
+from ..airframe.drone import Drone
+from ..control.pilots import Pilot
+from ..errors import ConfigError, SimulationError
+from ..probes.hub import resolve_probes
+from ..recording import publish
+from ..result import FlightResult
+from ..world.wind import Wind
+from . import loop, result
+from .assemble import Run
+from .plan import check_components, check_sensors, check_tasks, check_until, resolve
+
+
+class Mission:
+    """A flight to simulate: ``Mission(drone, pilot, ...).run() -> FlightResult``.
+
+    until: "landed" (fly the plan, return home, land), "battery_depleted" (fly
+    until the battery is empty), "battery_reserve" (return home and land when the
+    battery falls to its reserve), or a number of simulated seconds.
+    components: your own clocked components (``fa.Clocked``), stepped every tick
+    or on their own period, after the built-in ones.
+    """
+
+    def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
+                 seed: int = 0, until="landed", *, return_home: bool = True,
+                 max_time_s: float = 4 * 3600.0, telemetry_hz: float = 10.0,
+                 energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
+                 dataset_dir=None, dataset_period_s: float = 1.0,
+                 climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None,
+                 components=()):
+        if not isinstance(drone, Drone):
+            raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
+        if not isinstance(pilot, Pilot):
+            raise ConfigError(f"Mission: pilot = {pilot!r} is not a Pilot (fa.pilots.Hover, "
+                              f"Waypoints, ZigZag, Orbit or a Pilot subclass)")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ConfigError(f"Mission: seed = {seed!r} is not allowed; expected an integer >= 0")
+        if name is not None and (not isinstance(name, str) or not name):
+            raise ConfigError(f"Mission: name = {name!r} is not allowed; expected a non-empty str")
+        self.drone, self.pilot, self.world = drone, pilot, world
+        self.until = check_until(until)
+        self.sensors = list(check_sensors(sensors))
+        self.tasks = check_tasks(tasks, drone, self.sensors)
+        self.components = list(check_components(components))
+        self.probes = resolve_probes(probes)
+        self.subscribers: list = []
+        self.wind = Wind.coerce(wind)
+        self.seed = int(seed)
+        self.return_home = bool(return_home)
+        self.max_time_s = _check.positive("max_time_s", max_time_s, where="Mission")
+        self.telemetry_hz = _check.positive("telemetry_hz", telemetry_hz, where="Mission")
+        self.energy_hz = _check.positive("energy_hz", energy_hz, where="Mission")
+        self.climb_speed = _check.positive("climb_speed", climb_speed, where="Mission")
+        self.descent_speed = _check.positive("descent_speed", descent_speed, where="Mission")
+        self.name = name
+        self.fly_on = _check.choice("fly_on", fly_on, ("truth", "estimate"), where="Mission")
+        self.dataset_dir = dataset_dir
+        self.dataset_period_s = _check.positive("dataset_period_s", dataset_period_s, where="Mission")
+        resolve(self)
+
+    def subscribe(self, target) -> "Mission":
+        """Receive probe samples live: ``target`` is a callable ``fn(sample)`` or a
+        ``queue.Queue``; each sample is ``{"t": s, "probe": name, "values": {...}}``."""
+        if not (callable(target) or hasattr(target, "put_nowait")):
+            raise ConfigError(f"Mission.subscribe: {target!r} is neither callable nor a queue")
+        self.subscribers.append(target)
+        return self
+
+    def scenario(self) -> dict:
+        return {
+            "name": self.name, "drone": self.drone.to_dict(), "pilot": self.pilot.to_dict(),
+            "world": self.world.to_dict() if self.world is not None else {"name": "empty"},
+            "wind": self.wind.to_dict() if self.wind is not None else None,
+            "seed": self.seed, "until": self.until, "return_home": self.return_home,
+            "tasks": [getattr(t, "to_dict", lambda: repr(t))() for t in self.tasks],
+            "probes": [p.to_dict() for p in self.probes],
+            "sensors": [sn.name for sn in self.drone.extra_sensors + self.sensors],
+            "fly_on": self.fly_on,
+            **({"components": [c.to_dict() for c in self.components]} if self.components else {}),
+        }
+
+    def __repr__(self):
+        return f"Mission({self.drone.name!r}, {self.pilot!r}, seed={self.seed}, until={self.until!r})"
+
+    def run(self) -> FlightResult:
+        wall0 = _time.perf_counter()
+        run = Run(resolve(self), self, self.subscribers, self.probes)
+        try:
+            loop.fly(run)
+        except SimulationError as exc:
+            exc.result = result.build(run, self, _time.perf_counter() - wall0, run.data.time,
+                                      "diverged")
+            publish(exc.result, self)
+            raise
+        res = result.build(run, self, _time.perf_counter() - wall0, run.data.time,
+                           run.vehicle.end_reason)
+        publish(res, self)
+        return res

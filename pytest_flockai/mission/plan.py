@@ -1,0 +1,175 @@
+"""A Mission resolved into a frozen flight plan: every check, before anything flies.
+
+``resolve(mission)`` validates the mission as a whole (the drone's blueprint,
+the physics and control rates, the tasks against the drone's sensors and
+computer, the user's components) and derives what the loop needs: time
+steps, the end time, the on-board computer. A bad input raises a
+``ConfigError`` naming the field, the value and what is allowed, when the
+Mission is built; ``Mission.run()`` resolves again, so a drone edited in
+between flies as edited.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from numbers import Real
+
+import numpy as np
+
+from .. import _check
+from ..airframe.drone import Drone
+from ..clock import Clocked
+from ..compute import device as _device
+from ..control.pilots import Pilot
+from ..errors import ConfigError
+from ..ml import Task
+from ..probes.builtin import BUILTIN
+from ..sensors import Sensor
+from ..world.wind import Wind
+
+UNTIL = ("landed", "battery_depleted", "battery_reserve")
+NAV_SENSORS = ("battery", "barometer", "compass", "gps", "imu", "rangefinder")
+#: fixed spawn keys of the mission seed, one per random component
+SEEDS = {"wind": 0, "sensors": 1, "tasks": 2, "link": 3, "world": 4, "probes": 5}
+
+
+def seed_sequence(seed: int, component: str) -> np.random.SeedSequence:
+    """The SeedSequence of one component of a mission (fixed spawn keys)."""
+    return np.random.SeedSequence(seed, spawn_key=(SEEDS[component],))
+
+
+@dataclass(frozen=True)
+class FlightPlan:
+    drone: Drone
+    pilot: Pilot
+    world: object
+    tasks: tuple
+    sensors: tuple            # the mission's sensors (the drone's own are on the drone)
+    components: tuple         # the user's clocked components
+    wind: Wind | None
+    seed: int
+    until: object
+    t_end: float              # s: when the loop stops at the latest
+    physics_dt: float
+    substeps: int
+    ctrl_dt: float
+    telemetry_hz: float
+    energy_hz: float
+    climb_speed: float
+    descent_speed: float
+    return_home: bool
+    fly_on: str
+    dataset_dir: object
+    dataset_period_s: float
+    onboard_device: object    # compute.Device or None
+
+    @property
+    def use_reserve(self) -> bool:
+        return self.until == "battery_reserve"
+
+
+def check_until(until):
+    if isinstance(until, str):
+        return _check.choice("until", until, UNTIL, where="Mission")
+    if isinstance(until, Real) and not isinstance(until, bool):
+        return _check.positive("until", until, where="Mission")
+    raise ConfigError(f"Mission: until = {until!r} is not allowed; allowed: "
+                      f"{', '.join(map(repr, UNTIL))} or a number of seconds > 0")
+
+
+def check_tasks(tasks, drone, sensors) -> tuple:
+    try:
+        tasks = tuple(tasks or ())
+    except TypeError:
+        raise ConfigError(f"Mission: tasks = {tasks!r} is not a list of Task objects") from None
+    names = set()
+    reserved = {cls.name for cls in BUILTIN}
+    extra = {sn.name for sn in list(drone.extra_sensors) + list(sensors)}
+    for i, tk in enumerate(tasks):
+        if not isinstance(tk, Task):
+            raise ConfigError(f"Mission: tasks[{i}] = {tk!r} is not a Task; use "
+                              f"fa.Task(model, sensor='camera', period_s=5.0, ...)")
+        if tk.name in names:
+            raise ConfigError(f"Mission: two tasks are named {tk.name!r}; give them name=... "
+                              f"(task names prefix their KPIs)")
+        if tk.name in reserved:
+            raise ConfigError(f"Mission: task name {tk.name!r} clashes with a built-in probe; "
+                              f"give the task another name=")
+        names.add(tk.name)
+        _check_task_sensor(tk, drone, extra)
+    onboard = {tk.device.name for tk in tasks if tk.execution == "onboard"}
+    if len(onboard) > 1:
+        raise ConfigError(f"Mission: on-board tasks name different computers "
+                          f"({', '.join(sorted(onboard))}); a drone has one on-board computer: "
+                          f"give them the same device")
+    return tasks
+
+
+def _check_task_sensor(tk, drone, extra):
+    if tk.sensor == "camera":
+        if drone.camera is None and "camera" not in extra:
+            raise ConfigError(f"task {tk.name!r} reads sensor 'camera', but {drone.name} has no "
+                              f"[camera] section; add one to the blueprint or add a camera "
+                              f"sensor (drone.add_sensor(fa.sensors.ReplayCamera(...)))")
+    elif tk.sensor not in extra and tk.sensor not in NAV_SENSORS:
+        raise ConfigError(f"task {tk.name!r} reads sensor {tk.sensor!r}, which is not on "
+                          f"{drone.name}; add it with drone.add_sensor(...) or "
+                          f"Mission(sensors=[...]); built in: camera, {', '.join(NAV_SENSORS)}")
+
+
+def check_sensors(sensors) -> tuple:
+    try:
+        sensors = tuple(sensors or ())
+    except TypeError:
+        raise ConfigError(f"Mission: sensors = {sensors!r} is not a list of Sensor objects") from None
+    for i, sn in enumerate(sensors):
+        if not isinstance(sn, Sensor):
+            raise ConfigError(f"Mission: sensors[{i}] = {sn!r} is not a Sensor")
+    return sensors
+
+
+def check_components(components) -> tuple:
+    try:
+        components = tuple(components or ())
+    except TypeError:
+        raise ConfigError(f"Mission: components = {components!r} is not a list of "
+                          f"fa.Clocked components") from None
+    for i, c in enumerate(components):
+        if not isinstance(c, Clocked):
+            raise ConfigError(f"Mission: components[{i}] = {c!r} is not a Clocked component; "
+                              f"subclass fa.Clocked and implement step(t)")
+    return components
+
+
+def onboard_device(tasks, drone):
+    """The on-board computer: the on-board tasks' device, else the blueprint's."""
+    for tk in tasks:
+        if tk.execution == "onboard":
+            return tk.device
+    return _device(drone.device) if drone.device != "none" else None
+
+
+def resolve(m) -> FlightPlan:
+    """The flight plan of Mission ``m`` (raises ConfigError on bad input)."""
+    drone = m.drone
+    drone.check()
+    sim = drone.sim
+    if sim.physics_hz < sim.control_hz:
+        raise ConfigError(f"{drone.name} [sim]: physics_hz = {sim.physics_hz:g} must be >= "
+                          f"control_hz = {sim.control_hz:g}")
+    substeps = max(1, int(round(sim.physics_hz / sim.control_hz)))
+    physics_dt = 1.0 / sim.physics_hz
+    tasks = check_tasks(m.tasks, drone, m.sensors)
+    until = check_until(m.until)
+    t_end = min(float(until) if not isinstance(until, str) else m.max_time_s, m.max_time_s)
+    if m.dataset_dir is not None and drone.camera is None:
+        raise ConfigError(f"Mission: dataset_dir = {str(m.dataset_dir)!r} needs a camera, and "
+                          f"{drone.name} has no [camera] section")
+    return FlightPlan(
+        drone=drone, pilot=m.pilot, world=m.world, tasks=tasks, sensors=check_sensors(m.sensors),
+        components=check_components(m.components), wind=Wind.coerce(m.wind), seed=m.seed,
+        until=until, t_end=t_end, physics_dt=physics_dt, substeps=substeps,
+        ctrl_dt=physics_dt * substeps, telemetry_hz=m.telemetry_hz, energy_hz=m.energy_hz,
+        climb_speed=m.climb_speed, descent_speed=m.descent_speed, return_home=m.return_home,
+        fly_on=m.fly_on, dataset_dir=m.dataset_dir, dataset_period_s=m.dataset_period_s,
+        onboard_device=onboard_device(tasks, drone))

@@ -1,0 +1,148 @@
+"""The task scheduler: ML tasks (and the dataset recorder) fed on the simulated clock.
+
+A clocked component. When a task or the recorder wants a frame and the drone
+is surveying (pilot and return stages; not on the ground), it reads the
+sensor once (a camera renders only then), gives the frame and its ground
+truth to every consumer that is due, and notes the drone's position. Between
+frames, one comparison per tick. The energy integrator takes the SoC busy
+time and the task traffic from ``take_usage``; the result builder takes the
+KPIs, events and truth records.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..clock import CLOCK_EPS, Clocked
+from ..control.stages import PILOT, RETURN
+from .metrics import percentile
+from .task import DeviceClock
+
+#: MB: estimate of Raspberry Pi OS Lite + flight software resident set
+OS_MEMORY_MB = 250.0
+
+
+def memory_utilization(tasks, device) -> float:
+    """Share of the on-board computer's memory in use: the OS plus the weights
+    (4 bytes per parameter) of the on-board models."""
+    if device is None:
+        return 0.0
+    mem = OS_MEMORY_MB + sum(4e-6 * float(getattr(tk.model, "params", 0) or 0) for tk in tasks
+                             if tk.execution == "onboard")
+    return min(1.0, mem / device.memory_mb)
+
+
+class DatasetRecorder:
+    """Takes camera frames and their truth every ``period_s`` for ``export_dataset``."""
+
+    sensor = "camera"
+
+    def __init__(self, period_s: float):
+        self.period_s = period_s
+        self.next_frame_t = 0.0
+        self.records: list = []
+
+    def due(self, t: float) -> bool:
+        return t >= self.next_frame_t - CLOCK_EPS
+
+    def on_frame(self, t, frame, truth, pos):
+        if frame is not None:
+            self.records.append((t, frame, truth))
+        while self.next_frame_t <= t + CLOCK_EPS:
+            self.next_frame_t += self.period_s
+
+
+class TaskScheduler(Clocked):
+    """``tasks``: the mission's Tasks; ``seeds``: one SeedSequence per task."""
+
+    def __init__(self, state, tasks, seeds, suite, data, *, recorder: DatasetRecorder | None = None):
+        self.st, self.suite, self.data = state, suite, data
+        onboard_clock = DeviceClock()        # one on-board computer, shared by its tasks
+        self.runners = []
+        for tk, seed in zip(tasks, seeds):
+            r = tk.runner()
+            r.bind(np.random.default_rng(seed), t0=0.0, device_clock=onboard_clock)
+            self.runners.append(r)
+        self.recorder = recorder
+        self.consumers = self.runners + ([recorder] if recorder is not None else [])
+        self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
+        self.cpu_time_s = 0.0
+        self.in_view: list = []          # (t, people in view) at every frame read
+        self.capture_pos: dict = {}      # t -> drone (x, y, z) at captures
+
+    def step(self, t: float) -> None:
+        stage = self.st.stage
+        if stage != PILOT and stage != RETURN:
+            return
+        q = self.st.q
+        pos = (q[0], q[1], q[2])
+        cache = {}
+        for c in self.consumers:
+            if not c.due(t):
+                continue
+            name = getattr(c, "sensor", None) or c.task.sensor
+            if name not in cache:
+                cache[name] = self._read(name, t)
+                self.capture_pos[round(t, 6)] = pos
+            value, truth = cache[name]
+            if isinstance(c, DatasetRecorder):
+                c.on_frame(t, value, truth, pos)
+            else:
+                c.on_frame(t, value, truth if not hasattr(truth, "count") else truth.count, pos)
+        self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
+
+    def _read(self, name, t):
+        if name not in self.suite:
+            return None, None
+        value = self.suite.read(name, t, self.data)
+        truth = getattr(self.suite[name], "last_truth", None)
+        if truth is not None:
+            self.in_view.append((t, truth.count))
+        return value, truth
+
+    def take_usage(self, t: float):
+        """(SoC busy s, tx bytes, tx packets, rx bytes, rx packets) of all tasks
+        since the last call, after advancing each task to t."""
+        busy = 0.0
+        tb = tp = rb = rp = 0
+        for r in self.runners:
+            r.advance(t)
+            b, a1, a2, a3, a4 = r.take_usage()
+            busy += b
+            tb += a1
+            tp += a2
+            rb += a3
+            rp += a4
+        self.cpu_time_s += busy
+        return busy, tb, tp, rb, rp
+
+    def kpis(self) -> tuple[dict, dict]:
+        """(combined KPIs over all tasks, each task's own KPIs by task name)."""
+        by = {r.task.name: r.kpis() for r in self.runners}
+        if len(self.runners) == 1:
+            return next(iter(by.values())), by
+        lat = [e.latency_s for r in self.runners for e in r.events if e.ok]
+        comb = {"inference_count": float(len(lat)),
+                "inference_latency_p50_s": percentile(lat, 50),
+                "inference_latency_p95_s": percentile(lat, 95),
+                "inference_latency_max_s": max(lat) if lat else math.nan,
+                "frames_dropped": sum(k["frames_dropped"] for k in by.values()),
+                "inference_failures": sum(k["inference_failures"] for k in by.values())}
+        return comb, by
+
+    def inference_events(self) -> list[dict]:
+        """Every inference as an event dict, with the drone's position at capture."""
+        out = []
+        for r in self.runners:
+            thr = r.task.crowd_threshold
+            for e in r.events:
+                d = e.to_dict()
+                d["t"] = round(float(e.t_done if e.t_done is not None else e.t_capture), 6)
+                pos = self.capture_pos.get(round(float(e.t_capture), 6))
+                if pos is not None:
+                    d["x"], d["y"], d["z"] = pos
+                d["detected"] = bool(e.ok and e.count is not None and e.count >= thr)
+                out.append(d)
+        return out
