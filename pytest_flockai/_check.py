@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from numbers import Real
 
-from .errors import ConfigError
+from .errors import ConfigError, close_matches
 
 
 def _where(where: str) -> str:
@@ -66,7 +66,6 @@ def vector(field: str, value, n: int, *, where: str = "", positive_entries=False
 
 def choice(field: str, value, allowed, *, where: str = ""):
     if value not in allowed:
-        from .errors import close_matches
         raise ConfigError(f"{_where(where)}{field} = {value!r} is not allowed; "
                           f"allowed: {', '.join(map(repr, allowed))}"
                           f"{close_matches(str(value), [str(a) for a in allowed])}")

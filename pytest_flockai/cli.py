@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from . import report as _report
+from .airframe import blueprints
 
 
 def merge_reports(paths) -> dict:
@@ -53,7 +54,6 @@ def main(argv=None) -> int:
     sub.add_parser("blueprints", help="list the built-in drone blueprints")
     a = ap.parse_args(argv)
     if a.cmd == "blueprints":
-        from .airframe import blueprints
         print("\n".join(blueprints()))
         return 0
     try:

@@ -42,6 +42,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from ..energy.components import RadioLinear, RadioStates
 from ..errors import ConfigError, close_matches
 
 C_LIGHT = 299_792_458.0
@@ -196,7 +197,6 @@ class Link:
         """An energy component for this radio: ``"states"`` (paper's P_x t_x +
         P_r t_r + P_idle t_idle at the link's top rate) or ``"linear"``
         (Feeney-Nilsson per byte / per packet, Wi-Fi only)."""
-        from ..energy.components import RadioLinear, RadioStates
         if model == "states":
             return RadioStates(name, tx_w=self.tx_w, rx_w=self.rx_w, idle_w=self.idle_w,
                                bitrate_bps=max(r for _, r in self.rates),

@@ -26,6 +26,10 @@ import threading
 import time
 from dataclasses import dataclass
 
+import numpy as np
+import onnxruntime as ort
+from onnx import TensorProto, helper, numpy_helper
+
 from .devices import Device, device as _device
 from ..errors import ConfigError
 
@@ -87,8 +91,6 @@ _CAL_LOCK = threading.Lock()
 
 def _calibration_model_bytes() -> bytes:
     """Three 3x3 convolutions + ReLU on a 1x16x64x64 tensor; fixed seed weights."""
-    import numpy as np
-    from onnx import TensorProto, helper, numpy_helper
 
     rng = np.random.default_rng(12345)
     nodes, inits = [], []
@@ -116,8 +118,6 @@ def calibrate(*, runs: int = 15, force: bool = False) -> Calibration:
     with _CAL_LOCK:
         if _CAL is not None and not force:
             return _CAL
-        import numpy as np
-        import onnxruntime as ort
 
         # exact MACs of the calibration net: 64*64 outputs per channel
         macs = 64 * 64 * (32 * 16 * 9 + 32 * 32 * 9 + 16 * 32 * 9)

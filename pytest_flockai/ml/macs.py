@@ -42,6 +42,8 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 
+import onnx
+
 from ..errors import ConfigError, FlockAIError
 
 ELEMENTWISE = frozenset("""
@@ -79,11 +81,6 @@ class MacReport:
 
 
 def _require_onnx():
-    try:
-        import onnx  # noqa: F401
-    except ImportError:  # pragma: no cover - onnx is in the test environment
-        raise FlockAIError("counting MACs of an ONNX model needs the 'onnx' package "
-                           "(pip install onnx), or pass macs=... to the model") from None
     return onnx
 
 

@@ -21,9 +21,12 @@ from __future__ import annotations
 import os
 from numbers import Integral, Real
 
+import cv2
 import numpy as np
+import onnxruntime as ort
 
 from ..errors import ConfigError
+from .macs import _param_count, _require_onnx, count_macs
 
 _FLOAT_TYPES = {"tensor(float)": np.float32, "tensor(float16)": np.float16,
                 "tensor(double)": np.float64}
@@ -127,7 +130,6 @@ class OnnxModel(Model):
     def __init__(self, path, *, input_size=None, layout=None, scale=None, mean=None, std=None,
                  providers=("CPUExecutionProvider",), macs=None, postprocess=None,
                  threads: int = 1, name: str | None = None):
-        import onnxruntime as ort
 
         self.path = os.fspath(path)
         self.name = name or os.path.splitext(os.path.basename(self.path))[0]
@@ -228,7 +230,6 @@ class OnnxModel(Model):
                 # dynamic height/width: report the cost at the reference frame size
                 # (the blueprints' 320x240 camera); latency uses macs_for(frame)
                 self.macs = self._count(REFERENCE_HW)
-            from .macs import _param_count
             self.params = _param_count(self._proto)
 
     # -- set-up helpers ------------------------------------------------------
@@ -258,7 +259,6 @@ class OnnxModel(Model):
         return arr
 
     def _load_proto(self, data):
-        from .macs import _require_onnx
         onnx = _require_onnx()
         try:
             return onnx.load_model_from_string(data)
@@ -267,7 +267,6 @@ class OnnxModel(Model):
 
     def _params_from_graph(self, data, fail_ok):
         try:
-            from .macs import _param_count
             return _param_count(self._load_proto(data))
         except Exception:
             if fail_ok:
@@ -278,7 +277,6 @@ class OnnxModel(Model):
         h, w = hw
         key = (h, w)
         if key not in self._mac_cache:
-            from .macs import count_macs
             shape = [1, self.channels, h, w] if self.layout == "NCHW" else [1, h, w, self.channels]
             rep = count_macs(self._proto, {self.input_name: shape})
             self._mac_cache[key] = rep.macs
@@ -298,7 +296,6 @@ class OnnxModel(Model):
         return self._count(self._target_hw(frame))
 
     def preprocess(self, frame) -> np.ndarray:
-        import cv2
         a = np.asarray(frame)
         if a.ndim == 3 and a.shape[2] == 4:
             a = a[:, :, :3]

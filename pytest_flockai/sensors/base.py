@@ -26,6 +26,7 @@ in a 100 Hz control loop gives 100 readings per second (one per tick).
 
 from __future__ import annotations
 
+import inspect
 import math
 import zlib
 from numbers import Integral
@@ -34,7 +35,7 @@ import numpy as np
 
 from .. import _check
 from ..clock import Clocked
-from ..errors import ConfigError
+from ..errors import ConfigError, close_matches
 
 _EPS = 1e-9       # s: a reading due at t fires at t - eps (float time from MuJoCo)
 
@@ -96,7 +97,6 @@ class FunctionSensor(Sensor):
             raise ConfigError(f"FunctionSensor {name!r}: fn = {fn!r} is not callable; expected "
                               f"fn(t, data[, rng]) -> value")
         self.fn = fn
-        import inspect
         try:
             params = inspect.signature(fn).parameters.values()
             n = sum(p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params)
@@ -248,7 +248,6 @@ class SensorSuite:
         try:
             return self._by_name[name]
         except KeyError:
-            from ..errors import close_matches
             raise ConfigError(f"SensorSuite: sensor = {name!r} is not on the drone; allowed: "
                               f"{', '.join(map(repr, self._by_name))}"
                               f"{close_matches(name, self._by_name)}") from None

@@ -6,6 +6,7 @@ import math
 import os
 
 import numpy as np
+import pandas as pd
 
 from .. import _check
 from ..errors import ConfigError
@@ -58,7 +59,6 @@ class CsvSensor(Sensor):
     def __init__(self, path, column: str, time_column: str | None = None, loop: bool = True, *,
                  rate_hz: float = 1.0, name: str | None = None, power_w: float = 0.0):
         super().__init__(name or f"csv:{column}", rate_hz=rate_hz, power_w=power_w)
-        import pandas as pd
         w = f"CsvSensor {self.name!r}"
         p = os.fspath(path)
         if not os.path.isfile(p):

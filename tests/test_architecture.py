@@ -1,0 +1,119 @@
+"""The package's layers, enforced: each module imports only from its own layer
+or the layers below it, the core never imports pytest, and imports sit at
+module level (a function-level import is allowed only for an optional
+dependency or a platform backend). The layers are written down in the
+README's architecture section; change both together."""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parent.parent / "pytest_flockai"
+
+#: bottom to top; a name is a top-level module or subpackage of pytest_flockai
+LAYERS = [
+    {"errors", "physics", "phases", "clock", "_check", "_io", "kpis", "recording", "result"},
+    {"compute", "world"},
+    {"energy", "sensors"},
+    {"comm", "airframe"},
+    {"control", "ml", "probes"},
+    {"mission"},
+    {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness",
+     "plugin", "__init__"},
+]
+PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__"}
+#: function-level imports that are fine: optional extras and GL backends loaded on demand
+OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
+            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw"}
+#: the import-time MuJoCo/GL guard of the package itself (see its docstring)
+ALLOWED_LOCAL = {("__init__.py", "mujoco")}
+
+
+def _layer_of(name: str) -> int:
+    for i, layer in enumerate(LAYERS):
+        if name in layer:
+            return i
+    raise AssertionError(f"pytest_flockai.{name} is in no layer: add it to LAYERS in "
+                         f"tests/test_architecture.py and to the README's architecture section")
+
+
+def _modules():
+    return sorted(p for p in PKG.rglob("*.py"))
+
+
+def _top(path: Path) -> str:
+    rel = path.relative_to(PKG).parts
+    return rel[0][:-3] if len(rel) == 1 else rel[0]
+
+
+def _targets(path: Path, node) -> list[str]:
+    """Top-level pytest_flockai names an import statement reaches."""
+    rel = path.relative_to(PKG)
+    pkg_parts = list(rel.parts[:-1])
+    if isinstance(node, ast.Import):
+        return [a.name.split(".")[1] for a in node.names
+                if a.name.startswith("pytest_flockai.")]
+    if node.level == 0:
+        mod = node.module or ""
+        if not mod.startswith("pytest_flockai"):
+            return []
+        parts = mod.split(".")[1:]
+    else:
+        base = pkg_parts[:len(pkg_parts) - (node.level - 1)] if node.level > 1 else pkg_parts
+        parts = base + (node.module.split(".") if node.module else [])
+    if parts:
+        return [parts[0]]
+    return [a.name for a in node.names]          # from . import x
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PKG)))
+def test_imports_go_down_the_layers(path):
+    own = _layer_of(_top(path))
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            for target in _targets(path, node):
+                if target != _top(path) and _layer_of(target) > own:
+                    bad.append(f"line {node.lineno}: {_top(path)} (layer {own}) imports "
+                               f"{target} (layer {_layer_of(target)})")
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PKG)))
+def test_no_function_level_imports_and_no_pytest_in_the_core(path):
+    rel = str(path.relative_to(PKG))
+    tree = ast.parse(path.read_text())
+    bad = []
+    for fn in ast.walk(tree):
+        if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import):
+                    names = [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom):
+                    names = ["." * node.level + (node.module or "")]
+                else:
+                    continue
+                for n in names:
+                    if n not in OPTIONAL and n.split(".")[0] not in OPTIONAL \
+                            and (rel, n) not in ALLOWED_LOCAL:
+                        bad.append(f"line {node.lineno}: {n} imported inside {fn.name}()")
+    if _top(path) not in PYTEST_SIDE:
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import) and any(a.name.split(".")[0] in ("pytest", "_pytest")
+                                                    for a in node.names):
+                bad.append(f"line {node.lineno}: the core imports pytest")
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] in (
+                    "pytest", "_pytest") and node.level == 0:
+                bad.append(f"line {node.lineno}: the core imports pytest")
+    assert not bad, "\n".join(bad)
+
+
+def test_layer_checker_catches_an_upward_import(tmp_path):
+    """The checker itself: an energy module importing the mission is reported."""
+    fake = PKG / "energy" / "components.py"
+    node = ast.parse("from ..mission import Mission").body[0]
+    assert _targets(fake, node) == ["mission"]
+    assert _layer_of("mission") > _layer_of("energy")
+    node = ast.parse("from . import kpis").body[0]
+    assert _targets(PKG / "budgets.py", node) == ["kpis"]
