@@ -80,13 +80,8 @@ class MacReport:
                 "uncounted": list(self.uncounted)}
 
 
-def _require_onnx():
-    return onnx
-
-
 def load_onnx(path) -> "onnx.ModelProto":
     """Load an ONNX file; ConfigError naming the path when missing or corrupt."""
-    onnx = _require_onnx()
     p = os.fspath(path)
     if not os.path.isfile(p):
         raise ConfigError(f"model path = {p!r} does not exist or is not a file; "
@@ -122,7 +117,6 @@ def fix_input_shapes(model, shapes: dict | None = None):
     ``shapes`` maps input name -> full shape; otherwise unknown dims become 1
     (batch) and anything else unknown stays unknown.
     """
-    onnx = _require_onnx()
     m = onnx.ModelProto()
     m.CopyFrom(model)
     inits = {i.name for i in m.graph.initializer}
@@ -145,7 +139,6 @@ def fix_input_shapes(model, shapes: dict | None = None):
 
 
 def _param_count(model) -> int:
-    onnx = _require_onnx()
     from onnx import TensorProto
     kinds = {TensorProto.FLOAT, TensorProto.FLOAT16, TensorProto.DOUBLE, TensorProto.BFLOAT16,
              TensorProto.INT8, TensorProto.UINT8}
@@ -158,7 +151,6 @@ def _param_count(model) -> int:
             for a in node.attribute:
                 if a.name == "value" and a.t.data_type in kinds:
                     n += _prod(a.t.dims)
-    del onnx
     return n
 
 
@@ -167,17 +159,39 @@ def count_macs(model, input_shapes: dict | None = None) -> MacReport:
 
     ``input_shapes``: {input name: full shape} for inputs with dynamic dims.
     """
-    onnx = _require_onnx()
     if not isinstance(model, onnx.ModelProto):
         model = load_onnx(model)
-    fixed = fix_input_shapes(model, input_shapes)
+    g, shape, shape_error = _inferred_shapes(fix_input_shapes(model, input_shapes))
+    total = 0
+    by_op: dict[str, int] = {}
+    uncounted: list[str] = []
+    for node in g.node:
+        label = f"{node.op_type} {node.name or node.output[0]}"
+        if node.domain not in ("", "ai.onnx"):
+            uncounted.append(f"{label}: custom domain {node.domain!r}")
+            continue
+        macs = _node_macs(node, shape)
+        if macs is _UNKNOWN_OP:
+            uncounted.append(f"{label}: operator not counted (0 MACs)")
+        elif macs is None:
+            uncounted.append(f"{label}: {shape_error or 'shapes unknown after shape inference'}")
+        elif macs:
+            total += macs
+            by_op[node.op_type] = by_op.get(node.op_type, 0) + macs
+    return MacReport(macs=int(total), params=_param_count(model), by_op=by_op, uncounted=uncounted)
+
+
+_UNKNOWN_OP = object()
+
+
+def _inferred_shapes(fixed):
+    """(graph, shape(name) -> list or None, shape-inference error or None)."""
     try:
         inferred = onnx.shape_inference.infer_shapes(fixed, strict_mode=False, data_prop=True)
+        shape_error = None
     except Exception as e:  # inconsistent graph: fall back to declared shapes
         inferred = fixed
         shape_error = f"shape inference failed: {type(e).__name__}: {e}"
-    else:
-        shape_error = None
     g = inferred.graph
     shapes: dict[str, list | None] = {}
     for vi in list(g.input) + list(g.value_info) + list(g.output):
@@ -195,60 +209,37 @@ def count_macs(model, input_shapes: dict | None = None) -> MacReport:
         if s is None or any(d is None for d in s):
             return None
         return s
+    return g, shape, shape_error
 
-    total = 0
-    by_op: dict[str, int] = {}
-    uncounted: list[str] = []
-    for node in g.node:
-        op = node.op_type
-        label = f"{op} {node.name or node.output[0]}"
-        attrs = {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
-        out = shape(node.output[0]) if node.output else None
-        x = shape(node.input[0]) if node.input else None
-        macs = None
-        if node.domain not in ("", "ai.onnx"):
-            uncounted.append(f"{label}: custom domain {node.domain!r}")
-            continue
-        if op in ZERO:
-            macs = 0
-        elif op == "Conv":
-            w = shape(node.input[1])
-            if out is not None and w is not None:
-                macs = _prod(out) * _prod(w[1:])
-        elif op == "ConvTranspose":
-            w = shape(node.input[1])
-            if x is not None and w is not None:
-                macs = _prod(x) * _prod(w[1:])
-        elif op == "Gemm":
-            a = x
-            if a is not None and out is not None and len(a) == 2:
-                k = a[0] if attrs.get("transA", 0) else a[1]
-                macs = _prod(out) * k
-        elif op == "MatMul":
-            if x is not None and out is not None:
-                k = x[-1]
-                macs = max(1, _prod(out)) * k
-        elif op in POOL:
-            ks = attrs.get("kernel_shape")
-            if out is not None and ks:
-                macs = _prod(out) * _prod(ks)
-        elif op in GLOBAL_POOL or op in REDUCE:
-            if x is not None:
-                macs = _prod(x)
-        elif op in ELEMENTWISE or op in RESAMPLE:
-            if out is not None:
-                macs = _prod(out)
-        else:
-            uncounted.append(f"{label}: operator not counted (0 MACs)")
-            continue
-        if macs is None:
-            why = shape_error or "shapes unknown after shape inference"
-            uncounted.append(f"{label}: {why}")
-            continue
-        if macs:
-            total += macs
-            by_op[op] = by_op.get(op, 0) + macs
-    return MacReport(macs=int(total), params=_param_count(model), by_op=by_op, uncounted=uncounted)
+
+def _node_macs(node, shape):
+    """MACs of one node; None when its shapes are unknown, _UNKNOWN_OP for an uncounted op."""
+    op = node.op_type
+    attrs = {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
+    out = shape(node.output[0]) if node.output else None
+    x = shape(node.input[0]) if node.input else None
+    if op in ZERO:
+        return 0
+    if op == "Conv":
+        w = shape(node.input[1])
+        return _prod(out) * _prod(w[1:]) if out is not None and w is not None else None
+    if op == "ConvTranspose":
+        w = shape(node.input[1])
+        return _prod(x) * _prod(w[1:]) if x is not None and w is not None else None
+    if op == "Gemm":
+        if x is not None and out is not None and len(x) == 2:
+            return _prod(out) * (x[0] if attrs.get("transA", 0) else x[1])
+        return None
+    if op == "MatMul":
+        return max(1, _prod(out)) * x[-1] if x is not None and out is not None else None
+    if op in POOL:
+        ks = attrs.get("kernel_shape")
+        return _prod(out) * _prod(ks) if out is not None and ks else None
+    if op in GLOBAL_POOL or op in REDUCE:
+        return _prod(x) if x is not None else None
+    if op in ELEMENTWISE or op in RESAMPLE:
+        return _prod(out) if out is not None else None
+    return _UNKNOWN_OP
 
 
 __all__ = ["MacReport", "count_macs", "fix_input_shapes", "load_onnx"]

@@ -23,10 +23,11 @@ from numbers import Integral, Real
 
 import cv2
 import numpy as np
+import onnx
 import onnxruntime as ort
 
 from ..errors import ConfigError
-from .macs import _param_count, _require_onnx, count_macs
+from .macs import _param_count, count_macs
 
 _FLOAT_TYPES = {"tensor(float)": np.float32, "tensor(float16)": np.float16,
                 "tensor(double)": np.float64}
@@ -130,7 +131,6 @@ class OnnxModel(Model):
     def __init__(self, path, *, input_size=None, layout=None, scale=None, mean=None, std=None,
                  providers=("CPUExecutionProvider",), macs=None, postprocess=None,
                  threads: int = 1, name: str | None = None):
-
         self.path = os.fspath(path)
         self.name = name or os.path.splitext(os.path.basename(self.path))[0]
         where = f"OnnxModel {self.path!r}"
@@ -139,19 +139,30 @@ class OnnxModel(Model):
                               f"expected an .onnx file")
         with open(self.path, "rb") as f:
             data = f.read()
+        self.session = self._session(data, providers, threads)
+        self._layout_arg = layout
+        if postprocess is not None and not callable(postprocess):
+            raise ConfigError(f"{where}: postprocess = {postprocess!r} is not callable")
+        self.postprocess = postprocess
+        inp, dims, shp = self._input(where)
+        hi, wi = (2, 3) if self.layout == "NCHW" else (1, 2)
+        self.input_size = self._input_size(input_size, dims, shp, hi, wi, where, inp.name)
+        self._normalisation(scale, mean, std, where, inp.name)
+        self._costs(data, macs, where)
+
+    def _session(self, data, providers, threads):
         opts = ort.SessionOptions()
         opts.intra_op_num_threads = int(threads)
         opts.inter_op_num_threads = 1
         opts.log_severity_level = 3
         try:
-            self.session = ort.InferenceSession(data, opts, providers=list(providers))
+            return ort.InferenceSession(data, opts, providers=list(providers))
         except Exception as e:
             raise ConfigError(f"model path = {self.path!r} is not a valid ONNX model "
                               f"(ONNX Runtime: {type(e).__name__}: {str(e).strip()[:300]})") from None
-        if postprocess is not None and not callable(postprocess):
-            raise ConfigError(f"{where}: postprocess = {postprocess!r} is not callable")
-        self.postprocess = postprocess
 
+    def _input(self, where):
+        """The one image input: its dtype, layout and channels; (input, dims, shape)."""
         inputs = self.session.get_inputs()
         if len(inputs) != 1:
             raise ConfigError(f"{where}: the model has {len(inputs)} inputs "
@@ -174,14 +185,17 @@ class OnnxModel(Model):
         if dims[0] not in (None, 1):
             raise ConfigError(f"{where}: input {inp.name!r} has batch size {dims[0]}; frames are fed "
                               f"one at a time (batch 1)")
-        self.layout = self._layout(dims, layout, where, inp.name)
+        self.layout = self._layout(dims, self._layout_arg, where, inp.name)
         ci = 1 if self.layout == "NCHW" else 3
-        hi, wi = (2, 3) if self.layout == "NCHW" else (1, 2)
         c = dims[ci] if dims[ci] is not None else 3
         if c not in (1, 3):
             raise ConfigError(f"{where}: input {inp.name!r} has {c} channels in layout {self.layout}; "
                               f"a frame can feed 1 (grey) or 3 (RGB) channels")
         self.channels = c
+        return inp, dims, shp
+
+    @staticmethod
+    def _input_size(input_size, dims, shp, hi, wi, where, name):
         if input_size is not None:
             try:
                 h, w = (int(v) for v in input_size)
@@ -194,27 +208,29 @@ class OnnxModel(Model):
                 if want is not None and got != want:
                     raise ConfigError(f"{where}: input_size = {tuple(input_size)!r} has {axis} {got} "
                                       f"but the model's input is fixed at {want}")
-            self.input_size = (h, w)
-        elif dims[hi] is not None and dims[wi] is not None:
-            self.input_size = (dims[hi], dims[wi])
-        elif dims[hi] is None and dims[wi] is None:
-            self.input_size = None          # native frame size
-        else:
-            raise ConfigError(f"{where}: input {inp.name!r} has one fixed and one dynamic spatial "
-                              f"dimension {shp}; pass input_size=(height, width)")
+            return (h, w)
+        if dims[hi] is not None and dims[wi] is not None:
+            return (dims[hi], dims[wi])
+        if dims[hi] is None and dims[wi] is None:
+            return None          # native frame size
+        raise ConfigError(f"{where}: input {name!r} has one fixed and one dynamic spatial "
+                          f"dimension {shp}; pass input_size=(height, width)")
 
+    def _normalisation(self, scale, mean, std, where, name):
         if self._dtype == np.uint8:
             if any(v is not None for v in (scale, mean, std)):
                 raise ConfigError(f"{where}: scale/mean/std are for float inputs; input "
-                                  f"{inp.name!r} is uint8 and gets raw pixels")
+                                  f"{name!r} is uint8 and gets raw pixels")
             self.scale, self.mean, self.std = 1.0, None, None
-        else:
-            self.scale = 1.0 / 255.0 if scale is None else float(scale)
-            self.mean = self._per_channel("mean", mean, where)
-            self.std = self._per_channel("std", std, where)
-            if self.std is not None and np.any(self.std == 0):
-                raise ConfigError(f"{where}: std = {std!r} has a zero entry")
+            return
+        self.scale = 1.0 / 255.0 if scale is None else float(scale)
+        self.mean = self._per_channel("mean", mean, where)
+        self.std = self._per_channel("std", std, where)
+        if self.std is not None and np.any(self.std == 0):
+            raise ConfigError(f"{where}: std = {std!r} has a zero entry")
 
+    def _costs(self, data, macs, where):
+        """``macs`` and ``params``: given, or counted from the graph."""
         self._macs_given = _check_macs(macs, where, allow_none=True)
         self._mac_cache: dict = {}
         self._proto = None
@@ -222,15 +238,12 @@ class OnnxModel(Model):
         if self._macs_given is not None:
             self.macs = self._macs_given
             self.params = self._params_from_graph(data, fail_ok=True)
-        else:
-            self._proto = self._load_proto(data)
-            if self.input_size is not None:
-                self.macs = self._count(self.input_size)
-            else:
-                # dynamic height/width: report the cost at the reference frame size
-                # (the blueprints' 320x240 camera); latency uses macs_for(frame)
-                self.macs = self._count(REFERENCE_HW)
-            self.params = _param_count(self._proto)
+            return
+        self._proto = self._load_proto(data)
+        # dynamic height/width: report the cost at the reference frame size
+        # (the blueprints' 320x240 camera); latency uses macs_for(frame)
+        self.macs = self._count(self.input_size if self.input_size is not None else REFERENCE_HW)
+        self.params = _param_count(self._proto)
 
     # -- set-up helpers ------------------------------------------------------
     @staticmethod
@@ -259,7 +272,6 @@ class OnnxModel(Model):
         return arr
 
     def _load_proto(self, data):
-        onnx = _require_onnx()
         try:
             return onnx.load_model_from_string(data)
         except Exception as e:
