@@ -2,7 +2,7 @@
 
 Prints the mission's real-time factor (simulated s per wall s), the bare
 MuJoCo RTF over the same compiled model and timestep (a Python loop of
-single mj_step calls, as in REFERENCE.md, and the same in C-batched nstep
+single mj_step calls, as the peers' figures in the README were measured, and the same in C-batched nstep
 calls), their ratio, and peak memory. Median of --repeat runs.
 
     python benchmarks/flight_core.py [--repeat 5] [--seconds 1800]

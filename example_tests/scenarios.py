@@ -18,7 +18,7 @@ import pytest_flockai as fa
 ROOT = Path(__file__).resolve().parent.parent
 MODELS = ROOT / "fixtures" / "models"
 
-# The paper's figures (REFERENCE.md, paper Tables 2-4, section 5).
+# The paper's figures (FlockAI, Future Internet 2021, 13(12), 317: Tables 2-4, section 5).
 PAPER = {
     "1-A": {"flight_time_s": 1806, "note": "motors ~91 %, comm ~3 %"},
     "1-B": {"flight_time_s": 1488, "inference_latency_p50_s": 1.36, "note": "proc ~21 %"},

@@ -1,6 +1,6 @@
 """pytest-flockai: test ML-driven drone applications with pytest.
 
-The public API (see DESIGN.md): ``blueprints``, ``drone``, ``pilots``,
+The public API (see README.md): ``blueprints``, ``drone``, ``pilots``,
 ``Mission``, ``FlightResult``, ``World``, ``Wind``, ``devices`` and the errors.
 """
 

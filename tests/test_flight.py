@@ -5,7 +5,11 @@ import math
 import numpy as np
 import pytest
 
+import mujoco
+
 import pytest_flockai as fa
+from pytest_flockai.airframe.model import build_model
+from pytest_flockai.physics import RHO_SEA_LEVEL
 from pytest_flockai import SimulationError
 
 
@@ -198,3 +202,17 @@ def test_the_same_mission_flown_twice_is_identical():
                    wind=fa.Wind((2.0, 0.0, 0.0), gust_std=0.5), until=15.0, seed=3)
     a, b = m.run(), m.run()
     assert a.kpis == b.kpis and a.telemetry.equals(b.telemetry)
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_body_drag_is_half_rho_cda_v_squared_along_each_axis(axis):
+    """airframe/model.py: MuJoCo's ellipsoid fluid model, set up so the drag along
+    each body axis is 1/2 rho (Cd A) |v| v with the blueprint's Cd*A."""
+    d = fa.drone("dji-mavic-2-pro")
+    m = build_model(d, None, physics_dt=0.002)
+    data = mujoco.MjData(m)
+    data.qpos[2] = 30.0
+    data.qvel[axis] = 10.0
+    mujoco.mj_forward(m, data)
+    want = -0.5 * RHO_SEA_LEVEL * d.airframe.drag_area_m2[axis] * 10.0 ** 2
+    assert data.qfrc_passive[axis] == pytest.approx(want, rel=1e-6)

@@ -242,7 +242,7 @@ LINKS: dict[str, Link] = {lk.name: lk for lk in (
         per_packet_s=170e-6, latency_s=1e-3, jitter_s=1e-3, loss_floor=0.01,
         retry_limit=7,              # dot11ShortRetryLimit default
         retry_penalty_s=0.2e-3, rto_s=0.2,    # Linux TCP_RTO_MIN 200 ms
-        # power states: the FlockAI paper's Wi-Fi, 8.4 W tx/rx, 4.2 W idle (REFERENCE.md)
+        # power states: the FlockAI paper's Wi-Fi, 8.4 W tx/rx, 4.2 W idle (the FlockAI project's released energy model)
         tx_w=8.4, rx_w=8.4, idle_w=4.2,
         # Feeney and Nilsson, IEEE INFOCOM 2001: E = m * bytes + b per packet
         tx_uj_per_byte=1.9, tx_uj_per_packet=420.0, rx_uj_per_byte=0.42, rx_uj_per_packet=330.0,

@@ -27,12 +27,13 @@ class Device:
 
 
 DEVICES: dict[str, Device] = {d.name: d for d in (
-    # Raspberry Pi 4 B: idle 2.2-3.0 W, high CPU + Wi-Fi 5.1-6.3 W (REFERENCE.md,
-    # measured at the USB input; Raspberry Pi Foundation / Tom's Hardware bench).
+    # Raspberry Pi 4 B: idle 2.2-3.0 W, high CPU + Wi-Fi 5.1-6.3 W, measured at the
+    # USB input (Raspberry Pi Foundation / Tom's Hardware / pidramble.com power benches;
+    # the FlockAI paper, section 4.4, uses ~8 W active).
     # Effective ~1.5 GMAC/s for float32 CNNs on 4 Cortex-A72 cores with ONNX
     # Runtime (MobileNetV2 300 MMAC in ~0.2 s, public RPi 4 ORT benchmarks).
     Device("raspberry-pi-4", idle_w=2.7, active_w=6.0, macs_per_s=1.5e9, overhead_s=0.01,
-           memory_mb=4096, source="REFERENCE.md power; public RPi 4 ONNX Runtime benchmarks"),
+           memory_mb=4096, source="RPi 4 USB-input power benches; public RPi 4 ONNX Runtime benchmarks"),
     # Jetson Nano: nvpmodel 5 W and 10 W (MAXN) modes (NVIDIA Jetson Nano datasheet).
     # Effective GPU throughput ~25 / 50 GMAC/s for small CNNs with TensorRT FP16
     # (NVIDIA "Jetson Nano benchmarks": MobileNet-v2 ~ 60-120 fps at 300 MMAC).
