@@ -53,14 +53,8 @@ class TelemetryRecorder:
         roll = math.atan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
         pitch = math.asin(max(-1.0, min(1.0, 2 * (qw * qy - qz * qx))))
         yaw = math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
-        em = ep = ec = 0.0
-        for name, val in zip(self.meter.top, self.meter.energy):
-            if name == "motors":
-                em += val
-            elif name == "proc":
-                ep += val
-            elif name == "comm":
-                ec += val
+        by_top = self.meter.totals_by_top()
+        em, ep, ec = by_top.get("motors", 0.0), by_top.get("proc", 0.0), by_top.get("comm", 0.0)
         self._buf[i] = (q[0], q[1], q[2], v[0], v[1], v[2], roll, pitch, yaw, v[3], v[4], v[5],
                         sp[0], sp[1], sp[2], w[0], w[1], w[2], power, energy_j,
                         max(0.0, 1.0 - energy_j / e_usable), *self.data.act.tolist(), em, ep, ec)
