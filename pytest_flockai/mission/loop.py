@@ -25,6 +25,7 @@ def fly(run) -> None:
     model, d, s = run.model, run.data, run.vehicle
     comps, nsub, step = run.components, run.plan.substeps, mujoco.mj_step
     qpos, qvel, sqrt = d.qpos, d.qvel, math.sqrt
+    half_tick = 0.5 * nsub * model.opt.timestep      # a tick advances time by nsub steps
     while True:
         t = d.time
         s.q = q = qpos.tolist()
@@ -49,7 +50,7 @@ def fly(run) -> None:
             s.end_reason = "crashed"
             run.events.add(d.time, "crash", speed=s.speed)
             break
-        if d.time < t:
+        if d.time < t + half_tick:                    # MuJoCo reset the state inside mj_step
             raise SimulationError(
                 f"MuJoCo reset the simulation at t = {t:.3f} s (unstable physics: "
                 f"{_warnings(d)}); check the blueprint or lower the physics timestep")
@@ -69,8 +70,9 @@ def _impact(d, s) -> bool:
 
 
 def _warnings(d) -> str:
-    names = [w.name for w in mujoco.mjtWarning if w.name != "mjNWARNING"]
-    hits = [n for n in names if d.warning[getattr(mujoco.mjtWarning, n)].number > 0]
+    """The MuJoCo warnings raised so far (mjtWarning is not iterable in MuJoCo 4)."""
+    names = sorted(n for n in dir(mujoco.mjtWarning) if n.startswith("mjWARN_"))
+    hits = [n for n in names if d.warning[int(getattr(mujoco.mjtWarning, n))].number > 0]
     return ", ".join(hits) or "no MuJoCo warning recorded"
 
 
