@@ -60,10 +60,12 @@ import platform
 import re
 import sys
 import tempfile
+import warnings
 from importlib import metadata
 from pathlib import Path
 
 from . import kpis as _kpis
+from . import plots
 from ._io import atomic_write
 
 SCHEMA = "pytest-flockai/1"
@@ -258,12 +260,10 @@ def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     result.telemetry.to_csv(folder / f"{_safe(flight)}.telemetry.csv")
     write_json_atomic(folder / f"{_safe(flight)}.json", result.to_dict())
-    from . import plots
     if plots.available():
         plots.energy_figure(result, folder / f"{_safe(flight)}.energy.png")
         plots.path_figure(result, folder / f"{_safe(flight)}.path.png")
     else:
-        import warnings
         warnings.warn("pytest-flockai: matplotlib is not installed, so --flockai-artifacts writes "
                       "telemetry and JSON but no pictures (pip install 'pytest-flockai[plots]')",
                       stacklevel=2)

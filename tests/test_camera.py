@@ -145,7 +145,8 @@ def test_render_views_builds_training_data(tmp_path):
     df = export_dataset([(k, f, t) for k, (f, t) in enumerate(views)], tmp_path / "ds")
     assert list(df["count"]) == [t.count for _, t in views]
     assert sorted(p.name for p in (tmp_path / "ds").iterdir()) == [
-        "frame_00000.png", "frame_00001.png", "frame_00002.png", "truth.csv", "truth.json"]
+        "annotations.json", "frame_00000.png", "frame_00001.png", "frame_00002.png", "truth.csv",
+        "truth.json"]
     # the folder replays with its truth
     rc = ReplayCamera(tmp_path / "ds", rate_hz=1.0)
     rc.bind(None, None, np.random.default_rng(0))

@@ -12,7 +12,7 @@ from pytest_flockai.compute.devices import device
 from pytest_flockai.errors import ConfigError, FlockAIError
 from pytest_flockai.ml import (Counter, Detector, OnnxModel, OpenCVModel, PythonModel, Task,
                                TaskRunner, count_macs, count_of, crowd_metrics)
-from pytest_flockai.ml.task import JPEG_MACS_PER_PIXEL, encode_jpeg
+from pytest_flockai.ml.jpeg import JPEG_MACS_PER_PIXEL, encode_jpeg
 
 
 # -- helpers: small ONNX graphs built by hand ------------------------------------------

@@ -49,6 +49,11 @@ def resolve_device(dev, field: str = "device") -> Device:
                       f"(see pytest_flockai.devices()) or a Device")
 
 
+def compute_seconds(macs: float, device) -> float:
+    """Seconds of pure compute for ``macs`` on ``device`` (no per-call overhead)."""
+    return float(macs) / resolve_device(device).macs_per_s
+
+
 def modeled_latency(macs, device) -> float:
     """Seconds for one inference of ``macs`` multiply-accumulates on ``device``.
 
@@ -60,7 +65,7 @@ def modeled_latency(macs, device) -> float:
                           "give the model macs=... or use latency='measured'")
     if isinstance(macs, bool) or not isinstance(macs, (int, float)) or macs < 0 or not math.isfinite(macs):
         raise ConfigError(f"macs = {macs!r} is not allowed; expected a finite number >= 0")
-    return dev.overhead_s + float(macs) / dev.macs_per_s
+    return dev.overhead_s + compute_seconds(macs, dev)
 
 
 @dataclass(frozen=True)
@@ -162,5 +167,6 @@ def measured_latency(fn, *args, device, calibration: Calibration | None = None):
     return out, scale_to_device(wall, device, cal), wall
 
 
-__all__ = ["LATENCY_MODES", "Calibration", "calibrate", "measured_latency", "modeled_latency",
+__all__ = ["LATENCY_MODES", "Calibration", "calibrate", "compute_seconds", "measured_latency",
+           "modeled_latency",
            "resolve_device", "scale_to_device"]

@@ -5,15 +5,22 @@
 - ``Classifier``, ``Detector``, ``Regressor``, ``Clusterer``, ``Counter``:
   templates to subclass (the paper's Listing 3);
 - ``Task`` and ``TaskRunner``: what runs where, executed on the simulated clock;
+- ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
+  into one shape; ``evaluation``: COCO detection metrics and classification;
 - ``count_macs``: MACs and parameters of an ONNX graph.
 """
 
 from .macs import MacReport, count_macs
 from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
-from .task import InferenceEvent, Task, TaskRunner
+from .detections import Detections, parse_detections
+from .evaluation import FrameRecord
+from .jpeg import decode_jpeg, encode_jpeg
+from .runner import DeviceClock, InferenceEvent, TaskRunner
+from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
-__all__ = ["Classifier", "Clusterer", "Counter", "Detector", "InferenceEvent", "MacReport", "Model",
-           "OnnxModel", "OpenCVModel", "PythonModel", "Regressor", "Task", "TaskRunner", "Template",
-           "count_macs", "count_of", "crowd_metrics"]
+__all__ = ["Classifier", "Clusterer", "Counter", "Detections", "Detector", "DeviceClock",
+           "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel",
+           "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
+           "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]

@@ -139,7 +139,7 @@ def fix_input_shapes(model, shapes: dict | None = None):
 
 
 def _param_count(model) -> int:
-    from onnx import TensorProto
+    TensorProto = onnx.TensorProto
     kinds = {TensorProto.FLOAT, TensorProto.FLOAT16, TensorProto.DOUBLE, TensorProto.BFLOAT16,
              TensorProto.INT8, TensorProto.UINT8}
     n = 0

@@ -54,6 +54,8 @@ def truth_count(truth):
     """Count of the people in view from the mission's truth (None: unknown)."""
     if truth is None:
         return None
+    if hasattr(truth, "count") and not isinstance(truth, (list, tuple, np.ndarray)):
+        return float(truth.count)             # a camera frame's Truth
     if isinstance(truth, Real) and not isinstance(truth, bool):
         return float(truth)
     try:

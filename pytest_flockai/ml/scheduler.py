@@ -18,7 +18,7 @@ import numpy as np
 from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import PILOT, RETURN
 from .metrics import percentile
-from .task import DeviceClock
+from .runner import DeviceClock, TaskRunner
 
 #: MB: estimate of Raspberry Pi OS Lite + flight software resident set
 OS_MEMORY_MB = 250.0
@@ -62,7 +62,7 @@ class TaskScheduler(Clocked):
         onboard_clock = DeviceClock()        # one on-board computer, shared by its tasks
         self.runners = []
         for tk, seed in zip(tasks, seeds):
-            r = tk.runner()
+            r = TaskRunner(tk)
             r.bind(np.random.default_rng(seed), t0=0.0, device_clock=onboard_clock)
             self.runners.append(r)
         self.recorder = recorder
@@ -87,10 +87,7 @@ class TaskScheduler(Clocked):
                 cache[name] = self._read(name, t)
                 self.capture_pos[round(t, 6)] = pos
             value, truth = cache[name]
-            if isinstance(c, DatasetRecorder):
-                c.on_frame(t, value, truth, pos)
-            else:
-                c.on_frame(t, value, truth if not hasattr(truth, "count") else truth.count, pos)
+            c.on_frame(t, value, truth, pos)
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
 
     def _read(self, name, t):

@@ -185,9 +185,11 @@ class Camera(Sensor):
         if self.world is not None:
             self._points = self.world.truth_points()
             self._occ = self.world.occluders if self.occlusion else None
+            self._objects = self.world.objects
         else:
             self._points = people_in_model(model, data)
             self._occ = None
+            self._objects = None
         if self._renderer is not None and self._renderer.model is not model:
             self._renderer.close()
             self._renderer = None
@@ -206,7 +208,7 @@ class Camera(Sensor):
     def truth(self, t: float, data) -> Truth:
         """The ground truth of a frame taken now, without rendering it."""
         cam_pos, cam_mat = self.pose(data)
-        return self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ)
+        return self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ, self._objects)
 
     # -- frames ---------------------------------------------------------------
     def read(self, t: float, data) -> np.ndarray:
@@ -214,7 +216,7 @@ class Camera(Sensor):
             raise ConfigError(f"Camera {self.name!r}: read before bind(model, data, rng)")
         cam_pos, cam_mat = self.pose(data)
         frame = self.render_pose(data, cam_pos, cam_mat)
-        self.last_truth = self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ)
+        self.last_truth = self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ, self._objects)
         self.last_frame, self.last_t = frame, float(t)
         self.frames += 1
         return frame
@@ -296,7 +298,7 @@ def render_views(world, poses, camera_params=None) -> list:
         for x, y, z, yaw in rows:
             cam_pos, cam_mat = gimbal_pose((x, y, z), yaw, cam.pitch_deg)
             frame = renderer.render(data, cam_pos, cam_mat, cam.fov_deg)
-            out.append((frame, cam.lens.truth(0.0, points, cam_pos, cam_mat, occ)))
+            out.append((frame, cam.lens.truth(0.0, points, cam_pos, cam_mat, occ, world.objects)))
         return out
     finally:
         renderer.close()

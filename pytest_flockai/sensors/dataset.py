@@ -9,7 +9,11 @@ each capture; or from ``render_views``) and writes
 - ``truth.csv``: one row per frame: ``frame, file, t, count, pixels`` (pixels
   as a JSON list of [u, v]),
 - ``truth.json``: ``{"frames": [{"frame", "file", "t", "count", "indices",
-  "pixels"}, ...]}``, which ``ReplayCamera(folder)`` replays as ``last_truth``.
+  "pixels"}, ...]}``, which ``ReplayCamera(folder)`` replays as ``last_truth``;
+- ``annotations.json``: every object of every frame (people and vehicles: box,
+  class, visible fraction, distance, ground sample distance) as a COCO
+  detection dataset, so you can train on our renders with any COCO tooling
+  (``pycocotools.coco.COCO(folder + "/annotations.json")``).
 
 It flies nothing itself and returns the truth table as a pandas DataFrame.
 """
@@ -19,17 +23,18 @@ from __future__ import annotations
 import json
 import os
 
+import cv2
 import numpy as np
+import pandas as pd
 
 from ..errors import ConfigError
 from ..world.truth import Truth
+from .annotations import coco_dataset
 
 FORMATS = ("png", "jpg")
 
 
 def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame"):
-    import cv2
-    import pandas as pd
     if fmt not in FORMATS:
         raise ConfigError(f"export_dataset: fmt = {fmt!r} is not allowed; allowed: "
                           f"{', '.join(map(repr, FORMATS))}")
@@ -37,7 +42,7 @@ def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame"):
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise ConfigError(f"export_dataset: folder = {folder!r} exists and is not a folder")
     os.makedirs(folder, exist_ok=True)
-    rows, frames_json = [], []
+    rows, frames_json, coco = [], [], []
     for i, rec in enumerate(records):
         try:
             t, frame, truth = rec
@@ -61,8 +66,12 @@ def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame"):
                      "pixels": json.dumps(pix)})
         frames_json.append({"frame": i, "file": name, "t": float(t), "count": truth.count,
                             "indices": [int(k) for k in truth.indices], "pixels": pix})
+        coco.append((name, frame.shape[1], frame.shape[0], truth.objects))
     df = pd.DataFrame(rows, columns=["frame", "file", "t", "count", "pixels"])
     df.to_csv(os.path.join(folder, "truth.csv"), index=False)
     with open(os.path.join(folder, "truth.json"), "w") as f:
         json.dump({"frames": frames_json}, f)
+    classes = records[0][2].objects.classes if len(coco) and records[0][2] is not None else None
+    with open(os.path.join(folder, "annotations.json"), "w") as f:
+        json.dump(coco_dataset(coco, *([classes] if classes else [])), f)
     return df

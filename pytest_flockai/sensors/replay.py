@@ -20,10 +20,12 @@ import json
 import math
 import os
 
+import cv2
 import numpy as np
 
 from ..errors import ConfigError
-from ..world.truth import Truth
+from ..world.truth import CLASSES, Objects, Truth
+from .annotations import load_annotations, orphan_labels
 from .base import Sensor
 
 IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
@@ -33,9 +35,8 @@ class ReplayCamera(Sensor):
     on_demand = True
 
     def __init__(self, path, rate_hz: float = 1.0, loop: bool = True, *, name: str = "camera",
-                 power_w: float = 0.9):
+                 power_w: float = 0.9, annotations="auto", classes=None):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w)
-        import cv2
         self._cv2 = cv2
         w = f"ReplayCamera {name!r}"
         p = os.fspath(path)
@@ -57,6 +58,7 @@ class ReplayCamera(Sensor):
             tj = os.path.join(p, "truth.json")
             if os.path.isfile(tj):
                 self._truth = _load_truth(tj, w)
+            self._attach_objects(annotations, classes, w)
         elif os.path.isfile(p):
             cap = cv2.VideoCapture(p)
             if not cap.isOpened():
@@ -77,6 +79,31 @@ class ReplayCamera(Sensor):
         self.ended = False
         self._k = -1            # index of the cached frame
         self._pos = 0           # next frame the video capture will decode
+
+    def _attach_objects(self, annotations, classes, where):
+        """Per-object truth of each image from COCO or YOLO labels (``annotations``:
+        "auto" finds them, "coco" / "yolo" insists, None ignores them)."""
+        if annotations is None:
+            return
+        if annotations not in ("auto", "coco", "yolo"):
+            raise ConfigError(f"{where}: annotations = {annotations!r} is not allowed; allowed: "
+                              f"'auto', 'coco', 'yolo' or None")
+        has_labels = any(f.endswith(".json") and (f == "annotations.json" or f.startswith("instances"))
+                         for f in os.listdir(self.path)) or orphan_labels(self.path, []) != []
+        if annotations == "auto" and not has_labels:
+            return
+        orphans = orphan_labels(self.path, self.files) if not os.path.isfile(
+            os.path.join(self.path, "annotations.json")) else []
+        if orphans:
+            raise ConfigError(f"{where}: label file {orphans[0]!r} has no image in {self.path!r}")
+        sizes = [_image_size(f, where) for f in self.files]
+        objs, _ = load_annotations(self.path, self.files, sizes, fmt=annotations, classes=classes)
+        if self._truth is None:
+            person = list(classes or CLASSES).index("person") if "person" in (classes or CLASSES) else -1
+            self._truth = [_truth_of(k, o, person) for k, o in enumerate(objs)]
+        else:
+            for tr, o in zip(self._truth, objs):
+                tr.objects = o
 
     def bind(self, model, data, rng):
         super().bind(model, data, rng)
@@ -166,6 +193,21 @@ class ReplayCamera(Sensor):
 
     def __repr__(self):
         return f"ReplayCamera({self.path!r}, rate_hz={self.rate_hz:g}, loop={self.loop})"
+
+
+def _image_size(path, where):
+    img = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise ConfigError(f"{where}: image {path!r} cannot be decoded")
+    return int(img.shape[1]), int(img.shape[0])
+
+
+def _truth_of(k, objs: Objects, person: int) -> Truth:
+    """A frame's Truth from its labels: the people are the 'person' boxes (centres)."""
+    mask = objs.cls == person
+    b = objs.boxes[mask]
+    centres = np.column_stack([(b[:, 0] + b[:, 2]) / 2, (b[:, 1] + b[:, 3]) / 2]) if len(b) else np.zeros((0, 2))
+    return Truth(float(k), np.flatnonzero(mask), centres, objects=objs)
 
 
 def _load_truth(path, where):

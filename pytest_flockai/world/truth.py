@@ -64,16 +64,16 @@ def project(points, cam_pos, cam_mat, fov_deg: float, width: int, height: int):
     return np.column_stack([u, v]), depth
 
 
-def occluded(cam_pos, points, boxes) -> np.ndarray:
-    """Mask (N,): the segment cam_pos -> point crosses one of the boxes.
+def segment_hits(cam_pos, points, boxes) -> np.ndarray:
+    """(N, M) bool: the segment cam_pos -> point crosses box m (slab test).
 
     boxes: (M, 6) rows (xmin, ymin, zmin, xmax, ymax, zmax). A point inside a
-    box counts as occluded.
+    box counts as crossing it.
     """
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
     b = np.asarray(boxes, dtype=float).reshape(-1, 6)
     if len(pts) == 0 or len(b) == 0:
-        return np.zeros(len(pts), dtype=bool)
+        return np.zeros((len(pts), len(b)), dtype=bool)
     o = np.asarray(cam_pos, dtype=float).reshape(1, 1, 3)
     d = pts[:, None, :] - o                        # (N, 1, 3), segment t in [0, 1]
     lo, hi = b[None, :, :3], b[None, :, 3:]
@@ -87,8 +87,12 @@ def occluded(cam_pos, points, boxes) -> np.ndarray:
     par = (d == 0.0) & ((o < lo) | (o > hi))
     enter = tmin.max(axis=2)
     leave = tmax.min(axis=2)
-    hit = (enter <= leave) & (leave >= 0.0) & (enter <= 1.0) & ~par.any(axis=2)
-    return hit.any(axis=1)
+    return (enter <= leave) & (leave >= 0.0) & (enter <= 1.0) & ~par.any(axis=2)
+
+
+def occluded(cam_pos, points, boxes) -> np.ndarray:
+    """Mask (N,): the segment cam_pos -> point crosses one of the boxes (M, 6)."""
+    return segment_hits(cam_pos, points, boxes).any(axis=1)
 
 
 def visible_people(world_people, cam_pos, cam_mat, fov_deg: float, width: int, height: int, *,
@@ -171,6 +175,99 @@ class Truth:
                 "cam_pos": [float(x) for x in self.cam_pos]}
 
 
+def _cull_boxes(boxes, lo_xy, hi_xy):
+    """The boxes whose xy extent meets the rectangle [lo_xy, hi_xy]."""
+    b = np.asarray(boxes, dtype=float).reshape(-1, 6)
+    keep = ((b[:, 0] <= hi_xy[0]) & (b[:, 3] >= lo_xy[0]) & (b[:, 1] <= hi_xy[1])
+            & (b[:, 4] >= lo_xy[1]))
+    return b[keep], keep
+
+
+def object_truth(table, cam_pos, cam_mat, fov_deg: float, width: int, height: int, *,
+                 occluders=None, near: float = 0.05, classes=CLASSES) -> Objects:
+    """Per-object truth of one view: every object of ``table`` (a world's
+    ``ObjectTable``) whose box meets the image.
+
+    - box: the tight box of the projected vertices of the object's geometry,
+      clipped to the image (exact for its convex parts);
+    - visible: the share of the object's volume sample points that project
+      inside the image and whose line of sight to the camera crosses no
+      building (``occluders``) and no other object's box;
+    - distance_m: camera to object centre; gsd_m: metres per pixel at the
+      object's depth along the view axis (depth / focal length in pixels).
+    """
+    if table is None or len(table) == 0:
+        return Objects(classes=tuple(classes))
+    cam_pos = np.asarray(cam_pos, dtype=float).reshape(3)
+    f = focal_px(fov_deg, height)
+    uv, depth = project(table.centre, cam_pos, cam_mat, fov_deg, width, height)
+    reach = f * 3.0 / np.maximum(depth, near)                  # 3 m around the centre, in px
+    cand = np.flatnonzero((depth > near) & (uv[:, 0] > -reach) & (uv[:, 0] < width + reach)
+                          & (uv[:, 1] > -reach) & (uv[:, 1] < height + reach))
+    if len(cand) == 0:
+        return Objects(classes=tuple(classes))
+    k, nv = len(cand), table.verts.shape[1]
+    vuv, vdepth = project(table.verts[cand].reshape(-1, 3), cam_pos, cam_mat, fov_deg, width, height)
+    vuv, vdepth = vuv.reshape(k, nv, 2), vdepth.reshape(k, nv)
+    front = (vdepth > near).all(axis=1)
+    lo, hi = vuv.min(axis=1), vuv.max(axis=1)
+    box = np.column_stack([np.clip(lo[:, 0], 0, width), np.clip(lo[:, 1], 0, height),
+                           np.clip(hi[:, 0], 0, width), np.clip(hi[:, 1], 0, height)])
+    ok = front & (box[:, 2] > box[:, 0]) & (box[:, 3] > box[:, 1])
+    cand, box = cand[ok], box[ok]
+    if len(cand) == 0:
+        return Objects(classes=tuple(classes))
+    vis = _visible_fraction(table, cand, cam_pos, cam_mat, fov_deg, width, height, occluders, near)
+    dist = np.linalg.norm(table.centre[cand] - cam_pos, axis=1)
+    return Objects(ids=cand.astype(int), cls=table.cls[cand].astype(int), boxes=box, visible=vis,
+                   distance_m=dist, gsd_m=depth[cand] / f, classes=tuple(classes))
+
+
+def _visible_fraction(table, cand, cam_pos, cam_mat, fov_deg, width, height, occluders, near):
+    k, ns = len(cand), table.samples.shape[1]
+    pts = table.samples[cand].reshape(-1, 3)
+    w = table.sample_w[cand].reshape(-1)
+    suv, sdepth = project(pts, cam_pos, cam_mat, fov_deg, width, height)
+    seen = ((sdepth > near) & (suv[:, 0] >= 0) & (suv[:, 0] < width) & (suv[:, 1] >= 0)
+            & (suv[:, 1] < height) & (w > 0))
+    lo_xy = np.minimum(pts[:, :2].min(axis=0), cam_pos[:2])
+    hi_xy = np.maximum(pts[:, :2].max(axis=0), cam_pos[:2])
+    if occluders is not None and len(occluders) and seen.any():
+        bld, _ = _cull_boxes(occluders, lo_xy, hi_xy)
+        idx = np.flatnonzero(seen)
+        seen[idx[occluded(cam_pos, pts[idx], bld)]] = False
+    in_view = np.isin(table.box_owner, cand)
+    obox, owner = table.boxes[in_view], table.box_owner[in_view]
+    if len(obox) > 1 and seen.any():
+        _hide_behind_objects(seen, pts, np.repeat(cand, ns), obox, owner, cam_pos)
+    return (seen.reshape(k, ns).sum(axis=1) / table.sample_w[cand].sum(axis=1)).astype(float)
+
+
+def _hide_behind_objects(seen, pts, point_owner, obox, owner, cam_pos):
+    """Clear ``seen`` for points whose line of sight crosses another object's box.
+
+    The objects are low (a few metres), so only the stretch of a sight line below
+    the tallest box can meet one: the boxes tested against a point are those
+    whose xy extent meets that stretch's xy extent (a cheap prefilter)."""
+    idx = np.flatnonzero(seen)
+    p = pts[idx]
+    top = obox[:, 5].max()
+    dz = cam_pos[2] - p[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.clip(np.where(dz > 0, (top - p[:, 2]) / dz, 1.0), 0.0, 1.0)
+    q = p[:, :2] + t[:, None] * (cam_pos[:2] - p[:, :2])       # where the line rises above `top`
+    lo, hi = np.minimum(p[:, :2], q), np.maximum(p[:, :2], q)
+    near = ((obox[None, :, 0] <= hi[:, None, 0]) & (obox[None, :, 3] >= lo[:, None, 0])
+            & (obox[None, :, 1] <= hi[:, None, 1]) & (obox[None, :, 4] >= lo[:, None, 1])
+            & (owner[None, :] != point_owner[idx][:, None]))
+    rows = np.flatnonzero(near.any(axis=1))
+    if len(rows) == 0:
+        return
+    cols = np.flatnonzero(near[rows].any(axis=0))
+    hit = segment_hits(cam_pos, p[rows], obox[cols]) & near[np.ix_(rows, cols)]
+    seen[idx[rows[hit.any(axis=1)]]] = False
+
+
 class CameraModel:
     """Pinhole model of a camera: image size and vertical field of view."""
 
@@ -184,7 +281,12 @@ class CameraModel:
     def project(self, points, cam_pos, cam_mat):
         return project(points, cam_pos, cam_mat, self.fov_deg, self.width, self.height)
 
-    def truth(self, t, points, cam_pos, cam_mat, occluders=None) -> Truth:
+    def truth(self, t, points, cam_pos, cam_mat, occluders=None, objects=None) -> Truth:
+        """The frame's truth: people in view (``points``) and, with ``objects`` (a
+        world's ``ObjectTable``), every object's box, class and visibility."""
         idx, uv = visible_people(points, cam_pos, cam_mat, self.fov_deg, self.width, self.height,
                                  occluders=occluders)
-        return Truth(float(t), idx, uv, np.array(cam_pos, dtype=float), np.array(cam_mat, dtype=float))
+        objs = object_truth(objects, cam_pos, cam_mat, self.fov_deg, self.width, self.height,
+                            occluders=occluders)
+        return Truth(float(t), idx, uv, np.array(cam_pos, dtype=float), np.array(cam_mat, dtype=float),
+                     objs)

@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from ..errors import ConfigError
+from .objects import CAR_LENGTH, CAR_WIDTH
 
 BLOCK_PITCH = 40.0        # m, street centre to street centre
 STREET_WIDTH = 10.0       # m, carriageway plus sidewalks
@@ -38,6 +39,9 @@ HEIGHT_RANGE = (6.0, 45.0)
 
 # (streams of SeedSequence(seed)) -- fixed keys so streams never shift
 _S_BUILDINGS, _S_SCATTER, _S_CROWDS, _S_COLOURS = range(4)
+_S_VEHICLES = 5
+#: m, lateral offsets of cars from a street's centre line: kerb parking and the two lanes
+LANES = (-2.6, -1.0, 1.0, 2.6)
 
 
 def _rng(seed: int, *key: int) -> np.random.Generator:
@@ -188,36 +192,6 @@ def colours(seed: int, n: int) -> tuple[np.ndarray, np.ndarray]:
 # per person. MuJoCo computes the pose of every geom at every physics step, static
 # or not: 300 figure geoms doubled the cost of mj_step (see benchmarks/camera.py).
 
-def _prism(n, r, z0, z1):
-    a = 2 * np.pi * (np.arange(n) + 0.5) / n
-    ring = np.column_stack([r * np.cos(a), r * np.sin(a)])
-    v = np.vstack([np.column_stack([ring, np.full(n, z0)]), np.column_stack([ring, np.full(n, z1)]),
-                   [[0, 0, z0], [0, 0, z1]]])
-    f = []
-    for i in range(n):
-        j = (i + 1) % n
-        f += [(i, j, n + j), (i, n + j, n + i),          # side, outward (counter-clockwise)
-              (2 * n, j, i), (2 * n + 1, n + i, n + j)]  # bottom (facing down), top (up)
-    return v, np.array(f)
-
-
-def _sphere(n, rings, r, zc):
-    v = [[0, 0, zc - r], [0, 0, zc + r]]
-    for k in range(1, rings):
-        th = np.pi * k / rings - np.pi / 2
-        for i in range(n):
-            a = 2 * np.pi * i / n
-            v.append([r * np.cos(th) * np.cos(a), r * np.cos(th) * np.sin(a), zc + r * np.sin(th)])
-    f = []
-    idx = lambda k, i: 2 + (k - 1) * n + (i % n)   # noqa: E731  ring k (1..rings-1)
-    for i in range(n):
-        f.append((0, idx(1, i + 1), idx(1, i)))
-        f.append((1, idx(rings - 1, i), idx(rings - 1, i + 1)))
-        for k in range(1, rings - 1):
-            f += [(idx(k, i), idx(k, i + 1), idx(k + 1, i + 1)), (idx(k, i), idx(k + 1, i + 1), idx(k + 1, i))]
-    return np.array(v, dtype=float), np.array(f)
-
-
 def merged(template, positions):
     """(vertices (K*V, 3), faces (K*F, 3)): the template copied at each (x, y, z)."""
     v, f = template
@@ -227,9 +201,55 @@ def merged(template, positions):
     return verts, faces
 
 
-def torso_template(radius, top):
-    return _prism(8, radius, 0.0, top)
+def vehicles(seed: int, size, n: int, bld: np.ndarray, people: np.ndarray,
+             clear_radius: float) -> np.ndarray:
+    """Cars (n, 4) rows (x, y, z, yaw) on the streets: parked at the kerbs and in the
+    lanes, yaw along the street, none within ``clear_radius`` of home, on a person
+    (0.5 m margin) or on another car; drawn from their own stream."""
+    rng = _rng(seed, _S_VEHICLES)
+    sts = streets(size)
+    out: list = []
+    half = np.array([CAR_LENGTH / 2 + 0.5, CAR_WIDTH / 2 + 0.5])
+    tries = 0
+    while len(out) < n:
+        tries += 1
+        if tries > 50 * n + 100:
+            raise ConfigError(f"World.urban: vehicles = {n} do not fit on the streets of a "
+                              f"{size[0]:g} m x {size[1]:g} m city next to its people; allowed: fewer")
+        x0, y0, x1, y1 = sts[int(rng.integers(len(sts)))]
+        along_x = (x1 - x0) >= (y1 - y0)
+        lane = LANES[int(rng.integers(len(LANES)))]
+        u = rng.random()
+        if along_x:
+            x, y, yaw = x0 + 3.0 + u * (x1 - x0 - 6.0), (y0 + y1) / 2 + lane, 0.0 if lane > 0 else math.pi
+        else:
+            x, y, yaw = (x0 + x1) / 2 + lane, y0 + 3.0 + u * (y1 - y0 - 6.0), math.pi / 2 if lane < 0 else -math.pi / 2
+        hx, hy = (half if along_x else half[::-1])
+        if math.hypot(x, y) < clear_radius + CAR_LENGTH / 2:
+            continue
+        if len(people) and ((np.abs(people[:, 0] - x) < hx) & (np.abs(people[:, 1] - y) < hy)).any():
+            continue
+        if any(abs(x - cx) < hx + ox and abs(y - cy) < hy + oy for cx, cy, ox, oy in out_ext(out)):
+            continue
+        if inside_buildings(np.array([[x, y]]), bld, margin=CAR_LENGTH / 2).any():
+            continue
+        out.append((x, y, 0.0, yaw))
+    return np.array(out, dtype=float).reshape(-1, 4)
 
 
-def head_template(radius, zc):
-    return _sphere(8, 4, radius, zc)
+def out_ext(cars):
+    """(x, y, half extent x, half extent y) of placed cars."""
+    for x, y, _, yaw in cars:
+        along_x = abs(math.cos(yaw)) > 0.5
+        hx, hy = (CAR_LENGTH / 2, CAR_WIDTH / 2) if along_x else (CAR_WIDTH / 2, CAR_LENGTH / 2)
+        yield x, y, hx, hy
+
+
+#: car colours: white, black, silver, grey, blue, red (the commonest car colours)
+CAR_COLOURS = np.array([(0.93, 0.93, 0.92), (0.08, 0.08, 0.09), (0.70, 0.71, 0.73),
+                        (0.40, 0.41, 0.43), (0.12, 0.22, 0.55), (0.70, 0.08, 0.08)])
+GLASS = (0.12, 0.16, 0.20)
+
+
+def car_colours(seed: int, n: int) -> np.ndarray:
+    return _rng(seed, _S_VEHICLES, 1).integers(0, len(CAR_COLOURS), n)

@@ -39,10 +39,8 @@ import numpy as np
 from .. import _check
 from ..errors import ConfigError
 from . import urban as _urban
+from .objects import CAR_BODY, CAR_CABIN, HEAD, PERSON_HEIGHT, TORSO, ObjectTable, _rotate
 
-PERSON_HEIGHT = 1.7          # m, adult figure
-PERSON_RADIUS = 0.22         # m, torso capsule
-HEAD_RADIUS = 0.12           # m
 GROUND_RGBA = (0.45, 0.5, 0.4, 1)
 
 _G_GROUND, _G_BUILDINGS, _G_PEOPLE = 0, 1, 2
@@ -62,6 +60,8 @@ class World:
         self.seed = None
         self.crowds: list = []
         self.scattered = 0
+        self.vehicles = np.zeros((0, 4))     # rows (x, y, z, yaw): cars
+        self.car_idx = np.zeros(0, dtype=int)       # index into urban.CAR_COLOURS per car
         self.clothes_idx = np.zeros(0, dtype=int)   # index into urban.CLOTHES per person
         self.skin_idx = np.zeros(0, dtype=int)      # index into urban.SKIN per person
         self.path = None
@@ -75,7 +75,7 @@ class World:
     @classmethod
     def urban(cls, seed: int = 0, size=(200.0, 200.0), people: int = 100, crowds=(), *,
               building_density: float = 0.7, clear_radius: float = 15.0,
-              max_building_height: float | None = None) -> "World":
+              max_building_height: float | None = None, vehicles: int = 0) -> "World":
         """A procedural city of ``size = (east-west, north-south)`` metres centred on home.
 
         people: scattered people (uniform over the area, outside buildings);
@@ -85,7 +85,10 @@ class World:
         probability that a lot holds a building; clear_radius: no building
         within this distance of home (0, 0); max_building_height: cap on the
         tallest building (m; default: the built-in range's top). Buildings are
-        obstacles: fly above them or around them.
+        obstacles: fly above them or around them. vehicles: cars parked at the
+        kerbs and standing in the lanes of the streets (drawn from their own
+        random stream: adding cars moves nothing else); like people, they are
+        seen by the camera and counted by the truth, and do not collide.
         """
         where = "World.urban"
         if isinstance(seed, bool) or not isinstance(seed, Integral) or seed < 0:
@@ -94,6 +97,7 @@ class World:
         if min(size) < 20.0:
             raise ConfigError(f"{where}: size = {size!r} is too small; allowed: both sides >= 20 m")
         people = _count("people", people, where)
+        n_cars = _count("vehicles", vehicles, where)
         density = _check.fraction("building_density", building_density, where=where)
         clear = _check.non_negative("clear_radius", clear_radius, where=where)
         hmax = (None if max_building_height is None
@@ -107,10 +111,39 @@ class World:
         w.streets = _urban.streets(size)
         w.people = _urban.people(int(seed), size, people, cr, w.buildings)
         w.clothes_idx, w.skin_idx = _urban.colours(int(seed), len(w.people))
+        if n_cars:
+            w.vehicles = _urban.vehicles(int(seed), size, n_cars, w.buildings, w.people, clear)
+            w.car_idx = _urban.car_colours(int(seed), n_cars)
         b = w.buildings
         w.occluders = np.column_stack([b[:, 0] - b[:, 2], b[:, 1] - b[:, 3], np.zeros(len(b)),
                                        b[:, 0] + b[:, 2], b[:, 1] + b[:, 3], b[:, 4]])
         w._info = {"building_density": density, "clear_radius": clear, "max_building_height": hmax}
+        if n_cars:
+            w._info["vehicles"] = n_cars
+        return w
+
+    @classmethod
+    def scene(cls, people=(), vehicles=(), buildings=(), *, size=(100.0, 100.0)) -> "World":
+        """A test range: figures, cars and buildings exactly where you put them, on
+        the urban world's ground and streets. people: (x, y) feet positions;
+        vehicles: (x, y, yaw) rows; buildings: (cx, cy, half_x, half_y, height)."""
+        where = "World.scene"
+        size = _check.vector("size", size, 2, where=where, positive_entries=True)
+        w = cls("urban")
+        w.seed, w.size = 0, size
+        w.people = _rows(people, 2, "people", "(x, y)", where)
+        w.people = np.column_stack([w.people, np.zeros(len(w.people))])
+        cars = _rows(vehicles, 3, "vehicles", "(x, y, yaw)", where)
+        w.vehicles = np.column_stack([cars[:, :2], np.zeros(len(cars)), cars[:, 2]])
+        w.car_idx = np.zeros(len(cars), dtype=int)
+        w.buildings = _rows(buildings, 5, "buildings", "(cx, cy, half_x, half_y, height)", where)
+        w.scattered = len(w.people)
+        w.streets = _urban.streets(size)
+        w.clothes_idx, w.skin_idx = _urban.colours(0, len(w.people))
+        b = w.buildings
+        w.occluders = np.column_stack([b[:, 0] - b[:, 2], b[:, 1] - b[:, 3], np.zeros(len(b)),
+                                       b[:, 0] + b[:, 2], b[:, 1] + b[:, 3], b[:, 4]])
+        w._info = {"scene": True, "vehicles": int(len(cars))}
         return w
 
     @classmethod
@@ -203,16 +236,14 @@ class World:
                         size=[hx, hy, h / 2], rgba=[*np.clip(g + tint, 0, 1), 1],
                         material="flockai_building", group=_G_BUILDINGS)
         self._add_figures(spec)
+        self._add_vehicles(spec)
 
     def _add_figures(self, spec) -> None:
         """People: one mesh geom per colour holding all figures of that colour (group 2)."""
         if len(self.people) == 0:
             return
-        hr = HEAD_RADIUS
-        torso = _urban.torso_template(PERSON_RADIUS, PERSON_HEIGHT - 2 * hr - 0.02)
-        head = _urban.head_template(hr, PERSON_HEIGHT - hr)
-        for kind, template, idx, palette in (("clothes", torso, self.clothes_idx, _urban.CLOTHES),
-                                             ("skin", head, self.skin_idx, _urban.SKIN)):
+        for kind, template, idx, palette in (("clothes", TORSO, self.clothes_idx, _urban.CLOTHES),
+                                             ("skin", HEAD, self.skin_idx, _urban.SKIN)):
             for c in np.unique(idx):
                 verts, faces = _urban.merged(template, self.people[idx == c])
                 name = f"people_{kind}{int(c)}"
@@ -221,6 +252,23 @@ class World:
                 spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
                                         rgba=[*palette[c], 1], material="flockai_matte",
                                         contype=0, conaffinity=0, group=_G_PEOPLE)
+
+    def _add_vehicles(self, spec) -> None:
+        """Cars: one mesh per paint colour for the bodies, one for all glasshouses."""
+        if len(self.vehicles) == 0:
+            return
+        parts = [(f"cars_body{int(c)}", CAR_BODY, self.car_idx == c, _urban.CAR_COLOURS[c])
+                 for c in np.unique(self.car_idx)]
+        parts.append(("cars_glass", CAR_CABIN, np.ones(len(self.vehicles), bool), _urban.GLASS))
+        for name, (v, f), mask, rgba in parts:
+            cars = self.vehicles[mask]
+            verts = np.vstack([_rotate(v, yaw) + (x, y, z) for x, y, z, yaw in cars])
+            faces = np.vstack([f + k * len(v) for k in range(len(cars))])
+            spec.add_mesh(name=name, uservert=verts.reshape(-1).tolist(),
+                          userface=faces.reshape(-1).tolist())
+            spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
+                                    rgba=[*rgba, 1], material="flockai_building",
+                                    contype=0, conaffinity=0, group=_G_PEOPLE)
 
     def _add_mjcf(self, spec) -> None:
         try:
@@ -243,6 +291,18 @@ class World:
         """(N, 3) skin colour (rgb 0..1) of each person."""
         return _urban.SKIN[self.skin_idx].reshape(-1, 3)
 
+    @property
+    def objects(self) -> ObjectTable:
+        """The objects the camera truth boxes: people (ids 0..N-1), then vehicles."""
+        key = (len(self.people), len(self.vehicles))
+        if getattr(self, "_objects_key", None) != key:
+            feet = np.array(self.people, dtype=float).reshape(-1, 3)
+            if self.path is not None:      # from_mjcf: the positions are figure centres
+                feet = feet - (0.0, 0.0, PERSON_HEIGHT / 2)
+            self._objects = ObjectTable.build(feet, self.vehicles)
+            self._objects_key = key
+        return self._objects
+
     def truth_points(self) -> np.ndarray:
         """(N, 3) points the camera truth projects: people lifted by ``truth_height``."""
         pts = np.array(self.people, dtype=float).reshape(-1, 3)
@@ -251,6 +311,8 @@ class World:
 
     def to_dict(self) -> dict:
         d = {"name": self.name, "people": int(len(self.people))}
+        if len(self.vehicles):
+            d["vehicles"] = int(len(self.vehicles))
         if self.name == "urban" and self.path is None:
             d.update(seed=self.seed, size=list(self.size), scattered=self.scattered,
                      crowds=[list(c) for c in self.crowds], buildings=int(len(self.buildings)),
@@ -266,6 +328,19 @@ class World:
         if self.path is not None:
             return f"World.from_mjcf({self.path!r})"
         return f"World({self.name!r})"
+
+
+def _rows(values, n, field, shape, where) -> np.ndarray:
+    try:
+        arr = np.asarray(values if len(values) else np.zeros((0, n)), dtype=float).reshape(-1, n)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: {field} = {values!r} is not allowed; expected rows "
+                          f"{shape}") from None
+    if arr.shape[0] != len(values) and len(values):
+        raise ConfigError(f"{where}: {field} = {values!r} is not allowed; expected rows {shape}")
+    if not np.isfinite(arr).all():
+        raise ConfigError(f"{where}: {field} has non-finite values; expected rows {shape}")
+    return arr
 
 
 def _count(field, value, where) -> int:
