@@ -63,14 +63,39 @@ _ROWS = [
     ("count_mae", "count", "lower", "mean absolute error of the people count"),
     ("detection_precision", "fraction", "higher", "precision of crowd detection"),
     ("detection_recall", "fraction", "higher", "recall of crowd detection"),
-    ("detection_delay_frames", "count", "lower", "frames from a crowd entering view until detected"),
+    ("detection_delay_frames", "count", "lower", "frames from a crowd (detection tasks: an object) "
+     "entering view until detected"),
+    # ML: object detection (COCO, pycocotools) and classification
+    ("map50", "fraction", "higher", "mean average precision over the classes at IoU 0.5 (COCO)"),
+    ("map50_95", "fraction", "higher", "mean average precision over IoU 0.50:0.95 (COCO)"),
+    ("precision", "fraction", "higher", "detections at the score threshold that match an object"),
+    ("recall", "fraction", "higher", "objects matched by a detection at the score threshold"),
+    ("objects_missed", "fraction", "lower", "objects in view never detected"),
+    ("accuracy", "fraction", "higher", "frames whose predicted classes are exactly right"),
 ]
+
+#: ``<family>.<qualifier>`` KPIs (per class, altitude band, box size): a fraction, higher better
+FAMILIES = {"map50": "per class", "precision": "per class", "recall": "per class, altitude "
+            "band (alt_<lo>_<hi>m) or box height (size_<band>px)"}
 
 REGISTRY: dict[str, KPI] = {r[0]: KPI(*r) for r in _ROWS}
 
 
 def get(name: str) -> KPI | None:
-    return REGISTRY.get(name)
+    """The KPI ``name``: built in, registered, a family member (``recall.person``)
+    or a task's own (``<task>.<kpi>``, e.g. ``cnn.recall.person``)."""
+    k = REGISTRY.get(name)
+    if k is not None or not isinstance(name, str) or "." not in name:
+        return k
+    parts = name.split(".")
+    for i in range(len(parts) - 1):
+        head, rest = parts[i], parts[i + 1:]
+        if head in FAMILIES and rest and all(rest):
+            return KPI(name, "fraction", "higher", f"{REGISTRY[head].description} ({FAMILIES[head]})")
+        tail = REGISTRY.get(".".join(parts[i + 1:]))
+        if tail is not None and "." not in tail.name:
+            return KPI(name, tail.unit, tail.better, f"task {'.'.join(parts[:i + 1])}: {tail.description}")
+    return None
 
 
 def names() -> list[str]:

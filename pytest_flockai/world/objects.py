@@ -84,10 +84,12 @@ CAR_CABIN = box(*CAR_BOXES[1])
 
 
 def _person_samples():
-    """Points through a figure's volume: its axis and a ring at the chest."""
-    pts = [(0.0, 0.0, z) for z in (0.15, 0.5, 0.85, 1.2, PERSON_HEIGHT - HEAD_RADIUS)]
+    """Points through a figure's volume: rings of 8 at the hips and the chest, the
+    axis at the knees and the shoulders, and the head."""
     r = 0.7 * PERSON_RADIUS
-    pts += [(r * math.cos(a), r * math.sin(a), 1.1) for a in np.arange(4) * math.pi / 2]
+    ring = [(r * math.cos(a), r * math.sin(a)) for a in (np.arange(8) + 0.5) * math.pi / 4]
+    pts = [(x, y, z) for z in (0.6, 1.1) for x, y in ring]
+    pts += [(0.0, 0.0, 0.3), (0.0, 0.0, 1.35), (0.0, 0.0, PERSON_HEIGHT - HEAD_RADIUS)]
     return np.array(pts)
 
 

@@ -225,6 +225,8 @@ def vehicles(seed: int, size, n: int, bld: np.ndarray, people: np.ndarray,
         else:
             x, y, yaw = (x0 + x1) / 2 + lane, y0 + 3.0 + u * (y1 - y0 - 6.0), math.pi / 2 if lane < 0 else -math.pi / 2
         hx, hy = (half if along_x else half[::-1])
+        if not (x0 <= x <= x1 and y0 <= y <= y1):       # a street clipped by the area's edge
+            continue
         if math.hypot(x, y) < clear_radius + CAR_LENGTH / 2:
             continue
         if len(people) and ((np.abs(people[:, 0] - x) < hx) & (np.abs(people[:, 1] - y) < hy)).any():
