@@ -17,6 +17,7 @@ def build(run, mission, wall_s: float, t_final: float, end_reason: str) -> Fligh
     d = run.data
     stage = DONE if st.t_land else PILOT
     kpis = run.probing.final(t_final, d.qpos.tolist(), d.qvel.tolist(), stage)
+    kpis.update(run.scheduler.evaluation_kpis())
     frames = run.hub.frames()
     _merge_probe_columns(tel, frames)
     scen = mission.scenario()

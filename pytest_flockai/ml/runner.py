@@ -424,21 +424,23 @@ class TaskRunner:
             "inference_failures": float(self.inference_failures),
             "cpu_time_s": self.cpu_time_s(),
         }
-        if self.task.evaluate == "count":
-            if any(not math.isnan(x) for x in self._truth):
-                m = crowd_metrics(self._truth, self._pred, self.task.crowd_threshold)
-                for k in ("count_mae", "detection_precision", "detection_recall",
-                          "detection_delay_frames"):
-                    out[k] = m[k]
-        else:
-            out.update(self.evaluation())
+        if self.task.evaluate == "count" and any(not math.isnan(x) for x in self._truth):
+            m = crowd_metrics(self._truth, self._pred, self.task.crowd_threshold)
+            for k in ("count_mae", "detection_precision", "detection_recall",
+                      "detection_delay_frames"):
+                out[k] = m[k]
         return out
 
     def evaluation(self) -> dict:
-        """The accuracy KPIs of a detection, classification or custom evaluation."""
-        t, recs = self.task, [self._record_of[k] for k in sorted(self._record_of)
-                              if self._record_of[k].prediction is not None
-                              or self._record_of[k].detections is not None]
+        """The accuracy KPIs of a detection, classification or custom evaluation,
+        computed once at the end of the flight ({} for counting tasks: their
+        accuracy is in ``kpis()``)."""
+        t = self.task
+        if t.evaluate == "count":
+            return {}
+        recs = [self._record_of[k] for k in sorted(self._record_of)
+                if self._record_of[k].prediction is not None
+                or self._record_of[k].detections is not None]
         if callable(t.evaluate):
             return {str(k): float(v) for k, v in (t.evaluate(recs) or {}).items()}
         if t.evaluate == "detection":

@@ -129,6 +129,17 @@ class TaskScheduler(Clocked):
                 "inference_failures": sum(k["inference_failures"] for k in by.values())}
         return comb, by
 
+    def evaluation_kpis(self) -> dict:
+        """The accuracy KPIs of the detection, classification and custom tasks, as
+        ``<task>.<kpi>`` and, with a single task, also unprefixed."""
+        out = {}
+        for r in self.runners:
+            ev = r.evaluation()
+            out.update({f"{r.task.name}.{k}": v for k, v in ev.items()})
+            if len(self.runners) == 1:
+                out.update(ev)
+        return out
+
     def inference_events(self) -> list[dict]:
         """Every inference as an event dict, with the drone's position at capture."""
         out = []
