@@ -50,3 +50,26 @@ sc_1b = _scenario("1-B")
 sc_2 = _scenario("2")
 sc_2slow = _scenario("2-slow")
 sc_3b = _scenario("3-B")
+
+
+@pytest.fixture(scope="session")
+def det_city():
+    return scenarios.detection_world()
+
+
+@pytest.fixture(scope="session")
+def det_model():
+    return scenarios.detector()
+
+
+def _detection(name):
+    @pytest.fixture(scope="session")
+    def fixture(det_model, det_city):
+        return scenarios.detection_mission(name, det_model, det_city).run()
+    fixture.__doc__ = f"The person + vehicle detector, {name}, flown once per session."
+    return fixture
+
+
+det_pi4 = _detection("det-pi4")
+det_jetson = _detection("det-jetson")
+det_remote = _detection("det-remote")

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 from . import kpis as _kpis
 from .errors import ConfigError, close_matches
+from .report import table as text_table
 
 OPERATORS = ("<", "<=", ">", ">=", "==")
 
@@ -111,6 +112,14 @@ class Budget:
             margin = math.nan
         return bool(passed), float(margin)
 
+    def verdict(self, actual, flight: str | None = None) -> "Verdict":
+        """The one verdict type: this budget against ``actual`` (SI)."""
+        passed, margin = self.evaluate(actual)
+        a = math.nan if actual is None else float(actual)
+        return Verdict(flight=flight, kpi=self.kpi, budget=self.text, op=self.op, limit=self.limit,
+                       actual=a, margin=margin, passed=passed, actual_text=self.format(actual),
+                       margin_text=self.format(margin) if margin == margin else "n/a")
+
     def format(self, value) -> str:
         """``value`` (SI) in the unit the budget was written in."""
         if value is None or (isinstance(value, float) and math.isnan(value)):
@@ -178,6 +187,59 @@ def parse(kpi: str, text) -> Budget:
                   dimension=udim if udim is not None else "1")
 
 
+@dataclass(frozen=True)
+class Verdict:
+    """A budget checked against a flight: what every caller (the plugin, ``check``,
+    the reports, hypothesis targets) uses. ``margin`` > 0 inside the budget (SI)."""
+
+    flight: str | None
+    kpi: str
+    budget: str
+    op: str
+    limit: float
+    actual: float
+    margin: float
+    passed: bool
+    actual_text: str
+    margin_text: str
+
+    @property
+    def rel_margin(self) -> float:
+        """margin / |limit| (margin itself for a zero limit)."""
+        return self.margin / (abs(self.limit) if self.limit else 1.0)
+
+    @property
+    def verdict(self) -> str:
+        return "pass" if self.passed else "fail"
+
+    def to_dict(self) -> dict:
+        """The JSON report's budget row (schema pytest-flockai/1)."""
+        return {"flight": self.flight, "kpi": self.kpi, "budget": self.budget, "op": self.op,
+                "limit": self.limit, "actual": self.actual, "margin": self.margin,
+                "verdict": self.verdict, "actual_text": self.actual_text,
+                "margin_text": self.margin_text}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Verdict":
+        """From a report row (``to_dict``), e.g. one that came through pytest-xdist."""
+        return cls(flight=d.get("flight"), kpi=d["kpi"], budget=d["budget"], op=d.get("op", ""),
+                   limit=d.get("limit", math.nan), actual=d.get("actual", math.nan),
+                   margin=d.get("margin", math.nan), passed=d["verdict"] == "pass",
+                   actual_text=d.get("actual_text", str(d.get("actual"))),
+                   margin_text=d.get("margin_text", str(d.get("margin"))))
+
+    def __getitem__(self, key):
+        """Dict-style access (``v["passed"]``, ``v["rel_margin"]``), as before 0.2."""
+        return getattr(self, key)
+
+
+def table(verdicts, indent: str = "  ") -> str:
+    """The budget table of a failure message: flight, KPI, budget, actual, margin, verdict."""
+    rows = [[v.flight or "", v.kpi, v.budget, v.actual_text, v.margin_text,
+             "ok" if v.passed else "BROKEN"] for v in verdicts]
+    return text_table(["flight", "KPI", "budget", "actual", "margin", "verdict"], rows, indent=indent)
+
+
 def parse_many(budgets: dict) -> list[Budget]:
     """Parse ``{kpi: text}``; the first error is raised."""
     return [parse(k, v) for k, v in budgets.items()]
@@ -200,11 +262,11 @@ class BudgetError(AssertionError):
         self.verdicts = verdicts
 
 
-def evaluate(result, budgets: dict | None = None, **more) -> list[dict]:
+def evaluate(result, budgets: dict | None = None, **more) -> list[Verdict]:
     """Evaluate budgets against a FlightResult (or a KPI dict) without pytest.
 
-    Returns one dict per budget: kpi, budget, limit, actual, passed, margin
-    (positive inside the budget) and rel_margin (margin / |limit|).
+    Returns one ``Verdict`` per budget (kpi, budget, limit, actual, passed,
+    margin: positive inside the budget, rel_margin: margin / |limit|).
     A budget on a KPI the flight did not produce raises ConfigError naming it.
     """
     kpis = getattr(result, "kpis", result)
@@ -215,30 +277,21 @@ def evaluate(result, budgets: dict | None = None, **more) -> list[dict]:
         if b.kpi not in kpis:
             raise ConfigError(f"budget on {b.kpi!r}: the flight did not produce this KPI; it has "
                               f"{', '.join(sorted(kpis))}")
-        actual = kpis[b.kpi]
-        passed, margin = b.evaluate(actual)
-        scale = abs(b.limit) if b.limit else 1.0
-        out.append({"kpi": b.kpi, "budget": b.text, "limit": b.limit, "actual": actual,
-                    "passed": passed, "margin": margin, "rel_margin": margin / scale,
-                    "actual_text": b.format(actual), "margin_text": b.format(margin)})
+        out.append(b.verdict(kpis[b.kpi]))
     return out
 
 
-def check(result, budgets: dict | None = None, **more) -> list[dict]:
+def check(result, budgets: dict | None = None, **more) -> list[Verdict]:
     """Like ``evaluate`` but raises BudgetError (an AssertionError) with a table
     when a budget is broken: use it inside hypothesis ``@given`` tests, where
     the failing example is then shrunk and shown."""
     verdicts = evaluate(result, budgets, **more)
-    broken = [v for v in verdicts if not v["passed"]]
+    broken = [v for v in verdicts if not v.passed]
     if broken:
-        width = max(len(v["kpi"]) for v in verdicts)
-        lines = [f"{len(broken)} of {len(verdicts)} KPI budget(s) broken:"]
-        for v in verdicts:
-            lines.append(f"  {v['kpi']:<{width}}  {v['budget']:<12}  actual {v['actual_text']:<14} "
-                         f"margin {v['margin_text']:<14} {'ok' if v['passed'] else 'BROKEN'}")
-        raise BudgetError("\n".join(lines), verdicts)
+        raise BudgetError(f"{len(broken)} of {len(verdicts)} KPI budget(s) broken:\n"
+                          + table(verdicts), verdicts)
     return verdicts
 
 
-__all__ = ["Budget", "BudgetError", "OPERATORS", "UNITS", "check", "evaluate", "kpi_unit", "parse",
-           "parse_many"]
+__all__ = ["Budget", "BudgetError", "OPERATORS", "UNITS", "Verdict", "check", "evaluate", "kpi_unit",
+           "parse", "parse_many", "table"]

@@ -115,7 +115,7 @@ def target_margin(result, budgets: dict | None = None, *, label: str = "worst bu
     Returns that margin (positive: every budget holds). Outside a hypothesis test
     (a test body called directly) it only returns the margin."""
     verdicts = _budgets.evaluate(result, budgets, **more)
-    worst = min(v["rel_margin"] for v in verdicts)
+    worst = min(v.rel_margin for v in verdicts)
     if currently_in_test_context():
         _target(-float(worst), label=label)
     return worst

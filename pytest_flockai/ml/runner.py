@@ -154,6 +154,7 @@ class TaskRunner:
         self._wall: list[float] = []            # measured mode: host seconds per inference
         self.records: list[FrameRecord] = []    # scored frames (detection, classification)
         self._record_of: dict = {}              # frame index -> its FrameRecord
+        self._dets: dict = {}                   # frame index -> parsed Detections
         self.tx_bytes_total = self.rx_bytes_total = 0
         self.tx_packets_total = self.rx_packets_total = 0
         self.retransmissions = 0
@@ -327,9 +328,22 @@ class TaskRunner:
         raw = np.asarray(frame, dtype=np.float64).tobytes()
         return raw, len(raw), 0.0
 
-    def _count(self, pred):
+    def _count(self, pred, idx, frame):
+        """The people count of a prediction; for a detection task, the person
+        detections at the score threshold (the detections are kept for scoring)."""
+        t = self.task
+        if t.evaluate == "detection":
+            dets = parse_detections(
+                pred, np.shape(frame)[:2], n_classes=len(t.classes), where=f"task {t.name!r}",
+                decode=t.decode, score_threshold=t.score_threshold,
+                iou_threshold=t.iou_threshold, input_hw=getattr(t.model, "input_size", None))
+            self._dets[idx] = dets
+            sel = dets.above(t.score_threshold)
+            if "person" in t.classes:
+                return float((sel.cls == t.classes.index("person")).sum())
+            return float(len(sel))
         try:
-            return self.task.count(pred)
+            return t.count(pred)
         except Exception:
             return None
 
@@ -350,7 +364,7 @@ class TaskRunner:
         self._busy_seg(start, compute)
         done = start + compute
         free = done + self._update(task.model, frame, done)
-        count = self._count(pred) if err is None else None
+        count = self._count(pred, idx, frame) if err is None else None
         tx = 0
         alert = False
         if err is None:
@@ -397,7 +411,7 @@ class TaskRunner:
             if not down.delivered and err is None:
                 err = f"link {self.link.name!r} down at {dist:.0f} m on the downlink"
             if err is None:
-                count = self._count(pred)
+                count = self._count(pred, idx, frame_g)
         ev = InferenceEvent(task=task.name, frame_index=idx, t_capture=t, t_start=start, t_done=done,
                             latency_s=done - t, compute_s=compute, prediction=pred, count=count,
                             truth_count=tc, ok=err is None, error=err, tx_bytes=up.payload_bytes,
@@ -460,10 +474,12 @@ class TaskRunner:
             if not ev.ok:
                 rec.detections = Detections.empty()        # a failed inference found nothing
                 return
-            rec.detections = parse_detections(
-                ev.prediction, (rec.height, rec.width), n_classes=len(t.classes),
-                where=f"task {t.name!r}", decode=t.decode, score_threshold=t.score_threshold,
-                iou_threshold=t.iou_threshold, input_hw=getattr(t.model, "input_size", None))
+            rec.detections = self._dets.pop(ev.frame_index, None)
+            if rec.detections is None:
+                rec.detections = parse_detections(
+                    ev.prediction, (rec.height, rec.width), n_classes=len(t.classes),
+                    where=f"task {t.name!r}", decode=t.decode, score_threshold=t.score_threshold,
+                    iou_threshold=t.iou_threshold, input_hw=getattr(t.model, "input_size", None))
         elif not ev.ok:
             rec.prediction = None
 

@@ -65,7 +65,8 @@ def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame"):
         rows.append({"frame": i, "file": name, "t": float(t), "count": truth.count,
                      "pixels": json.dumps(pix)})
         frames_json.append({"frame": i, "file": name, "t": float(t), "count": truth.count,
-                            "indices": [int(k) for k in truth.indices], "pixels": pix})
+                            "indices": [int(k) for k in truth.indices], "pixels": pix,
+                            "cam_pos": [round(float(x), 4) for x in truth.cam_pos]})
         coco.append((name, frame.shape[1], frame.shape[0], truth.objects))
     df = pd.DataFrame(rows, columns=["frame", "file", "t", "count", "pixels"])
     df.to_csv(os.path.join(folder, "truth.csv"), index=False)

@@ -215,7 +215,8 @@ def _load_truth(path, where):
         with open(path) as f:
             rows = json.load(f)["frames"]
         return [Truth(float(r.get("t", 0.0)), np.array(r["indices"], dtype=int),
-                      np.array(r["pixels"], dtype=float).reshape(-1, 2)) for r in rows]
+                      np.array(r["pixels"], dtype=float).reshape(-1, 2),
+                      np.array(r.get("cam_pos", (np.nan,) * 3), dtype=float)) for r in rows]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise ConfigError(f"{where}: {path!r} is not a truth file written by export_dataset: "
                           f"{exc}") from None

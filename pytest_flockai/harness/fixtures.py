@@ -1,0 +1,81 @@
+"""The provisioning fixtures: ``drone world pilot tasks probes`` (each set by an
+indirect parametrization, else the closest ``flockai`` marker, else a default),
+``mission`` (assembled, not flown) and ``flight`` (the mission flown)."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from ..airframe import drone as _make_drone
+from ..control.pilots import Hover
+from ..mission import Mission
+
+DEFAULT_DRONE = "dji-mavic-2-pro"
+
+
+def setting(request, key, default=None):
+    """The value for one of the provisioning fixtures: an indirect parametrization
+    of that fixture (``@pytest.mark.parametrize("drone", [...], indirect=True)``)
+    first, then the closest ``flockai`` marker, then the default."""
+    if getattr(request, "fixturename", None) == key and hasattr(request, "param"):
+        return request.param
+    for mark in request.node.iter_markers("flockai"):   # closest first
+        if key in mark.kwargs:
+            return mark.kwargs[key]
+    return default
+
+
+@pytest.fixture
+def drone(request):
+    """A fresh Drone: ``@pytest.mark.flockai(drone=...)`` (a blueprint name, a
+    path or a Drone), else ``fa.drone("dji-mavic-2-pro")``."""
+    value = setting(request, "drone", DEFAULT_DRONE)
+    if isinstance(value, (str, os.PathLike)):
+        return _make_drone(value)
+    return value
+
+
+@pytest.fixture
+def world(request):
+    """The world to fly in: ``@pytest.mark.flockai(world=...)``, else None (empty)."""
+    return setting(request, "world", None)
+
+
+@pytest.fixture
+def pilot(request):
+    """The flight plan: ``@pytest.mark.flockai(pilot=...)``, else
+    ``fa.pilots.Hover(altitude=10.0, duration=30.0)``."""
+    value = setting(request, "pilot", None)
+    return Hover(altitude=10.0, duration=30.0) if value is None else value
+
+
+@pytest.fixture
+def tasks(request):
+    """ML tasks flown with the mission: ``@pytest.mark.flockai(tasks=...)``, else ()."""
+    return tuple(setting(request, "tasks", ()) or ())
+
+
+@pytest.fixture
+def probes(request):
+    """Monitoring probes: ``@pytest.mark.flockai(probes=...)``, else None."""
+    return setting(request, "probes", None)
+
+
+@pytest.fixture
+def mission(request, drone, pilot, world, tasks, probes):
+    """The Mission assembled from the fixtures and the ``flockai`` marker (not flown).
+
+    ``pytest_flockai_adjust_mission(mission, item)`` hooks run on it last."""
+    m = Mission(drone, pilot, world=world, tasks=tasks, probes=probes,
+                wind=setting(request, "wind", None), seed=setting(request, "seed", 0),
+                until=setting(request, "until", "landed"), name=setting(request, "name", None))
+    request.config.hook.pytest_flockai_adjust_mission(mission=m, item=request.node)
+    return m
+
+
+@pytest.fixture
+def flight(mission):
+    """The mission flown: a ``FlightResult`` (recorded for the kpi marker and reports)."""
+    return mission.run()

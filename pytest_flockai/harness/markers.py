@@ -1,0 +1,121 @@
+"""The plugin's markers, parsed once at collection into frozen dataclasses.
+
+``@pytest.mark.kpi(flight_time_s=">= 24 min", ..., flight=None)``: KPI budgets,
+checked after the test body against every flight the test flew (or only the
+flight named ``flight``); dotted KPIs go in a positional dict.
+``@pytest.mark.flockai(drone=, pilot=, world=, tasks=, probes=, seed=, until=,
+wind=, name=, max_regression=)``: quick settings for the fixtures, and a
+per-test regression threshold (a percent, or ``{kpi: percent}``).
+
+A bad marker does not raise at collection: ``Markers.error`` holds the
+message and the test errors at setup, before anything flies.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .. import budgets as _budgets
+from .. import kpis as _kpis
+from ..errors import ConfigError, close_matches
+
+FLOCKAI_KEYS = ("drone", "pilot", "world", "tasks", "probes", "seed", "until", "wind", "name",
+                "max_regression")
+
+
+@dataclass(frozen=True)
+class FlightBudget:
+    flight: str | None          # None: every flight of the test
+    budget: _budgets.Budget
+
+
+@dataclass(frozen=True)
+class Markers:
+    """What a test's markers say: its budgets, its regression threshold (None:
+    the session's; a percent; or a tuple of (kpi, percent)), or the error."""
+
+    budgets: tuple = ()
+    max_regression: object = None
+    error: str | None = None
+
+    @property
+    def per_kpi_regression(self) -> dict | None:
+        return dict(self.max_regression) if isinstance(self.max_regression, tuple) else None
+
+
+def _error(item, marker: str, msg: str) -> Markers:
+    return Markers(error=f"pytest-flockai: bad @pytest.mark.{marker} on {item.nodeid}: {msg}")
+
+
+def parse(item) -> Markers:
+    try:
+        budgets = _kpi_budgets(item)
+    except ConfigError as exc:
+        return _error(item, "kpi", str(exc))
+    for mark in item.iter_markers("flockai"):
+        if mark.args:
+            return _error(item, "flockai", f"positional arguments {mark.args!r} are not allowed; "
+                                           f"use keywords: {', '.join(FLOCKAI_KEYS)}")
+        for key in mark.kwargs:
+            if key not in FLOCKAI_KEYS:
+                return _error(item, "flockai", f"unknown setting {key!r}"
+                                               f"{close_matches(key, FLOCKAI_KEYS)}; allowed: "
+                                               f"{', '.join(FLOCKAI_KEYS)}")
+    try:
+        reg = regression_setting(closest(item, "max_regression"))
+    except ConfigError as exc:
+        return _error(item, "flockai", str(exc))
+    return Markers(budgets=budgets, max_regression=reg)
+
+
+def _kpi_budgets(item) -> tuple:
+    seen: dict = {}
+    for mark in item.iter_markers("kpi"):    # closest first: it wins
+        kwargs = dict(mark.kwargs)
+        flight = kwargs.pop("flight", None)
+        if flight is not None and not isinstance(flight, str):
+            raise ConfigError(f"flight = {flight!r} is not allowed; expected the name of a "
+                              f"flight (a str) or None for every flight")
+        specs: dict = {}
+        for arg in mark.args:
+            if not isinstance(arg, dict):
+                raise ConfigError(f"positional argument {arg!r} is not allowed; write budgets "
+                                  f"as kpi_name='<= 1.5 s' or a dict {{'probe.metric': '<= 3'}}")
+            specs.update(arg)
+        specs.update(kwargs)
+        if not specs:
+            raise ConfigError("no budget given; write e.g. "
+                              "@pytest.mark.kpi(flight_time_s='>= 24 min')")
+        for kpi, text in specs.items():
+            seen.setdefault((flight, kpi), _budgets.parse(kpi, text))
+    return tuple(FlightBudget(f, b) for (f, _), b in seen.items())
+
+
+def closest(item, key):
+    """The value of ``key`` in the closest ``flockai`` marker, or None."""
+    for mark in item.iter_markers("flockai"):
+        if key in mark.kwargs:
+            return mark.kwargs[key]
+    return None
+
+
+def regression_setting(value):
+    """``max_regression``: None, a percent for every KPI, or ``{kpi: percent}``
+    (returned as a sorted tuple of pairs, so the dataclass stays frozen)."""
+    def pct(field, v):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+            raise ConfigError(f"{field} = {v!r} is not allowed; expected a percentage >= 0 "
+                              f"(e.g. 2.5 for 2.5 %)")
+        return float(v)
+    if value is None:
+        return None
+    if isinstance(value, dict):
+        out = []
+        for kpi, v in value.items():
+            if _kpis.get(kpi) is None and "." not in str(kpi):
+                raise ConfigError(f"max_regression: unknown KPI {kpi!r}"
+                                  f"{close_matches(str(kpi), _kpis.names())}")
+            out.append((kpi, pct(f"max_regression[{kpi!r}]", v)))
+        return tuple(sorted(out))
+    return pct("max_regression", value)

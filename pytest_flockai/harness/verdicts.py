@@ -1,0 +1,82 @@
+"""One test's verdict: its budgets against its flights, its KPIs against the
+baseline, and the failure message (None when everything holds)."""
+
+from __future__ import annotations
+
+from .. import budgets as _budgets
+from .. import kpis as _kpis
+from .. import report as _report
+from ..errors import ConfigError, close_matches
+
+
+def check(item, st, session) -> str | None:
+    """Evaluate budgets and the baseline into ``st``; return the failure message or None."""
+    st.verdicts, st.regressions, st.problems = [], [], []
+    if st.markers.budgets:
+        _budget_verdicts(item, st)
+    if session.baseline is not None and st.flights:
+        base = session.baseline.get(item.nodeid)
+        if base:
+            limit = session.max_regression
+            reg = st.markers.max_regression
+            if reg is not None and not isinstance(reg, tuple):
+                limit = reg
+            st.regressions = _report.regressions({f.name: f.kpis for f in st.flights}, base,
+                                                 limit, per_kpi=st.markers.per_kpi_regression)
+    parts = list(st.problems)
+    broken = [v for v in st.verdicts if not v.passed]
+    if broken:
+        parts.append(f"pytest-flockai: {len(broken)} of {len(st.verdicts)} KPI budget(s) broken "
+                     f"in {item.nodeid}:\n" + _budgets.table(st.verdicts))
+    if st.regressions:
+        rows = [[r["flight"], r["kpi"], _report.format_kpi(r["kpi"], r["baseline"]),
+                 _report.format_kpi(r["kpi"], r["actual"]), f"{r['change_pct']:+.2f}%",
+                 r["better"]] for r in st.regressions]
+        parts.append(f"pytest-flockai: {len(st.regressions)} KPI regression(s) against baseline "
+                     f"{session.baseline_path} (max {limit_text(session, st)}) in "
+                     f"{item.nodeid}:\n"
+                     + _report.table(["flight", "KPI", "baseline", "actual", "change",
+                                      "better"], rows))
+    return "\n".join(parts) or None
+
+
+def _budget_verdicts(item, st) -> None:
+    fb = st.markers.budgets
+    if not st.flights:
+        st.problems.append(
+            f"pytest-flockai: {item.nodeid} has @pytest.mark.kpi budgets "
+            f"({', '.join(sorted({x.budget.kpi for x in fb}))}) but flew no mission; use "
+            f"the `flight` fixture or call Mission.run() in the test")
+        return
+    names = [f.name for f in st.flights]
+    for x in fb:
+        fname, b = x.flight, x.budget
+        targets = st.flights if fname is None else [f for f in st.flights if f.name == fname]
+        if not targets:
+            st.problems.append(f"pytest-flockai: @pytest.mark.kpi(flight={fname!r}) on "
+                               f"{item.nodeid}: no flight named {fname!r}"
+                               f"{close_matches(fname, names)}; this test flew: "
+                               f"{', '.join(names)}")
+            continue
+        if "." in b.kpi and _kpis.get(b.kpi) is not None:
+            try:   # a custom KPI registered since collection: check its unit now
+                b = _budgets.parse(b.kpi, b.text)
+            except ConfigError as exc:
+                st.problems.append(f"pytest-flockai: {exc}")
+                continue
+        for f in targets:
+            if b.kpi not in f.kpis:
+                st.problems.append(
+                    f"pytest-flockai: budget {b.kpi} {b.text!r}: flight {f.name!r} did "
+                    f"not produce KPI {b.kpi!r}{close_matches(b.kpi, f.kpis)}; it "
+                    f"produced: {', '.join(f.kpis)}")
+                continue
+            st.verdicts.append(b.verdict(f.kpis[b.kpi], flight=f.name))
+
+
+def limit_text(session, st) -> str:
+    m = st.markers.max_regression
+    if isinstance(m, tuple):
+        extra = ", ".join(f"{k} {v:g}%" for k, v in m)
+        return f"{session.max_regression:g}%, {extra}"
+    return f"{(session.max_regression if m is None else m):g}%"
