@@ -96,7 +96,7 @@ def pytest_collection_modifyitems(session, config, items):
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     st = _state(item)
-    with recording(lambda result, mission: st.record(mission, result)):
+    with recording(lambda result, m: st.record(m, result)):
         return (yield)
 
 

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import onnx
 
-from ..errors import ConfigError, FlockAIError
+from ..errors import ConfigError
 
 ELEMENTWISE = frozenset("""
 Add Sub Mul Div Pow Sqrt Exp Log Abs Neg Reciprocal Floor Ceil Round Sign Max Min Sum Mean

@@ -62,48 +62,15 @@ from ..comm.link import link as _link
 from ..compute.latency import (calibrate, compute_seconds, modeled_latency, resolve_device,
                                scale_to_device)
 from ..errors import ConfigError
-from .detections import Detections, parse_detections
-from .evaluation import FrameRecord, classification_kpis, detection_kpis
+from .events import DeviceClock, InferenceEvent
 from .jpeg import JPEG_MACS_PER_PIXEL, annotate, decode_jpeg, encode_jpeg, is_image
-from .metrics import crowd_metrics, percentile, truth_count
+from .metrics import percentile
+from .scoring import Scorer
 from .task import Task
 from .templates import Template
 
 _ZERO_USAGE = (0.0, 0, 0, 0, 0)
 _NO_EVENTS: tuple = ()
-
-
-class DeviceClock:
-    """When a shared on-board computer is next free: the on-board tasks of one
-    drone share one, so one task's inference waits for another's to finish
-    (a frame is dropped only while its own task's model is still busy)."""
-
-    __slots__ = ("free_at",)
-
-    def __init__(self):
-        self.free_at = -math.inf
-
-
-class InferenceEvent:
-    """One inference, as returned by ``TaskRunner.advance``."""
-
-    __slots__ = ("task", "frame_index", "t_capture", "t_start", "t_done", "latency_s",
-                 "compute_s", "prediction", "count", "truth_count", "ok", "error",
-                 "tx_bytes", "rx_bytes", "execution", "alert_sent")
-
-    def __init__(self, **kw):
-        for k in self.__slots__:
-            setattr(self, k, kw.get(k))
-
-    def to_dict(self) -> dict:
-        d = {k: getattr(self, k) for k in self.__slots__ if k != "prediction"}
-        d["kind"] = "inference"
-        return d
-
-    def __repr__(self):
-        state = "ok" if self.ok else f"failed: {self.error}"
-        return (f"InferenceEvent({self.task!r}, frame={self.frame_index}, t={self.t_capture:.3f}, "
-                f"latency={self.latency_s:.4f} s, count={self.count}, {state})")
 
 
 class TaskRunner:
@@ -149,12 +116,8 @@ class TaskRunner:
         self.frames_dropped = 0
         self.inference_failures = 0
         self.events: list[InferenceEvent] = []
-        self._truth: list[float] = []
-        self._pred: list[float] = []
+        self.scorer = Scorer(t)
         self._wall: list[float] = []            # measured mode: host seconds per inference
-        self.records: list[FrameRecord] = []    # scored frames (detection, classification)
-        self._record_of: dict = {}              # frame index -> its FrameRecord
-        self._dets: dict = {}                   # frame index -> parsed Detections
         self.tx_bytes_total = self.rx_bytes_total = 0
         self.tx_packets_total = self.rx_packets_total = 0
         self.retransmissions = 0
@@ -185,14 +148,7 @@ class TaskRunner:
         self._next_frame_t = self._t0 + (k + 1) * task.period_s
         idx = self.frames
         self.frames += 1
-        tc = truth_count(truth)
-        self._truth.append(math.nan if tc is None else tc)
-        self._pred.append(math.nan)
-        if task.evaluate != "count" and hasattr(truth, "objects"):
-            shape = np.shape(frame)
-            self._record_of[idx] = FrameRecord(idx, truth.objects, None, float(drone_pos[2]),
-                                               int(shape[1]) if len(shape) > 1 else 0,
-                                               int(shape[0]) if len(shape) else 0)
+        tc = self.scorer.frame(idx, frame, truth, drone_pos)
         if self._free_at > t + 1e-12:      # this task's model is still busy
             if task.on_busy == "drop":
                 self.frames_dropped += 1
@@ -230,12 +186,9 @@ class TaskRunner:
             ev = pend.pop(0)[2]
             out.append(ev)
             self.events.append(ev)
-            if ev.ok:
-                if ev.count is not None:
-                    self._pred[ev.frame_index] = ev.count
-            else:
+            if not ev.ok:
                 self.inference_failures += 1
-            self._score(ev)
+            self.scorer.finished(ev)
         self._next_done = pend[0][0] if pend else math.inf
         return out
 
@@ -328,25 +281,6 @@ class TaskRunner:
         raw = np.asarray(frame, dtype=np.float64).tobytes()
         return raw, len(raw), 0.0
 
-    def _count(self, pred, idx, frame):
-        """The people count of a prediction; for a detection task, the person
-        detections at the score threshold (the detections are kept for scoring)."""
-        t = self.task
-        if t.evaluate == "detection":
-            dets = parse_detections(
-                pred, np.shape(frame)[:2], n_classes=len(t.classes), where=f"task {t.name!r}",
-                decode=t.decode, score_threshold=t.score_threshold,
-                iou_threshold=t.iou_threshold, input_hw=getattr(t.model, "input_size", None))
-            self._dets[idx] = dets
-            sel = dets.above(t.score_threshold)
-            if "person" in t.classes:
-                return float((sel.cls == t.classes.index("person")).sum())
-            return float(len(sel))
-        try:
-            return t.count(pred)
-        except Exception:
-            return None
-
     def _update(self, model, frame, start: float) -> float:
         if isinstance(model, Template) and model.learns_in_flight:
             try:
@@ -364,7 +298,7 @@ class TaskRunner:
         self._busy_seg(start, compute)
         done = start + compute
         free = done + self._update(task.model, frame, done)
-        count = self._count(pred, idx, frame) if err is None else None
+        count = self.scorer.count(pred, idx, frame) if err is None else None
         tx = 0
         alert = False
         if err is None:
@@ -411,7 +345,7 @@ class TaskRunner:
             if not down.delivered and err is None:
                 err = f"link {self.link.name!r} down at {dist:.0f} m on the downlink"
             if err is None:
-                count = self._count(pred, idx, frame_g)
+                count = self.scorer.count(pred, idx, frame_g)
         ev = InferenceEvent(task=task.name, frame_index=idx, t_capture=t, t_start=start, t_done=done,
                             latency_s=done - t, compute_s=compute, prediction=pred, count=count,
                             truth_count=tc, ok=err is None, error=err, tx_bytes=up.payload_bytes,
@@ -438,50 +372,12 @@ class TaskRunner:
             "inference_failures": float(self.inference_failures),
             "cpu_time_s": self.cpu_time_s(),
         }
-        if self.task.evaluate == "count" and any(not math.isnan(x) for x in self._truth):
-            m = crowd_metrics(self._truth, self._pred, self.task.crowd_threshold)
-            for k in ("count_mae", "detection_precision", "detection_recall",
-                      "detection_delay_frames"):
-                out[k] = m[k]
+        out.update(self.scorer.count_kpis())
         return out
 
     def evaluation(self) -> dict:
-        """The accuracy KPIs of a detection, classification or custom evaluation,
-        computed once at the end of the flight ({} for counting tasks: their
-        accuracy is in ``kpis()``)."""
-        t = self.task
-        if t.evaluate == "count":
-            return {}
-        recs = [self._record_of[k] for k in sorted(self._record_of)
-                if self._record_of[k].prediction is not None
-                or self._record_of[k].detections is not None]
-        if callable(t.evaluate):
-            return {str(k): float(v) for k, v in (t.evaluate(recs) or {}).items()}
-        if t.evaluate == "detection":
-            return detection_kpis(recs, t.classes, score_threshold=t.score_threshold,
-                                  min_visible=t.min_visible)
-        return classification_kpis(recs, t.classes, score_threshold=t.score_threshold,
-                                   min_visible=t.min_visible, where=f"task {t.name!r}")
-
-    def _score(self, ev) -> None:
-        """Parse a finished inference's prediction for its frame's record."""
-        rec = self._record_of.get(ev.frame_index)
-        if rec is None:
-            return
-        t = self.task
-        rec.prediction = ev.prediction if ev.ok else None
-        if t.evaluate == "detection" or (callable(t.evaluate) and t.decode != "auto"):
-            if not ev.ok:
-                rec.detections = Detections.empty()        # a failed inference found nothing
-                return
-            rec.detections = self._dets.pop(ev.frame_index, None)
-            if rec.detections is None:
-                rec.detections = parse_detections(
-                    ev.prediction, (rec.height, rec.width), n_classes=len(t.classes),
-                    where=f"task {t.name!r}", decode=t.decode, score_threshold=t.score_threshold,
-                    iou_threshold=t.iou_threshold, input_hw=getattr(t.model, "input_size", None))
-        elif not ev.ok:
-            rec.prediction = None
+        """The end-of-flight accuracy KPIs (``Scorer.evaluation``)."""
+        return self.scorer.evaluation()
 
     def summary(self) -> dict:
         """More than the KPIs: frames, traffic, crowd encounters, measured-mode spread."""
@@ -491,8 +387,8 @@ class TaskRunner:
                "rx_bytes": self.rx_bytes_total, "rx_packets": self.rx_packets_total,
                "retransmissions": self.retransmissions,
                "in_flight": len(self._pending)}
-        if any(not math.isnan(x) for x in self._truth):
-            m = crowd_metrics(self._truth, self._pred, self.task.crowd_threshold)
+        m = self.scorer.crowd()
+        if m is not None:
             out.update(crowd_encounters=m["crowd_encounters"], crowds_missed=m["crowds_missed"])
         if self._wall:
             w = np.asarray(self._wall)

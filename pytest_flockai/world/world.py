@@ -39,6 +39,7 @@ import numpy as np
 from .. import _check
 from ..errors import ConfigError
 from . import urban as _urban
+from .mjcf import box_occluders, find_people
 from .objects import CAR_BODY, CAR_CABIN, HEAD, PERSON_HEIGHT, TORSO, ObjectTable, _rotate
 
 GROUND_RGBA = (0.45, 0.5, 0.4, 1)
@@ -174,7 +175,7 @@ class World:
         w.path = os.path.abspath(p)
         w.truth_height = 0.0
         if people is None:
-            w.people = _find_people(model)
+            w.people = find_people(model)
         else:
             try:
                 arr = np.asarray(people, dtype=float).reshape(-1, 3)
@@ -185,7 +186,7 @@ class World:
                 raise ConfigError(f"{where}: people has non-finite positions; expected (N, 3) "
                                   f"finite numbers")
             w.people = arr
-        w.occluders = _box_occluders(model)
+        w.occluders = box_occluders(model)
         return w
 
     # -- MuJoCo ------------------------------------------------------------
@@ -379,40 +380,3 @@ def _crowds(crowds, size, where) -> list:
                               f"{_urban.PERSON_AREA_M2:g} m^2 within 2 spreads of the centre)")
         out.append((x, y, count, spread))
     return out
-
-
-def _find_people(model) -> np.ndarray:
-    d = mujoco.MjData(model)
-    mujoco.mj_forward(model, d)
-    pos = []
-    for b in range(1, model.nbody):
-        if (model.body(b).name or "").rsplit("/", 1)[-1].startswith("person"):
-            pos.append(d.xpos[b].copy())
-    if pos:
-        return np.array(pos)
-    groups: dict[str, list] = {}
-    for g in range(model.ngeom):
-        name = model.geom(g).name or ""
-        base = name.rsplit("/", 1)[-1]
-        if base.startswith("person"):
-            groups.setdefault(base.split("_", 1)[0], []).append(d.geom_xpos[g])
-    return np.array([np.mean(v, axis=0) for v in groups.values()]).reshape(-1, 3)
-
-
-def _box_occluders(model) -> np.ndarray:
-    """Axis-aligned (in world) box geoms that are not people: (M, 6) AABBs."""
-    d = mujoco.MjData(model)
-    mujoco.mj_forward(model, d)
-    rows = []
-    for g in range(model.ngeom):
-        if model.geom_type[g] != mujoco.mjtGeom.mjGEOM_BOX:
-            continue
-        if (model.geom(g).name or "").rsplit("/", 1)[-1].startswith("person"):
-            continue
-        R = np.abs(d.geom_xmat[g].reshape(3, 3))
-        if not np.allclose(np.sort(R, axis=0)[-1], 1.0, atol=1e-6):
-            continue   # rotated about a non-principal axis: not an axis-aligned box
-        half = R @ model.geom_size[g]
-        c = d.geom_xpos[g]
-        rows.append([*(c - half), *(c + half)])
-    return np.array(rows, dtype=float).reshape(-1, 6)
