@@ -130,7 +130,7 @@ class Camera(Sensor):
     def __init__(self, width: int = 320, height: int = 240, fov_deg: float = 60.0,
                  pitch_deg: float = -90.0, rate_hz: float = 1.0, *, name: str = "camera",
                  power_w: float = 0.9, world=None, occlusion: bool = True,
-                 mount=(0.0, 0.0, -0.05), body_name: str = "drone"):
+                 mount=(0.0, 0.0, -0.05), body_name: str = "drone", objects: bool = True):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w)
         w = f"Camera {name!r}"
         self.width = _size("width", width, w)
@@ -141,6 +141,7 @@ class Camera(Sensor):
         self.body_name = body_name
         self.world = world
         self.occlusion = bool(occlusion)
+        self.objects = bool(objects)          # per-object truth (boxes, visibility) per frame
         self.lens = CameraModel(self.width, self.height, self.fov_deg)
         self.last_frame = None
         self.last_truth = None
@@ -185,7 +186,7 @@ class Camera(Sensor):
         if self.world is not None:
             self._points = self.world.truth_points()
             self._occ = self.world.occluders if self.occlusion else None
-            self._objects = self.world.objects
+            self._objects = self.world.objects if self.objects else None
         else:
             self._points = people_in_model(model, data)
             self._occ = None
