@@ -31,10 +31,13 @@ class Clocked:
     period_s: float | None = None
     #: simulated time of the next step; the loop steps the component when t >= next_due
     next_due: float = -math.inf
+    #: stepped every control tick without looking at next_due (set from period_s at bind)
+    every_tick: bool = False
 
     def bind(self, run) -> None:
         """Called once before the flight with the run context; resets per-flight state."""
         self.next_due = -math.inf if self.period_s is None else 0.0 - CLOCK_EPS
+        self.every_tick = self.period_s is None
         self._t_next = 0.0
 
     def step(self, t: float) -> None:  # pragma: no cover - interface

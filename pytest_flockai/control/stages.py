@@ -26,6 +26,8 @@ LANDING_OVERSHOOT = 0.5
 class StageMachine(Clocked):
     """Stages of one vehicle. ``accel``: the trajectories' acceleration limit."""
 
+    every_tick = True
+
     def __init__(self, state, pilot, events, data, *, accel: float, climb_speed: float,
                  descent_speed: float, return_home: bool):
         self.st, self.pilot, self.events, self.data = state, pilot, events, data

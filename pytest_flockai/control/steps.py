@@ -16,6 +16,8 @@ from .stages import DONE, STAGES
 class Navigation(Clocked):
     """Flying on estimates: replaces the truth the loop put in ``qc, vc``."""
 
+    every_tick = True
+
     def __init__(self, state, estimator, suite):
         self.st, self.estimator, self.suite = state, estimator, suite
 
@@ -25,6 +27,8 @@ class Navigation(Clocked):
 
 
 class Control(Clocked):
+    every_tick = True
+
     def __init__(self, state, controller, data, n_rotors: int):
         self.st, self.controller, self.ctrl = state, controller, data.ctrl
         self._update = controller.update

@@ -174,6 +174,8 @@ class Meter:
                 self.parts.append(path)
         self.energy = [0.0] * len(self.parts)
         self.top = [p.split(".", 1)[0] for p in self.parts]
+        tops = list(dict.fromkeys(self.top))
+        self._top_idx = [(name, [i for i, t in enumerate(self.top) if t == name]) for name in tops]
         self.last_power = 0.0
 
     def step(self, u: Usage) -> float:
@@ -196,9 +198,14 @@ class Meter:
         return total
 
     def totals_by_top(self) -> dict[str, float]:
-        out: dict[str, float] = {}
-        for name, e in zip(self.top, self.energy):
-            out[name] = out.get(name, 0.0) + e
+        """Energy (J) of each top group ("motors", "proc", "comm", ...)."""
+        e = self.energy
+        out = {}
+        for name, idx in self._top_idx:
+            total = 0.0
+            for i in idx:
+                total += e[i]
+            out[name] = total
         return out
 
     def breakdown(self) -> dict[str, float]:

@@ -9,6 +9,7 @@ up exactly to the flight time, and logs each phase change.
 from __future__ import annotations
 
 import math
+from math import sqrt
 
 from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import LAND, PILOT, TAKEOFF
@@ -31,12 +32,13 @@ class FlightBook(Clocked):
     def __init__(self, state, events, ctrl_dt: float):
         self.st, self.events = state, events
         self.period_s = book_period(ctrl_dt)
+        self.every_tick = self.period_s == ctrl_dt      # then its clock is the tick itself
         self._t_next = 0.0
         self.next_due = -CLOCK_EPS
         self._t_book = 0.0
         self._a = math.exp(-self.period_s / ACCEL_SMOOTHING_S)
         self._acc = 0.0
-        self._pv = (0.0, 0.0, 0.0)
+        self._pvx = self._pvy = self._pvz = 0.0
         self._last = -1
         self.phase_ticks = [0] * len(PHASES)
         self.distance_m = self.max_speed_mps = self.tracking_error_max_m = 0.0
@@ -50,19 +52,18 @@ class FlightBook(Clocked):
         s = self.st
         bdt = t - self._t_book
         self._t_book = t
-        self._t_next += self.period_s
-        self.next_due = self._t_next - CLOCK_EPS
+        if not self.every_tick:
+            self._t_next += self.period_s
+            self.next_due = self._t_next - CLOCK_EPS
         v = s.v
         vx, vy, vz = v[0], v[1], v[2]
         if s.airborne:
             speed = s.speed
+            acc = self._acc
             if bdt > 0.0:
-                pvx, pvy, pvz = self._pv
+                dx, dy, dz = vx - self._pvx, vy - self._pvy, vz - self._pvz
                 a = self._a
-                self._acc = acc = a * self._acc + (1.0 - a) * math.sqrt(
-                    (vx - pvx) ** 2 + (vy - pvy) ** 2 + (vz - pvz) ** 2) / bdt
-            else:
-                acc = self._acc
+                self._acc = acc = a * acc + (1.0 - a) * sqrt(dx * dx + dy * dy + dz * dz) / bdt
             stage = s.stage
             if stage == TAKEOFF:
                 phase = _TAKEOFF
@@ -81,7 +82,7 @@ class FlightBook(Clocked):
             if stage == PILOT:
                 q, sp = s.q, s.sp
                 ex, ey, ez = q[0] - sp[0], q[1] - sp[1], q[2] - sp[2]
-                e = math.sqrt(ex * ex + ey * ey + ez * ez)
+                e = sqrt(ex * ex + ey * ey + ez * ez)
                 if e > self.tracking_error_max_m:
                     self.tracking_error_max_m = e
         else:
@@ -90,4 +91,4 @@ class FlightBook(Clocked):
             self.events.add(t, "phase", phase=PHASES[phase])
             self._last = phase
         s.phase = phase
-        self._pv = (vx, vy, vz)
+        self._pvx, self._pvy, self._pvz = vx, vy, vz

@@ -26,6 +26,12 @@ def fly(run) -> None:
     comps, nsub, step = run.components, run.plan.substeps, mujoco.mj_step
     qpos, qvel, sqrt = d.qpos, d.qvel, math.sqrt
     half_tick = 0.5 * nsub * model.opt.timestep      # a tick advances time by nsub steps
+    # every-tick components run alone in the ticks where no clocked one is due
+    # (one comparison); otherwise every component is looked at, in order
+    ticking = [c.step for c in comps if c.every_tick]
+    clocked = [c for c in comps if not c.every_tick]
+    ordered = [(c, c.step) for c in comps]
+    next_any = min([c.next_due for c in clocked], default=math.inf)
     while True:
         t = d.time
         s.q = q = qpos.tolist()
@@ -39,9 +45,14 @@ def fly(run) -> None:
         s.speed = sqrt(vx * vx + vy * vy + vz * vz)
         s.qc = q                     # the truth, unless a Navigation estimate replaces it
         s.vc = v
-        for c in comps:
-            if t >= c.next_due:
-                c.step(t)
+        if t >= next_any:
+            for c, c_step in ordered:
+                if t >= c.next_due:
+                    c_step(t)
+            next_any = min([c.next_due for c in clocked], default=math.inf)
+        else:
+            for c_step in ticking:
+                c_step(t)
         if s.end_reason is not None:
             break
         step(model, d, nsub)

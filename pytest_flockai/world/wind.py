@@ -82,6 +82,8 @@ class WindStep(Clocked):
     sets MuJoCo's ``opt.wind``, against which MuJoCo applies body drag every
     substep; the vehicle state's ``w`` is the air velocity of this tick."""
 
+    every_tick = True
+
     def __init__(self, wind: Wind, state, model, rng, dt: float):
         self.st = state
         self.sampler = wind.sampler(rng, dt)

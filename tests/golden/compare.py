@@ -1,6 +1,8 @@
 """Compare the KPIs of a ``--flockai-json`` report with a golden file recorded
 before a change: ``python tests/golden/compare.py GOLDEN.json REPORT.json``.
-Prints every flight whose KPIs or end reason differ; exit 1 if any do."""
+Prints every flight whose KPIs or end reason differ; exit 1 if any do. A
+flight found under another name with identical KPIs counts as renamed (the
+naming rule of issue 11), not as a difference; new flights are listed apart."""
 
 import json
 import math
@@ -28,13 +30,22 @@ def same(a, b):
 
 def main(golden, report):
     g, r = flights(golden), flights(report)
-    diffs = 0
+    diffs = renamed = new = 0
     for test in sorted(set(g) | set(r)):
         for name in sorted(set(g.get(test, {})) | set(r.get(test, {}))):
             a, b = g.get(test, {}).get(name), r.get(test, {}).get(name)
-            if a is None or b is None:
-                print(f"{test} [{name}]: only in {'report' if a is None else 'golden'}")
+            if b is None:
+                twin = [n for n, f in r.get(test, {}).items()
+                        if f["kpis"].keys() == a["kpis"].keys()
+                        and all(same(a["kpis"][k], f["kpis"][k]) for k in a["kpis"])]
+                if twin:
+                    renamed += 1
+                    continue
+                print(f"{test} [{name}]: only in golden")
                 diffs += 1
+                continue
+            if a is None:
+                new += 1
                 continue
             keys = set(a["kpis"]) | set(b["kpis"])
             bad = [k for k in sorted(keys) if not same(a["kpis"].get(k), b["kpis"].get(k))]
@@ -42,8 +53,9 @@ def main(golden, report):
                 diffs += 1
                 print(f"{test} [{name}]: " + ", ".join(
                     f"{k} {a['kpis'].get(k)} -> {b['kpis'].get(k)}" for k in bad[:6]))
-    n = sum(len(v) for v in r.values())
-    print(f"{n} flights compared, {diffs} differ")
+    n = sum(len(v) for v in g.values())
+    print(f"{n} golden flights: {diffs} differ, {renamed} renamed with identical KPIs; "
+          f"{new} flights new in the report")
     return 1 if diffs else 0
 
 
