@@ -3,7 +3,7 @@
 remote, camera truth, battery reserve, time limits).
 
 ``python tests/golden/scenarios.py`` records their KPIs, end reasons and event
-counts into ``tests/golden/kpis.json``; ``tests/test_golden.py`` flies them again
+counts into ``tests/golden/golden.json``; ``tests/test_golden.py`` flies them again
 and compares. The file was recorded before the flight loop was reshaped into
 clocked components (issue 11), so it proves that reshaping did not move
 behaviour. Re-record only for an intended change of behaviour, and say why in
@@ -21,7 +21,7 @@ import numpy as np
 import pytest_flockai as fa
 
 HERE = Path(__file__).resolve().parent
-GOLDEN = HERE / "kpis.json"
+GOLDEN = HERE / "golden.json"
 
 
 def _bright(frame):
