@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import math
 
+import math
+
 from hypothesis import strategies as st
 from hypothesis import target as _target
 from hypothesis.control import currently_in_test_context
@@ -31,6 +33,7 @@ from . import budgets as _budgets
 from .airframe.drone import G, drone as _drone
 from .control import pilots as _pilots
 from .mission import Mission
+from .sensors.conditions import Conditions
 from .world.wind import Wind
 
 
@@ -54,6 +57,20 @@ def wind_from(speed_mps: float, heading_rad: float = 0.0, gust_fraction: float =
     of ``gust_fraction`` x the speed. Named so failing examples read well."""
     return Wind((speed_mps * math.cos(heading_rad), speed_mps * math.sin(heading_rad), vertical_mps),
                 gust_std=gust_fraction * speed_mps)
+
+
+def conditions(*, max_exposure_s: float = 1 / 15, min_visibility_m: float = 20.0,
+               min_sun_elevation_deg: float = 2.0, noise: bool = True) -> st.SearchStrategy[Conditions]:
+    """Imaging conditions: shutter, sun elevation and haze; each shrinks towards the
+    ideal camera (no blur, overhead sun, clear air), so a failure hypothesis finds
+    shrinks to its simplest cause."""
+    clear = st.just(math.inf)
+    hazy = st.floats(min_visibility_m, 2000.0, allow_nan=False)
+    return st.builds(Conditions,
+                     exposure_s=st.one_of(st.just(0.0), st.floats(1 / 4000, max_exposure_s)),
+                     sun_elevation_deg=st.one_of(st.just(60.0),
+                                                 st.floats(min_sun_elevation_deg, 90.0)),
+                     visibility_m=st.one_of(clear, hazy), noise=st.just(noise))
 
 
 def batteries(min_mah: float = 1000.0, max_mah: float = 6000.0) -> st.SearchStrategy[float]:

@@ -10,7 +10,7 @@ import pytest
 from pycocotools.coco import COCO
 
 import pytest_flockai as fa
-from pytest_flockai.sensors.camera import render_views
+from pytest_flockai.sensors.views import render_views
 from pytest_flockai.world.objects import CAR_BOXES, HEAD_RADIUS, PERSON_HEIGHT, PERSON_RADIUS
 from pytest_flockai.world.truth import CLASSES, gimbal_pose
 

@@ -57,7 +57,7 @@ def sensor_suite(plan: FlightPlan) -> SensorSuite:
     if drone.camera is not None and "camera" not in names and (
             "camera" in drone.sensors or plan.dataset_dir is not None
             or any(tk.sensor == "camera" for tk in plan.tasks)):
-        chosen.append(Camera.from_blueprint(drone))
+        chosen.append(Camera.from_blueprint(drone, conditions=plan.conditions))
     return SensorSuite(chosen)
 
 

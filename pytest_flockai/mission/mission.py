@@ -22,6 +22,7 @@ from ..errors import ConfigError, SimulationError
 from ..probes.hub import resolve_probes
 from ..recording import publish
 from ..result import FlightResult
+from ..sensors import Conditions
 from ..world.wind import Wind
 from . import loop, result
 from .assemble import Run
@@ -44,7 +45,7 @@ class Mission:
                  energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
                  dataset_dir=None, dataset_period_s: float = 1.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None,
-                 components=()):
+                 components=(), conditions: Conditions | None = None):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
         if not isinstance(pilot, Pilot):
@@ -73,6 +74,10 @@ class Mission:
         self.fly_on = _check.choice("fly_on", fly_on, ("truth", "estimate"), where="Mission")
         self.dataset_dir = dataset_dir
         self.dataset_period_s = _check.positive("dataset_period_s", dataset_period_s, where="Mission")
+        if conditions is not None and not isinstance(conditions, Conditions):
+            raise ConfigError(f"Mission: conditions = {conditions!r} is not allowed; expected "
+                              f"fa.Conditions(...) or None")
+        self.conditions = conditions
         resolve(self)
 
     def subscribe(self, target) -> "Mission":
@@ -94,6 +99,7 @@ class Mission:
             "sensors": [sn.name for sn in self.drone.extra_sensors + self.sensors],
             "fly_on": self.fly_on,
             **({"components": [c.to_dict() for c in self.components]} if self.components else {}),
+            **({"conditions": self.conditions.to_dict()} if self.conditions is not None else {}),
         }
 
     def __repr__(self):

@@ -62,6 +62,7 @@ class FlightPlan:
     dataset_dir: object
     dataset_period_s: float
     onboard_device: object    # compute.Device or None
+    conditions: object = None  # sensors.Conditions for the blueprint's camera
 
     @property
     def use_reserve(self) -> bool:
@@ -172,4 +173,4 @@ def resolve(m) -> FlightPlan:
         ctrl_dt=physics_dt * substeps, telemetry_hz=m.telemetry_hz, energy_hz=m.energy_hz,
         climb_speed=m.climb_speed, descent_speed=m.descent_speed, return_home=m.return_home,
         fly_on=m.fly_on, dataset_dir=m.dataset_dir, dataset_period_s=m.dataset_period_s,
-        onboard_device=onboard_device(tasks, drone))
+        onboard_device=onboard_device(tasks, drone), conditions=m.conditions)

@@ -38,6 +38,7 @@ from .. import _check
 from ..errors import ConfigError
 from ..world.truth import CameraModel, Truth, gimbal_pose
 from . import _gl
+from .conditions import Conditions, apply as apply_conditions, blur_vector
 from .base import DroneBody, Sensor
 
 NEAR_M = 0.05       # near clipping plane
@@ -71,9 +72,20 @@ class FrameRenderer:
         self._cam.type = mujoco.mjtCamera.mjCAMERA_FREE
         self._rect = mujoco.MjrRect(0, 0, width, height)
         self._buf = np.empty((height, width, 3), dtype=np.uint8)
+        self._depth = np.empty((height, width), dtype=np.float32)
+        yy, xx = np.mgrid[0:height, 0:width].astype(np.float32)
+        self._ray = None if width == 0 else (xx - width / 2 + 0.5, yy - height / 2 + 0.5)
+
+    def distance(self, fov_deg: float) -> np.ndarray:
+        """(H, W) metres from the camera to what each pixel of the last render shows."""
+        d = self._depth[::-1]
+        z = NEAR_M / (1.0 - d * (1.0 - NEAR_M / FAR_M))            # along the optical axis
+        f = 0.5 * self.height / math.tan(math.radians(fov_deg) / 2.0)
+        xx, yy = self._ray
+        return z * np.sqrt(1.0 + (xx / f) ** 2 + (yy / f) ** 2)
 
     def render(self, data, cam_pos, cam_mat, fov_deg: float, *,
-               catmask=mujoco.mjtCatBit.mjCAT_STATIC) -> np.ndarray:
+               catmask=mujoco.mjtCatBit.mjCAT_STATIC, depth: bool = False) -> np.ndarray:
         self._ctx.make_current()
         scn = self.scene
         mujoco.mjv_updateScene(self.model, data, self.option, None, self._cam, int(catmask), scn)
@@ -92,7 +104,7 @@ class FrameRenderer:
             c.frustum_far = FAR_M
             c.orthographic = 0
         mujoco.mjr_render(self._rect, scn, self._con)
-        mujoco.mjr_readPixels(self._buf, None, self._rect, self._con)
+        mujoco.mjr_readPixels(self._buf, self._depth if depth else None, self._rect, self._con)
         return self._buf[::-1].copy()       # OpenGL rows start at the bottom
 
     def close(self):
@@ -130,7 +142,8 @@ class Camera(Sensor):
     def __init__(self, width: int = 320, height: int = 240, fov_deg: float = 60.0,
                  pitch_deg: float = -90.0, rate_hz: float = 1.0, *, name: str = "camera",
                  power_w: float = 0.9, world=None, occlusion: bool = True,
-                 mount=(0.0, 0.0, -0.05), body_name: str = "drone", objects: bool = True):
+                 mount=(0.0, 0.0, -0.05), body_name: str = "drone", objects: bool = True,
+                 conditions: Conditions | None = None):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w)
         w = f"Camera {name!r}"
         self.width = _size("width", width, w)
@@ -142,6 +155,10 @@ class Camera(Sensor):
         self.world = world
         self.occlusion = bool(occlusion)
         self.objects = bool(objects)          # per-object truth (boxes, visibility) per frame
+        if conditions is not None and not isinstance(conditions, Conditions):
+            raise ConfigError(f"{w}: conditions = {conditions!r} is not allowed; expected "
+                              f"fa.Conditions(...) or None")
+        self.conditions = conditions
         self.lens = CameraModel(self.width, self.height, self.fov_deg)
         self.last_frame = None
         self.last_truth = None
@@ -218,6 +235,10 @@ class Camera(Sensor):
         cam_pos, cam_mat = self.pose(data)
         frame = self.render_pose(data, cam_pos, cam_mat)
         self.last_truth = self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ, self._objects)
+        if self.conditions is not None:
+            b = self.body.id
+            w_world = data.xmat[b].reshape(3, 3) @ data.qvel[3:6]     # free joint: body rates
+            frame = self._condition(frame, cam_pos, cam_mat, data.qvel[:3], float(w_world[2]))
         self.last_frame, self.last_t = frame, float(t)
         self.frames += 1
         return frame
@@ -225,7 +246,19 @@ class Camera(Sensor):
     def render_pose(self, data, cam_pos, cam_mat) -> np.ndarray:
         if self._renderer is None:
             self._renderer = FrameRenderer(self.model, self.width, self.height)
-        return self._renderer.render(data, cam_pos, cam_mat, self.fov_deg)
+        depth = self.conditions is not None and self.conditions.needs_depth
+        return self._renderer.render(data, cam_pos, cam_mat, self.fov_deg, depth=depth)
+
+    def _condition(self, frame, cam_pos, cam_mat, velocity, yaw_rate) -> np.ndarray:
+        """Light, haze, motion blur, exposure and noise (``sensors.conditions``)."""
+        c = self.conditions
+        dist = self._renderer.distance(self.fov_deg) if c.needs_depth else None
+        centre = (float(dist[self.height // 2, self.width // 2]) if dist is not None
+                  else ground_distance(cam_pos, cam_mat))
+        blur = blur_vector(cam_pos, cam_mat, velocity, yaw_rate, c.exposure_s, self.lens.focal_px,
+                           centre, math.radians(c.gimbal_jitter_dps))
+        self.last_truth.blur_px = blur
+        return apply_conditions(frame, c, self.rng, distance=dist, blur=blur)
 
     def close(self):
         if self._renderer is not None:
@@ -241,6 +274,13 @@ class Camera(Sensor):
                 f"pitch_deg={self.pitch_deg:g}, rate_hz={self.rate_hz:g})")
 
 
+def ground_distance(cam_pos, cam_mat) -> float:
+    """Distance along the optical axis to the ground plane (z = 0), or the height."""
+    axis = -np.asarray(cam_mat, dtype=float).reshape(3, 3)[:, 2]
+    down = -axis[2]
+    return float(cam_pos[2] / down) if down > 1e-3 else float(cam_pos[2])
+
+
 def people_in_model(model, data) -> np.ndarray:
     """People of a compiled model by name: geoms ``person*`` grouped up to the first ``_``."""
     groups: dict[str, list] = {}
@@ -249,57 +289,3 @@ def people_in_model(model, data) -> np.ndarray:
         if base.startswith("person"):
             groups.setdefault(base.split("_", 1)[0], []).append(data.geom_xpos[g].copy())
     return np.array([np.mean(v, axis=0) for v in groups.values()]).reshape(-1, 3)
-
-
-def _camera_params(camera_params) -> Camera:
-    if isinstance(camera_params, Camera):
-        return camera_params
-    if isinstance(camera_params, dict):
-        return Camera(**camera_params)
-    if camera_params is None:
-        return Camera()
-    return Camera.from_blueprint(camera_params)
-
-
-def render_views(world, poses, camera_params=None) -> list:
-    """Render a World from camera poses, without a drone or a mission: [(frame, truth)].
-
-    poses: (x, y, z) or (x, y, z, yaw) rows (yaw in rad, 0 = the image top
-    points east when looking down); camera_params: a Camera, a dict of its
-    arguments, a blueprint camera section, or None (320x240, 60 deg, -90 deg).
-    Useful to build training data: frames and ground truth from the same
-    renderer the missions use.
-    """
-    cam = _camera_params(camera_params)
-    rows = []
-    for i, p in enumerate(poses):
-        try:
-            vals = [float(v) for v in p]
-        except (TypeError, ValueError):
-            raise ConfigError(f"render_views: poses[{i}] = {p!r} is not allowed; expected "
-                              f"(x, y, z) or (x, y, z, yaw)") from None
-        if len(vals) not in (3, 4) or not all(math.isfinite(v) for v in vals):
-            raise ConfigError(f"render_views: poses[{i}] = {p!r} is not allowed; expected "
-                              f"(x, y, z) or (x, y, z, yaw) finite numbers")
-        rows.append(vals + [0.0] * (4 - len(vals)))
-    spec = mujoco.MjSpec()
-    spec.modelname = "flockai_views"
-    world.add_to_spec(spec)
-    vg = spec.visual.global_
-    vg.offwidth = max(int(vg.offwidth), cam.width)
-    vg.offheight = max(int(vg.offheight), cam.height)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    points = world.truth_points()
-    occ = world.occluders if cam.occlusion else None
-    renderer = FrameRenderer(model, cam.width, cam.height)
-    try:
-        out = []
-        for x, y, z, yaw in rows:
-            cam_pos, cam_mat = gimbal_pose((x, y, z), yaw, cam.pitch_deg)
-            frame = renderer.render(data, cam_pos, cam_mat, cam.fov_deg)
-            out.append((frame, cam.lens.truth(0.0, points, cam_pos, cam_mat, occ, world.objects)))
-        return out
-    finally:
-        renderer.close()

@@ -163,6 +163,8 @@ class Truth:
     cam_pos: np.ndarray = field(default_factory=lambda: np.zeros(3))
     cam_mat: np.ndarray = field(default_factory=lambda: np.eye(3))
     objects: Objects = field(default_factory=Objects)
+    #: (du, dv) pixels of motion blur in this frame (imaging conditions), (0, 0) without
+    blur_px: tuple = (0.0, 0.0)
 
     @property
     def count(self) -> int:

@@ -1,0 +1,125 @@
+"""Frames of a world from given camera poses, without a drone or a mission.
+
+``render_views(world, poses, camera)`` renders each pose once and returns
+``[(frame, truth)]``: training data, or a fixed scene for a test.
+``ViewSet(world, poses, camera)`` keeps the renders (and their depth) so that
+the same views can be seen under many imaging conditions cheaply:
+``views.under(fa.Conditions(...), velocity=(12, 0, 0))`` only re-applies light,
+haze, blur and noise (numpy and OpenCV, no rendering), which is what a
+hypothesis search over conditions needs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from ..errors import ConfigError
+from ..world.truth import gimbal_pose
+from .camera import Camera, FrameRenderer, ground_distance
+from .conditions import Conditions, apply as apply_conditions, blur_vector
+
+
+def _camera_params(camera_params) -> Camera:
+    if isinstance(camera_params, Camera):
+        return camera_params
+    if isinstance(camera_params, dict):
+        return Camera(**camera_params)
+    if camera_params is None:
+        return Camera()
+    return Camera.from_blueprint(camera_params)
+
+
+def _poses(poses) -> list:
+    rows = []
+    for i, p in enumerate(poses):
+        try:
+            vals = [float(v) for v in p]
+        except (TypeError, ValueError):
+            raise ConfigError(f"render_views: poses[{i}] = {p!r} is not allowed; expected "
+                              f"(x, y, z) or (x, y, z, yaw)") from None
+        if len(vals) not in (3, 4) or not all(math.isfinite(v) for v in vals):
+            raise ConfigError(f"render_views: poses[{i}] = {p!r} is not allowed; expected "
+                              f"(x, y, z) or (x, y, z, yaw) finite numbers")
+        rows.append(vals + [0.0] * (4 - len(vals)))
+    return rows
+
+
+class ViewSet:
+    """Renders of ``world`` from ``poses`` ((x, y, z) or (x, y, z, yaw) rows; yaw in
+    rad, 0 = the image top points east when looking down), with their truth and
+    depth; ``camera``: a Camera, a dict of its arguments, a blueprint camera
+    section, or None (320x240, 60 deg, straight down)."""
+
+    def __init__(self, world, poses, camera=None, *, depth: bool = True):
+        cam = self.camera = _camera_params(camera)
+        rows = _poses(poses)
+        spec = mujoco.MjSpec()
+        spec.modelname = "flockai_views"
+        world.add_to_spec(spec)
+        vg = spec.visual.global_
+        vg.offwidth = max(int(vg.offwidth), cam.width)
+        vg.offheight = max(int(vg.offheight), cam.height)
+        model = spec.compile()
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        points = world.truth_points()
+        occ = world.occluders if cam.occlusion else None
+        objects = world.objects if cam.objects else None
+        renderer = FrameRenderer(model, cam.width, cam.height)
+        self.frames, self.truths, self.poses, self.distances = [], [], [], []
+        try:
+            for x, y, z, yaw in rows:
+                cam_pos, cam_mat = gimbal_pose((x, y, z), yaw, cam.pitch_deg)
+                self.frames.append(renderer.render(data, cam_pos, cam_mat, cam.fov_deg, depth=depth))
+                self.distances.append(renderer.distance(cam.fov_deg).astype(np.float32)
+                                      if depth else None)
+                self.truths.append(cam.lens.truth(0.0, points, cam_pos, cam_mat, occ, objects))
+                self.poses.append((cam_pos, cam_mat))
+        finally:
+            renderer.close()
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def ideal(self) -> list:
+        """[(frame, truth)] as rendered."""
+        return list(zip(self.frames, self.truths))
+
+    def under(self, conditions: Conditions, *, velocity=(0.0, 0.0, 0.0), seed: int = 0) -> list:
+        """[(frame, truth)] under ``conditions``, the camera moving at ``velocity``
+        (m/s, world frame) during its exposure; ``seed``: the sensor noise."""
+        if not isinstance(conditions, Conditions):
+            raise ConfigError(f"ViewSet.under: conditions = {conditions!r} is not a fa.Conditions")
+        rng = np.random.default_rng(seed)
+        cam, out = self.camera, []
+        for frame, truth, (pos, mat), dist in zip(self.frames, self.truths, self.poses,
+                                                  self.distances):
+            if conditions.needs_depth and dist is None:
+                raise ConfigError("ViewSet.under: haze needs depth; build the ViewSet with depth=True")
+            centre = (float(dist[cam.height // 2, cam.width // 2]) if dist is not None
+                      else ground_distance(pos, mat))
+            blur = blur_vector(pos, mat, velocity, 0.0, conditions.exposure_s, cam.lens.focal_px,
+                               centre)
+            t = type(truth)(**{**truth.__dict__, "blur_px": blur})
+            out.append((apply_conditions(frame, conditions, rng, distance=dist, blur=blur), t))
+        return out
+
+
+def render_views(world, poses, camera_params=None, *, conditions=None, velocity=(0.0, 0.0, 0.0),
+                 seed: int = 0) -> list:
+    """Render a World from camera poses, without a drone or a mission: [(frame, truth)].
+
+    Useful to build training data: frames and ground truth from the same
+    renderer the missions use. conditions: ``fa.Conditions`` applied to each
+    frame as if the camera moved at ``velocity`` (m/s, world frame) during its
+    exposure; ``seed``: its noise. To see the same views under many
+    conditions, build a ``ViewSet`` once.
+    """
+    views = ViewSet(world, poses, camera_params,
+                    depth=conditions is not None and conditions.needs_depth)
+    if conditions is None:
+        return views.ideal()
+    return views.under(conditions, velocity=velocity, seed=seed)
