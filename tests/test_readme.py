@@ -47,3 +47,10 @@ def test_the_readme_hypothesis_example_fails_on_a_short_battery(readme_namespace
     body(wind=fa.Wind((2.0, 0.0, 0.0)), mah=4500)
     with pytest.raises(AssertionError, match="endurance_s"):
         body(wind=fa.Wind((2.0, 0.0, 0.0)), mah=3000)
+
+
+def test_the_readme_robustness_search_finds_the_haze(readme_namespace):
+    """The README's hypothesis search over imaging conditions breaks the 0.5 recall
+    budget (the shipped detector fails in haze) and reports the shrunk example."""
+    with pytest.raises(AssertionError, match="recall"):
+        readme_namespace["test_detector_recall_holds"]()
