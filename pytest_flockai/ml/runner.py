@@ -1,8 +1,4 @@
-"""The task runner: one ML task executed on the simulated clock.
-
-A ``Task`` says what runs: a model, on which sensor, how often, where
-(on board the drone or remotely on the ground station over a radio link).
-A ``TaskRunner`` executes one task during a mission. The mission loop drives
+"""The task runner: one ML task (``ml.task.Task``) executed during a mission. The mission loop drives
 it (all times are simulated seconds)::
 
     runner = TaskRunner(task)
