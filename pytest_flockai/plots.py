@@ -4,11 +4,17 @@
   share of motors, processing and communication, and each group's sub-components.
 - ``path_figure``: the flight path seen from above, coloured by flight phase,
   over the world's people, with the ML detections when there are any.
+- ``save_envelope``: a KPI mapped over altitude x speed (``ml.envelope``) as CSV
+  and, with matplotlib, as a heat map.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+
+import numpy as np
+
+from ._io import atomic_write
 
 
 def available() -> bool:
@@ -102,3 +108,28 @@ def path_figure(result, path) -> Path:
     fig.savefig(p, dpi=110)
     plt.close(fig)
     return p
+
+
+def save_envelope(df, path, kpi: str = "recall") -> list[Path]:
+    """Write an envelope (``ml.envelope.envelope``) as ``<path>.csv`` (atomically) and,
+    when matplotlib is installed, a heat map of ``kpi`` as ``<path>.png``."""
+    path = Path(path)
+    written = [atomic_write(path.with_suffix(".csv"), lambda fh: df.to_csv(fh, index=False))]
+    if not available():
+        return written
+    plt = _plt()
+    grid = df.pivot(index="altitude_m", columns="speed_mps", values=kpi)
+    fig, ax = plt.subplots(figsize=(5, 3.6))
+    im = ax.imshow(grid.to_numpy(), origin="lower", vmin=0, vmax=1, cmap="viridis", aspect="auto")
+    ax.set_xticks(range(len(grid.columns)), [f"{c:g}" for c in grid.columns])
+    ax.set_yticks(range(len(grid.index)), [f"{i:g}" for i in grid.index])
+    ax.set_xlabel("speed during the exposure (m/s)")
+    ax.set_ylabel("altitude (m)")
+    for (i, j), v in np.ndenumerate(grid.to_numpy()):
+        ax.text(j, i, f"{v:.2f}", ha="center", va="center", color="w", fontsize=8)
+    fig.colorbar(im, label=kpi)
+    fig.tight_layout()
+    png = path.with_suffix(".png")
+    fig.savefig(png, dpi=100)
+    plt.close(fig)
+    return written + [png]

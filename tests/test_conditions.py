@@ -165,3 +165,18 @@ def test_hypothesis_finds_and_shrinks_a_failing_condition(pytester):
     assert ("Falsifying example" in out or "Failing test case" in out) and "cond=Conditions(" in out
     assert "exposure_s=0.0," not in out or "visibility_m=inf" not in out   # not the ideal camera
     assert "recall" in out and "BROKEN" in out
+
+
+def test_altitude_band_and_the_envelope_files(tmp_path):
+    import pandas as pd
+    from pytest_flockai import plots
+    from pytest_flockai.ml.envelope import altitude_band
+    df = pd.DataFrame({"altitude_m": [15, 25, 35, 50] * 2, "speed_mps": [0] * 4 + [16] * 4,
+                       "recall": [0.4, 0.9, 0.8, 0.75, 0.2, 0.72, 0.5, 0.71]})
+    assert altitude_band(df, "recall", 0.7, speed_mps=0) == (25.0, 50.0)
+    assert altitude_band(df, "recall", 0.7, speed_mps=16) == (25.0, 25.0)
+    assert altitude_band(df, "recall", 0.95, speed_mps=0) != altitude_band(df, "recall", 0.95,
+                                                                           speed_mps=0)  # NaN
+    written = plots.save_envelope(df, tmp_path / "env")
+    assert written[0].read_text().splitlines()[0] == "altitude_m,speed_mps,recall"
+    assert all(p.exists() for p in written) and len(written) == 2     # matplotlib: the picture
