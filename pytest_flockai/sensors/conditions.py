@@ -7,7 +7,8 @@ light reaches the sensor:
 - **light** (``sun_elevation_deg``): the sun's elevation sets the scene's
   irradiance, ``sin(elevation)`` of the overhead sun's for direct light plus a
   diffuse sky share (``SKY_SHARE``), so dusk (a few degrees) is several times
-  darker than noon; the rendered sun comes from that elevation too;
+  darker than noon (brightness only: the rendered sun keeps its direction and
+  casts no shadows);
 - **haze** (``visibility_m``): Koschmieder's law, extinction ``3.912 / V`` for a
   meteorological visibility V (the distance at which contrast falls to 2 %):
   each pixel is attenuated by ``exp(-beta d)`` over its distance ``d`` from the
@@ -96,11 +97,6 @@ class Conditions:
     @property
     def needs_depth(self) -> bool:
         return self.extinction_per_m > 0.0
-
-    def sun_direction(self, azimuth_deg: float = 210.0) -> tuple:
-        """The direction the sunlight travels (towards the ground), world frame."""
-        el, az = math.radians(max(self.sun_elevation_deg, 1.0)), math.radians(azimuth_deg)
-        return (-math.cos(el) * math.cos(az), -math.cos(el) * math.sin(az), -math.sin(el))
 
     def to_dict(self) -> dict:
         return {k: (None if isinstance(v, float) and math.isinf(v) else v)
