@@ -155,3 +155,25 @@ def test_the_users_pilot_is_not_mutated_by_a_flight():
     before = dict(vars(pilot))
     fa.Mission(fa.drone("dji-mavic-2-pro"), pilot).run()
     assert vars(pilot) == before
+
+
+def test_a_users_camera_sees_each_flights_own_world():
+    """A camera added to the drone without a world of its own takes the world of
+    each flight; it used to keep the first flight's world for every later one."""
+    cam = fa.sensors.Camera(name="eye")
+    d = fa.drone("dji-mavic-2-pro")
+    d.add_sensor(cam)
+    seen = []
+
+    def model(frame):
+        seen.append(len(cam.last_truth.objects))
+        return 0.0
+    task = fa.Task(fa.ml.PythonModel(model, macs=1), sensor="eye", period_s=1.0)
+    crowd = fa.World.scene(people=[(x, y) for x in range(-4, 5, 2) for y in range(-4, 5, 2)])
+    fa.Mission(d, fa.pilots.Waypoints([(0, 0, 15)], speed=2), world=crowd, tasks=[task]).run()
+    assert max(seen) == 25
+    seen.clear()
+    fa.Mission(d, fa.pilots.Waypoints([(0, 0, 15)], speed=2), world=fa.World.scene(),
+               tasks=[task]).run()
+    assert seen and max(seen) == 0
+    assert cam.world is None

@@ -181,12 +181,12 @@ class SensorSuite:
         """Bind every sensor; seed: the mission's sensors SeedSequence (or int / Generator).
 
         Each sensor gets its own Generator, keyed by its name. ``world`` is
-        handed to sensors that have a ``world`` attribute still None (cameras,
-        for their ground truth).
+        handed to sensors with a ``bind_world`` method (cameras, for their ground
+        truth) for this flight only; nothing is assigned onto a sensor's own ``world``.
         """
         for s in self.sensors:
-            if world is not None and hasattr(s, "world") and s.world is None:
-                s.world = world
+            if hasattr(s, "bind_world"):
+                s.bind_world(world)           # this flight's world, unless the sensor has its own
             s.bind(model, data, np.random.default_rng(_child_seed(seed, s.name)))
             if battery is not None and hasattr(s, "bind_battery"):
                 s.bind_battery(battery)

@@ -152,7 +152,8 @@ class Camera(Sensor):
         self.pitch_deg = _check.number("pitch_deg", pitch_deg, where=w, minimum=-90.0, maximum=90.0)
         self.mount = np.array(_check.vector("mount", mount, 3, where=w))
         self.body_name = body_name
-        self.world = world
+        self.world = world                     # yours; else each flight's (bind_world)
+        self._flight_world = None
         self.occlusion = bool(occlusion)
         self.objects = bool(objects)          # per-object truth (boxes, visibility) per frame
         if conditions is not None and not isinstance(conditions, Conditions):
@@ -200,10 +201,11 @@ class Camera(Sensor):
     def bind(self, model, data, rng):
         super().bind(model, data, rng)
         self.body = DroneBody(model, self.body_name, f"Camera {self.name!r}")
-        if self.world is not None:
-            self._points = self.world.truth_points()
-            self._occ = self.world.occluders if self.occlusion else None
-            self._objects = self.world.objects if self.objects else None
+        world = self.world if self.world is not None else self._flight_world
+        if world is not None:
+            self._points = world.truth_points()
+            self._occ = world.occluders if self.occlusion else None
+            self._objects = world.objects if self.objects else None
         else:
             self._points = people_in_model(model, data)
             self._occ = None
@@ -213,6 +215,10 @@ class Camera(Sensor):
             self._renderer = None
         self.last_frame = self.last_truth = self.last_t = None
         self.frames = 0
+
+    def bind_world(self, world) -> None:
+        """Per flight: the world flown in, used when the camera has no world of its own."""
+        self._flight_world = world
 
     # -- pose and truth (no GL) ---------------------------------------------------
     def pose(self, data) -> tuple[np.ndarray, np.ndarray]:
