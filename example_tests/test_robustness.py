@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 
 import pytest_flockai as fa
-from pytest_flockai import plots
+import scenarios
+from pytest_flockai import plots, report
 from pytest_flockai import strategies as fst
 from pytest_flockai.budgets import check
 from pytest_flockai.ml.envelope import altitude_band, envelope
@@ -61,3 +62,32 @@ def test_a_tight_recall_budget_breaks_in_haze(fixed_views, det_model):
         recall_holds()
     assert "visibility_m" in str(exc.value) or "visibility_m" in "".join(
         getattr(exc.value, "__notes__", []))
+
+
+@pytest.fixture(scope="session")
+def haze_model():
+    """fixtures/models/detector_haze.onnx: the same recipe with imaging-condition
+    augmentation (make_detector.py train --haze-prob 0.5)."""
+    return fa.ml.OnnxModel(scenarios.MODELS / "detector_haze.onnx", name="detector_haze")
+
+
+def _kpis(model, frames):
+    recs = [FrameRecord(i, t.objects, fa.ml.parse_detections(
+                model(f), f.shape[:2], n_classes=2, where="det", score_threshold=0.05,
+                input_hw=model.input_size), 25.0, 320, 240) for i, (f, t) in enumerate(frames)]
+    return detection_kpis(recs, ("person", "vehicle"), score_threshold=0.4, min_visible=0.25)
+
+
+def test_the_haze_augmented_detector_holds_in_haze_and_the_gate_shows_its_cost(
+        fixed_views, det_model, haze_model):
+    """In 300 m haze the shipped detector finds almost nothing and the augmented one
+    keeps its recall budget; in clear air the augmented one is worse by more than
+    the 5 % a baseline gate allows, so the gate catches the trade-off."""
+    hazy = fixed_views.under(fa.Conditions(visibility_m=300.0), seed=1)
+    with pytest.raises(AssertionError, match="recall"):
+        check(_kpis(det_model, hazy), recall=">= 0.5")
+    check(_kpis(haze_model, hazy), recall=">= 0.5")
+    clear = {"flight": _kpis(haze_model, fixed_views.ideal())}
+    shipped = {"flight": _kpis(det_model, fixed_views.ideal())}
+    regressed = {r["kpi"] for r in report.regressions(clear, shipped, 5.0)}
+    assert "recall" in regressed
