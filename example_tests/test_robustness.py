@@ -91,3 +91,36 @@ def test_the_haze_augmented_detector_holds_in_haze_and_the_gate_shows_its_cost(
     shipped = {"flight": _kpis(det_model, fixed_views.ideal())}
     regressed = {r["kpi"] for r in report.regressions(clear, shipped, 5.0)}
     assert "recall" in regressed
+
+
+def test_detector_envelope_over_weather_shadows_and_rolling_shutter(fixed_views, det_model,
+                                                                     tmp_path_factory):
+    """The shipped detector (trained on clear, shadowless, global-shutter renders)
+    against the flight's other conditions, written as a table: snow at any
+    severity keeps recall >= 0.65; rain breaks it from severity 2 and water on the
+    lens from severity 3; a low sun's shadows break it (each figure gets a dark
+    twin), while its direction alone costs little; a 60 ms rolling-shutter readout
+    at 16 m/s costs at most 0.1."""
+    rows = []
+    for weather in ("rain", "snow", "spatter"):
+        for sev in range(1, 6):
+            k = _kpis(det_model, fixed_views.under(fa.Conditions(weather=weather, severity=sev),
+                                                   seed=1))
+            rows.append((weather, sev, k["recall"]))
+    recall = {(w, s): r for w, s, r in rows}
+    out = os.environ.get("FLOCKAI_ENVELOPE_DIR") or tmp_path_factory.mktemp("weather")
+    with open(os.path.join(out, "detector-weather.csv"), "w") as f:
+        f.write("weather,severity,recall\n" + "".join(f"{w},{s},{r:.3f}\n" for w, s, r in rows))
+    assert min(recall["snow", s] for s in range(1, 6)) >= 0.65
+    assert recall["rain", 1] >= 0.55 and max(recall["rain", s] for s in range(2, 6)) < 0.4
+    assert min(recall["spatter", s] for s in (1, 2)) >= 0.7
+    assert max(recall["spatter", s] for s in range(3, 6)) < 0.4
+    low_sun = dict(sun_azimuth_deg=250.0, sun_elevation_deg=25.0)
+    lit = _kpis(det_model, fixed_views.under(fa.Conditions(**low_sun), seed=1))["recall"]
+    shaded = _kpis(det_model, fixed_views.under(fa.Conditions(**low_sun, shadows=True),
+                                                 seed=1))["recall"]
+    assert lit >= 0.6 and shaded < 0.4
+    ideal = _kpis(det_model, fixed_views.ideal())["recall"]
+    skewed = _kpis(det_model, fixed_views.under(fa.Conditions(readout_s=0.06),
+                                                velocity=(16.0, 0.0, 0.0), seed=1))["recall"]
+    assert skewed >= ideal - 0.1

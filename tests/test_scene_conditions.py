@@ -204,3 +204,14 @@ def test_bad_weather_is_refused_with_what_is_allowed():
         fa.Conditions(readout_s=-0.01)
     with pytest.raises(ConfigError, match="sun_azimuth_deg"):
         fa.Conditions(sun_azimuth_deg=400.0)
+
+
+def test_the_conditions_strategy_draws_weather_and_shrinks_to_its_mildest_form():
+    from hypothesis import find, settings
+    from pytest_flockai import strategies as fst
+    strat = fst.conditions(weather=("rain", "snow"), max_readout_s=0.05)
+    c = find(strat, lambda c: c.weather == "rain", settings=settings(database=None))
+    assert (c.weather, c.severity, c.readout_s, c.exposure_s) == ("rain", 1, 0.0, 0.0)
+    c = find(strat, lambda c: c.readout_s > 0.01, settings=settings(database=None))
+    assert c.weather is None and c.exposure_s == 0.0 and c.visibility_m == math.inf
+    assert fst.conditions().example().weather is None          # not asked: no weather

@@ -38,7 +38,7 @@ from .. import _check
 from ..errors import ConfigError
 from ..world.truth import CameraModel, Truth, gimbal_pose
 from . import _gl
-from .conditions import Conditions, apply as apply_conditions, blur_vector, shift_boxes
+from .conditions import SKY_SHARE, Conditions, apply as apply_conditions, blur_vector, shift_boxes
 from .base import DroneBody, Sensor
 
 NEAR_M = 0.05       # near clipping plane
@@ -121,7 +121,11 @@ class FrameRenderer:
 
     def _light(self, cam_pos, fwd, sun_dir, shadows) -> None:
         """Point the world's sun (the shadow-casting directional light) and centre its
-        shadow map on the ground point the camera looks at."""
+        shadow map on the ground point the camera looks at. Given a direction, the
+        light becomes physical: the sun's share ``1 / (1 + SKY_SHARE)`` of an
+        overhead sun's irradiance times the cosine MuJoCo applies, the sky's share as
+        ambient light on the (shadowless) headlight, so a horizontal face receives
+        exactly ``Conditions.irradiance`` and a shadow keeps only the sky."""
         scn = self.scene
         scn.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = int(bool(shadows))
         if sun_dir is None and not shadows:
@@ -129,11 +133,17 @@ class FrameRenderer:
         down = -fwd[2]
         reach = min(cam_pos[2] / down, SHADOW_HALF_M) if down > 1e-3 else 0.0
         target = np.asarray(cam_pos, float) + fwd * reach
+        sky = SKY_SHARE / (1.0 + SKY_SHARE)
         for i in range(scn.nlight):
             light = scn.lights[i]
-            if light.castshadow and light.type == mujoco.mjtLightType.mjLIGHT_DIRECTIONAL:
+            if sun_dir is not None and light.headlight:
+                light.ambient[:] = sky
+                light.diffuse[:] = 0.0
+            elif light.castshadow and light.type == mujoco.mjtLightType.mjLIGHT_DIRECTIONAL:
                 if sun_dir is not None:
                     light.dir[:] = sun_dir
+                    light.diffuse[:] = 1.0 - sky
+                    light.ambient[:] = 0.0
                 d = np.asarray(light.dir, float)
                 light.pos[:] = target - d / np.linalg.norm(d) * SUN_DISTANCE_M
 

@@ -9,9 +9,12 @@ light reaches the sensor:
   diffuse sky share (``SKY_SHARE``), so dusk (a few degrees) is several times
   darker than noon;
 - **sun direction and shadows** (``sun_azimuth_deg``, ``shadows``): with an
-  azimuth (compass degrees the sun stands at: 0 north, 90 east) the rendered
-  sun shines from there at ``sun_elevation_deg``, so walls facing away from it
-  darken; with ``shadows=True`` it casts shadows (MuJoCo's shadow map, 6 cm
+  azimuth (compass degrees the sun stands at: 0 north, 90 east) the frame is
+  rendered under the sun shining from there at ``sun_elevation_deg``, with the
+  same sun and sky shares as the brightness model (a horizontal face receives
+  ``irradiance``; walls facing away from the sun and shadows only the sky's
+  share), and auto-exposure aims at the level the scene has under an overhead
+  sun; with ``shadows=True`` it casts shadows (MuJoCo's shadow map, 6 cm
   per texel within 60 m of the view centre), long at a low sun. Both need a
   render, not only a change of the pixels;
 - **haze** (``visibility_m``): Koschmieder's law, extinction ``3.912 / V`` for a
@@ -221,8 +224,12 @@ def apply(frame: np.ndarray, cond: Conditions, rng, *, distance=None, blur=(0.0,
     if distance is not None:
         distance = rolling_shift(distance, skew)
     img = frame.astype(np.float32) / 255.0
-    target = cond.target_level if cond.target_level is not None else float(img.mean())
-    img *= cond.irradiance
+    if cond.sun_azimuth_deg is None:      # rendered under the overhead sun: dim it here
+        target = cond.target_level if cond.target_level is not None else float(img.mean())
+        img *= cond.irradiance
+    else:                                 # rendered under this sun: the light is in the frame
+        target = (cond.target_level if cond.target_level is not None
+                  else min(float(img.mean()) / cond.irradiance, 1.0))
     beta = cond.extinction_per_m
     if beta > 0.0:
         if distance is None:
