@@ -87,7 +87,7 @@ def test_a_car_has_glass_and_tyres_and_keeps_the_golf_size():
     assert v[:, 2].max() == pytest.approx(1.46, abs=0.01) and v[:, 2].min() == pytest.approx(0)
     glass = car["glass"][0]
     assert glass[:, 2].min() >= 0.9 and np.ptp(glass[:, 0]) > 2.0   # the glasshouse band
-    world = fa.World.scene(vehicles=[(0.0, 0.0, 0.0)])            # a white car facing east
+    world = fa.World.scene(vehicles=[(0.0, 0.0, 0.0)], figures="articulated")   # white, east
     cam = {"fov_deg": FOV, "width": W, "height": H, "pitch_deg": -20.0}
     views = fa.sensors.ViewSet(world, [(10.0, 0.0, 4.0, math.pi)], cam)   # ahead, looking west
     frame = views.ideal()[0][0]

@@ -13,7 +13,9 @@ Geometry (metres; a figure stands on the ground at its feet position):
   prism (radius ``PERSON_RADIUS``) and a low-poly head sphere (``HEAD_RADIUS``),
   1.7 m tall; a person hides others by the axis-aligned box of its vertices;
 - vehicle: a compact car, 4.3 m x 1.8 m x 1.46 m (Volkswagen Golf 8 technical data:
-  4284 x 1789 x 1456 mm): painted body and roof, glasshouse, tyres (``figures.CAR``).
+  4284 x 1789 x 1456 mm): with articulated figures, painted body and roof, glasshouse
+  and tyres (``figures.CAR``); with simple figures, the first release's body box from
+  0.15 m to 0.95 m and a glass cabin box on top (``SIMPLE_CAR_BOXES``).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .figures import CAR as CAR_MESHES, prism, sphere
+from .figures import CAR as CAR_MESHES, box, prism, sphere
 from .truth import CLASSES
 
 PERSON_HEIGHT = 1.7          # m, adult figure
@@ -36,6 +38,9 @@ CAR_LENGTH, CAR_WIDTH, CAR_HEIGHT = 4.3, 1.8, 1.46
 #: hides other objects: the body (tyres included) and the cabin
 CAR_BOXES = ((0.0, CAR_LENGTH / 2, CAR_WIDTH / 2, 0.0, 0.95),
              (-0.25, 1.2, 0.8, 0.95, CAR_HEIGHT))
+#: the simple car's geometry (and occluder boxes): body, then the glass cabin, 2.3 x 1.6 m
+SIMPLE_CAR_BOXES = ((0.0, CAR_LENGTH / 2, CAR_WIDTH / 2, 0.15, 0.95),
+                    (-0.2, 1.15, 0.8, 0.95, CAR_HEIGHT))
 
 #: the simple figure (``figures="simple"``)
 TORSO = prism(8, PERSON_RADIUS, 0.0, PERSON_HEIGHT - 2 * HEAD_RADIUS - 0.02)
@@ -61,6 +66,8 @@ def _car_samples():
 
 PERSON_VERTS = np.vstack([TORSO[0][:-2], HEAD[0]])         # hull extremes (no cap centres)
 CAR_VERTS = np.vstack([m[0] for m in CAR_MESHES.values()])
+SIMPLE_CAR = (box(*SIMPLE_CAR_BOXES[0]), box(*SIMPLE_CAR_BOXES[1]))
+SIMPLE_CAR_VERTS = np.vstack([m[0] for m in SIMPLE_CAR])
 PERSON_SAMPLES, CAR_SAMPLES = _person_samples(), _car_samples()
 
 
@@ -100,8 +107,9 @@ class ObjectTable:
     @classmethod
     def build(cls, people=(), vehicles=(), shapes=None) -> "ObjectTable":
         """people: (N, 3) feet positions; vehicles: (M, 4) rows (x, y, z, yaw);
-        shapes: None (simple figures) or, per person, (vertices (V, 3), samples
-        (S, 3)) relative to the feet (``figures.person`` in its pose)."""
+        shapes: None (simple figures and cars) or, per person, (vertices (V, 3),
+        samples (S, 3)) relative to the feet (``figures.person`` in its pose), with
+        the articulated cars."""
         people = np.asarray(people, dtype=float).reshape(-1, 3)
         vehicles = np.asarray(vehicles, dtype=float).reshape(-1, 4)
         verts, samples, boxes, owner = [], [], [], []
@@ -115,16 +123,18 @@ class ObjectTable:
             else:
                 boxes.append([*verts[-1].min(axis=0), *verts[-1].max(axis=0)])
             owner.append(i)
+        car_verts, car_boxes = ((SIMPLE_CAR_VERTS, SIMPLE_CAR_BOXES) if shapes is None
+                                else (CAR_VERTS, CAR_BOXES))
         for j, (x, y, z, yaw) in enumerate(vehicles):
             at = np.array([x, y, z])
-            verts.append(_rotate(CAR_VERTS, yaw) + at)
+            verts.append(_rotate(car_verts, yaw) + at)
             samples.append(_rotate(CAR_SAMPLES, yaw) + at)
-            for cx, hx, hy, z0, z1 in CAR_BOXES:
+            for cx, hx, hy, z0, z1 in car_boxes:
                 corners = _rotate(np.array([[cx - hx, -hy, z0], [cx + hx, hy, z1]]), yaw) + at
                 boxes.append([*corners.min(axis=0), *corners.max(axis=0)])
                 owner.append(len(people) + j)
         n = len(people) + len(vehicles)
-        nv = max([len(CAR_VERTS)] + [len(v) for v in verts])
+        nv = max([len(car_verts)] + [len(v) for v in verts])
         ns = max([len(CAR_SAMPLES)] + [len(s) for s in samples])
         w = np.zeros((n, ns))
         for i, s in enumerate(samples):

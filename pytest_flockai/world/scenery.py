@@ -20,7 +20,7 @@ import numpy as np
 
 from . import figures as _fig
 from . import urban as _urban
-from .objects import HEAD, TORSO, _rotate
+from .objects import HEAD, SIMPLE_CAR, TORSO, _rotate
 
 G_GROUND, G_BUILDINGS, G_PEOPLE = 0, 1, 2
 #: default sun direction (pointing from the sun): azimuth ~214 deg, elevation ~70 deg
@@ -106,14 +106,20 @@ def _add_figures(world, spec) -> None:
 
 
 def _add_vehicles(world, spec) -> None:
-    """Cars: one mesh per paint colour for the bodies, one for all glass, one for all tyres."""
+    """Cars: one mesh per paint colour for the bodies, one for all glass, one for all tyres
+    (articulated figures; simple figures keep the first release's box cars)."""
     if len(world.vehicles) == 0:
         return
     everyone = np.ones(len(world.vehicles), bool)
-    parts = [(f"cars_body{int(c)}", _fig.CAR["paint"], world.car_idx == c,
+    simple = world.figures == "simple"
+    paint = SIMPLE_CAR[0] if simple else _fig.CAR["paint"]
+    parts = [(f"cars_body{int(c)}", paint, world.car_idx == c,
               _urban.CAR_COLOURS[c], "flockai_building") for c in np.unique(world.car_idx)]
-    parts.append(("cars_glass", _fig.CAR["glass"], everyone, _urban.GLASS, "flockai_glass"))
-    parts.append(("cars_tyres", _fig.CAR["tyres"], everyone, _urban.TYRE, "flockai_matte"))
+    if simple:       # the first release's cars: a body box and a glass cabin box
+        parts.append(("cars_glass", SIMPLE_CAR[1], everyone, _urban.GLASS, "flockai_building"))
+    else:
+        parts.append(("cars_glass", _fig.CAR["glass"], everyone, _urban.GLASS, "flockai_glass"))
+        parts.append(("cars_tyres", _fig.CAR["tyres"], everyone, _urban.TYRE, "flockai_matte"))
     for name, (v, f), mask, rgba, material in parts:
         verts, faces = _fig.merge([(_rotate(v, yaw) + (x, y, z), f)
                                    for x, y, z, yaw in world.vehicles[mask]])
