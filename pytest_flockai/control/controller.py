@@ -54,7 +54,12 @@ class CascadedController:
         self.tan_tilt = math.tan(self.max_tilt)
         self.a_up = max(0.5, 0.8 * (tw - 1.0) * G)   # keep 20% of the margin for attitude
         self.a_down = 0.6 * G
-        self.i_lim = 0.3 * G
+        # the integral term's acceleration limits (m/s^2): horizontally up to the
+        # tilt limit, so it can hold against any wind the airframe can fly in;
+        # vertically 0.3 g (mass and thrust errors). The state is clamped to
+        # limit / k_vel_i: the limit is on the acceleration the integral supplies.
+        self.i_lim_h = G * self.tan_tilt / self.k_vel_i
+        self.i_lim_z = 0.3 * G / self.k_vel_i
         # drag feed-forward: the reference velocity's expected body drag (still air),
         # 1/2 rho CdA / m with the frontal CdA horizontally and the top CdA vertically
         self.kd_h = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[0] / self.mass
@@ -113,10 +118,10 @@ class CascadedController:
             sat = True
         if not sat:
             dt = self.dt
-            lim = self.i_lim
+            lim, lz = self.i_lim_h, self.i_lim_z
             self.ix = min(lim, max(-lim, self.ix + ex * dt))
             self.iy = min(lim, max(-lim, self.iy + ey * dt))
-            self.iz = min(lim, max(-lim, self.iz + ez * dt))
+            self.iz = min(lz, max(-lz, self.iz + ez * dt))
         # desired thrust direction b3d and attitude (yaw sp[9])
         nrm = math.sqrt(ax * ax + ay * ay + fz * fz)
         d2x, d2y, d2z = ax / nrm, ay / nrm, fz / nrm
