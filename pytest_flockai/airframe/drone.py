@@ -18,7 +18,7 @@ from .. import _check
 from ..compute import device as _device
 from ..energy import EnergyModel
 from ..errors import ConfigError, close_matches
-from ..physics import G  # noqa: F401  (re-exported: airframe.drone.G)
+from ..physics import G, RHO_SEA_LEVEL  # G re-exported: airframe.drone.G
 from ..sensors import Sensor
 from .params import Airframe, Battery, Camera, EnergyParams, Radio, Rotor, Sim
 
@@ -118,6 +118,15 @@ class Drone:
     def thrust_to_weight(self) -> float:
         return self.max_thrust_n / (self.mass_kg * G)
 
+    def thrust_to_weight_at(self, rho: float) -> float:
+        """Thrust-to-weight in air of density ``rho`` (kg/m^3): thrust scales with rho."""
+        return self.thrust_to_weight * rho / RHO_SEA_LEVEL
+
+    def max_payload_kg(self, rho: float = RHO_SEA_LEVEL) -> float:
+        """The largest payload that keeps the minimum thrust-to-weight in air of density rho."""
+        return max(0.0, self.max_thrust_n * rho / RHO_SEA_LEVEL / (MIN_THRUST_TO_WEIGHT * G)
+                   - self.airframe.mass_kg)
+
     @property
     def hover_thrust_per_rotor_n(self) -> float:
         return self.mass_kg * G / self.airframe.rotor_count
@@ -152,13 +161,16 @@ class Drone:
 
     addSensor = add_sensor
 
-    def check(self, where: str | None = None) -> None:
-        """Cross-field checks (thrust-to-weight); run again before every flight."""
+    def check(self, where: str | None = None, *, rho: float = RHO_SEA_LEVEL) -> None:
+        """Cross-field checks (thrust-to-weight in air of density ``rho``); run again
+        before every flight."""
         where = where or self.source
-        tw = self.thrust_to_weight
+        tw = self.thrust_to_weight_at(rho)
+        air = "" if rho == RHO_SEA_LEVEL else f" in air of {rho:.3f} kg/m^3"
         if not tw >= MIN_THRUST_TO_WEIGHT:
             raise ConfigError(
-                f"{where}: thrust-to-weight = {tw:.2f} (max thrust {self.max_thrust_n:.3g} N "
+                f"{where}: thrust-to-weight{air} = {tw:.2f} (max thrust "
+                f"{self.max_thrust_n * rho / RHO_SEA_LEVEL:.3g} N "
                 f"for {self.mass_kg:.3g} kg incl. payload {self.payload_kg:g} kg) is below the "
                 f"minimum {MIN_THRUST_TO_WEIGHT}; raise [rotor] max_speed_rad_s or thrust_coeff, "
                 f"or lower the mass")

@@ -13,6 +13,7 @@ import copy
 import math
 
 from .. import _check
+from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
 
 
@@ -56,6 +57,17 @@ class Field:
                 raise ConfigError(f"{where}: {name} = {value!r} is not allowed; "
                                   f"allowed: a whole number of pixels from 1 to 4096")
             return value
+        if k == "optpos":          # a positive number, or None: derived
+            return None if value is None else _check.positive(name, value, where=where)
+        if k == "cells":           # None: derived from the nominal voltage
+            if value is None:
+                return None
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 14:
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; allowed: a whole "
+                                  f"number of cells in series from 1 to 14 (1S to 14S packs)")
+            return value
+        if k == "chemistry":
+            return _check.choice(name, value, _cells.CHEMISTRIES, where=where)
         if k == "layout":
             return _check.choice(name, value, ("x",), where=where)
         if k == "str":
@@ -147,20 +159,58 @@ class Rotor(Section):
 
 
 class Battery(Section):
-    """Battery: capacity, nominal voltage, usable fraction and reserve level."""
+    """Battery: capacity, nominal voltage, chemistry and cells, internal resistance,
+    cut-off voltage, usable fraction and reserve level (an equivalent circuit,
+    see ``energy/battery.py``)."""
 
     TABLE = "battery"
     FIELDS = {
         "capacity_mah": Field("pos", unit="mAh"),
-        "voltage_v": Field("pos", unit="V"),
-        "usable_fraction": Field("frac01", 1.0, doc="share of nameplate energy that can be drawn"),
+        "voltage_v": Field("pos", doc="nominal (label) voltage", unit="V"),
+        "chemistry": Field("chemistry", "lipo", doc="lipo or li-ion"),
+        "cells": Field("cells", None, doc="cells in series; default: voltage_v / nominal cell voltage"),
+        "internal_resistance_mohm": Field("optpos", None, unit="mOhm",
+                                          doc="DC resistance of one cell at half charge; default: "
+                                              "0.03 ohm Ah / capacity"),
+        "cutoff_v_per_cell": Field("optpos", None, unit="V",
+                                   doc="terminal voltage under load that ends the flight; "
+                                       "default: the chemistry's datasheet cut-off"),
+        "usable_fraction": Field("frac01", 1.0, doc="share of the charge that can be drawn "
+                                 "(the battery management system's 0 %)"),
         "reserve_fraction": Field("reserve", 0.15, doc="state of charge that triggers return home"),
     }
 
     @property
+    def cell_count(self) -> int:
+        if self.cells is not None:
+            return self.cells
+        return max(1, round(self.voltage_v / _cells.NOMINAL_V[self.chemistry]))
+
+    @property
+    def resistance_ohm(self) -> float:
+        """DC resistance of one cell at half charge (ohm)."""
+        if self.internal_resistance_mohm is not None:
+            return self.internal_resistance_mohm * 1e-3
+        return _cells.SPECIFIC_RESISTANCE_OHM_AH / (self.capacity_mah * 1e-3)
+
+    @property
+    def cutoff_v(self) -> float:
+        """Cut-off voltage of one cell under load (V)."""
+        c = self.cutoff_v_per_cell
+        return _cells.CUTOFF_V[self.chemistry] if c is None else c
+
+    @property
     def energy_j(self) -> float:
-        """Usable energy in joules: mAh x V x 3.6 x usable fraction."""
-        return self.capacity_mah * self.voltage_v * 3.6 * self.usable_fraction
+        """Usable chemical energy in joules: cells x capacity x the open-circuit voltage
+        integrated from full charge down to 1 - usable_fraction."""
+        return _cells.usable_energy_j(self.chemistry, self.cell_count, self.capacity_mah * 1e-3,
+                                      1.0 - self.usable_fraction)
+
+    def circuit(self) -> "_cells.Circuit":
+        """A fresh, full equivalent circuit of this pack for one flight."""
+        return _cells.Circuit(chemistry=self.chemistry, cells=self.cell_count,
+                              capacity_ah=self.capacity_mah * 1e-3, resistance_ohm=self.resistance_ohm,
+                              cutoff_v_per_cell=self.cutoff_v)
 
     @property
     def nameplate_wh(self) -> float:

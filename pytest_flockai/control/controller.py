@@ -33,14 +33,14 @@ CASCADE_RATIO = 3.0
 
 
 class CascadedController:
-    def __init__(self, drone, control_dt: float):
+    def __init__(self, drone, control_dt: float, rho: float = RHO_SEA_LEVEL):
         self.dt = control_dt
         af, rot = drone.airframe, drone.rotor
         self.mass = drone.mass_kg
         self.J = tuple(af.inertia_kg_m2)
         n = af.rotor_count
         self.n = n
-        self.fmax = rot.max_thrust_n
+        self.fmax = rot.max_thrust_n * rho / RHO_SEA_LEVEL     # thrust scales with air density
         tau_eff = rot.time_constant_s + control_dt
         self.k_rate = 0.5 / tau_eff
         self.k_att = self.k_rate / CASCADE_RATIO
@@ -50,7 +50,7 @@ class CascadedController:
         self.k_vel_i = 0.35 * self.k_vel * self.k_vel
         self.k_pos = self.k_vel / CASCADE_RATIO
         self.max_tilt = math.radians(af.max_tilt_deg)
-        tw = drone.thrust_to_weight
+        tw = drone.thrust_to_weight_at(rho)
         self.tan_tilt = math.tan(self.max_tilt)
         self.a_up = max(0.5, 0.8 * (tw - 1.0) * G)   # keep 20% of the margin for attitude
         self.a_down = 0.6 * G
@@ -62,8 +62,8 @@ class CascadedController:
         self.i_lim_z = 0.3 * G / self.k_vel_i
         # drag feed-forward: the reference velocity's expected body drag (still air),
         # 1/2 rho CdA / m with the frontal CdA horizontally and the top CdA vertically
-        self.kd_h = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[0] / self.mass
-        self.kd_v = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[2] / self.mass
+        self.kd_h = 0.5 * rho * af.drag_area_m2[0] / self.mass
+        self.kd_v = 0.5 * rho * af.drag_area_m2[2] / self.mass
         # allocation: [T, tau_x, tau_y, tau_z] = A f
         k = rot.torque_coeff / rot.thrust_coeff
         lay = drone.rotor_layout()

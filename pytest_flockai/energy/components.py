@@ -58,6 +58,9 @@ class Component:
     def bind(self, drone) -> None:
         """Precompute from the drone before a flight (optional)."""
 
+    def set_air_density(self, rho: float) -> None:
+        """The flight's air density (kg/m^3), set before ``bind`` (optional)."""
+
     def power(self, u: Usage) -> float:  # pragma: no cover - interface
         raise NotImplementedError(f"{type(self).__name__}.power(usage) must return watts")
 
@@ -214,6 +217,10 @@ class HoverPower(Component):
         self.efficiency = None if efficiency is None else _check.fraction(
             "efficiency", efficiency, where=f"component {name!r}", allow_zero=False)
         self._p = 0.0
+        self._rho_air = RHO_SEA_LEVEL
+
+    def set_air_density(self, rho):
+        self._rho_air = rho
 
     def bind(self, drone):
         if self.power_w is not None:
@@ -225,7 +232,7 @@ class HoverPower(Component):
             eta = (m.figure_of_merit * m.motor_efficiency * m.esc_efficiency
                    if isinstance(m, Motors) else 0.4)
         area = drone.airframe.rotor_count * drone.rotor.disc_area_m2
-        self._p = (drone.mass_kg * G) ** 1.5 / math.sqrt(2.0 * RHO_SEA_LEVEL * area) / eta
+        self._p = (drone.mass_kg * G) ** 1.5 / math.sqrt(2.0 * self._rho_air * area) / eta
 
     def power(self, u):
         return self._p if u.airborne else 0.0
@@ -259,7 +266,7 @@ class Motors(Component):
     parts = ("induced", "profile", "climb_and_drag")
 
     def __init__(self, name: str = "motors", *, figure_of_merit, induced_power_factor=1.15,
-                 motor_efficiency, esc_efficiency, wake_interference=0.0, rho=RHO_SEA_LEVEL,
+                 motor_efficiency, esc_efficiency, wake_interference=0.0, rho=None,
                  description: str = "rotors: momentum theory per rotor"):
         super().__init__(name, description)
         w = f"component {name!r}"
@@ -271,19 +278,25 @@ class Motors(Component):
         self.esc_efficiency = _check.fraction("esc_efficiency", esc_efficiency, where=w, allow_zero=False)
         self.wake_interference = _check.number("wake_interference", wake_interference, where=w,
                                                minimum=0.0, maximum=1.0)
-        self.rho = _check.positive("rho", rho, where=w)
+        # None: the flight's air (Mission(atmosphere=...), sea level by default)
+        self.rho = None if rho is None else _check.positive("rho", rho, where=w)
+        self._rho_air = RHO_SEA_LEVEL
         if self.figure_of_merit * self.induced_power_factor >= 1.0:
             raise ConfigError(f"{w}: figure_of_merit x induced_power_factor = "
                               f"{self.figure_of_merit * self.induced_power_factor:.3f} must be < 1 "
                               f"(the rest is profile power)")
         self._vi = []
 
+    def set_air_density(self, rho):
+        self._rho_air = rho
+
     def bind(self, drone):
         A = drone.rotor.disc_area_m2
-        self._inv2rhoA = 1.0 / (2.0 * self.rho * A)
-        self._c0 = (1.0 / self.figure_of_merit - self.induced_power_factor) / math.sqrt(2.0 * self.rho * A)
+        rho = self.rho if self.rho is not None else self._rho_air
+        self._inv2rhoA = 1.0 / (2.0 * rho * A)
+        self._c0 = (1.0 / self.figure_of_merit - self.induced_power_factor) / math.sqrt(2.0 * rho * A)
         self._R = 0.5 * drone.rotor.diameter_m
-        self._inv_kf = 1.0 / drone.rotor.thrust_coeff
+        self._inv_kf = RHO_SEA_LEVEL / (drone.rotor.thrust_coeff * rho)   # kf is given at sea level
         self._inv_eta = 1.0 / (self.motor_efficiency * self.esc_efficiency)
         lay = drone.rotor_layout()
         self._dirs = [(x / math.hypot(x, y), y / math.hypot(x, y)) for x, y, _ in lay]
