@@ -29,7 +29,10 @@ Open-circuit voltage per cell:
 
 Cut-off voltages per cell: 3.0 V for LiPo and 2.5 V for Li-ion, the discharge
 cut-off of the cells' datasheets (e.g. Samsung INR18650-25R: 2.5 V; LiPo
-pouch cells such as Grepow or Tattu: 3.0 V).
+pouch cells such as Grepow or Tattu: 3.0 V). The flight ends when the terminal
+voltage stays below it for ``CUTOFF_HOLD_S`` (a take-off punch of a fraction of
+a second does not end it, as a flight controller's filtered voltage would not),
+or at once when the load asks for more power than the pack can give.
 """
 
 from __future__ import annotations
@@ -49,6 +52,9 @@ NOMINAL_V = {"lipo": 3.7, "li-ion": 3.6}
 #: 0.15 ohm x Ah (series plus both RC branches, 1C cell); multirotor packs are
 #: high-rate (10-25C) cells of 3-8 mOhm at 3-5 Ah, about 0.02-0.03 ohm x Ah.
 SPECIFIC_RESISTANCE_OHM_AH = 0.03
+
+#: s the terminal voltage must stay below the cut-off before the flight ends
+CUTOFF_HOLD_S = 1.0
 
 
 def ocv(chemistry: str, s: float) -> float:
@@ -91,6 +97,7 @@ class Circuit:
         self.voltage_v = self.open_circuit_v()
         self.cutoff = False
         self.v_min = self.voltage_v
+        self._below_s = 0.0
 
     def open_circuit_v(self) -> float:
         return self.cells * ocv(self.chemistry, self.soc)
@@ -109,6 +116,10 @@ class Circuit:
         if v < self.v_min:
             self.v_min = v
         if i > 0.0 and v < self.v_cut:
-            self.cutoff = True
+            self._below_s += dt
+            if self._below_s >= CUTOFF_HOLD_S - 1e-9:
+                self.cutoff = True
+        else:
+            self._below_s = 0.0
         self.soc -= i * dt / self.q_c
         return i * i * r
