@@ -85,7 +85,12 @@ class Drone:
         self.device = compute.get("device", "none")
         sensors = data.get("sensors", {})
         _no_unknown(sensors, {"names"}, f"{where} [sensors]")
-        self.sensors = list(sensors.get("names", []))
+        names = sensors.get("names", [])
+        if not isinstance(names, list) or not all(isinstance(n, str) and n for n in names):
+            raise ConfigError(f"{where} [sensors]: names = {names!r} is not allowed; expected a list "
+                              f"of sensor names, e.g. names = [\"gps\", \"imu\"] (a string would be "
+                              f"read one character at a time)")
+        self.sensors = list(names)
         self.payload_kg = 0.0
         self.extra_sensors = []
         energy = EnergyParams(data["energy"], where=f"{where} [energy]")

@@ -18,16 +18,32 @@ from ..errors import ConfigError, close_matches
 
 
 class Field:
-    __slots__ = ("kind", "default", "doc", "unit")
+    """One blueprint field: its kind (how it is checked), default, doc and unit, and
+    optional physical-plausibility ``bounds`` (low, high, why), so a unit slip (a
+    propeller of 22.1 m, a 0.3 s control rate) is refused with the reason."""
 
-    def __init__(self, kind: str, default=..., doc: str = "", unit: str = ""):
+    __slots__ = ("kind", "default", "doc", "unit", "bounds")
+
+    def __init__(self, kind: str, default=..., doc: str = "", unit: str = "", bounds=None):
         self.kind, self.default, self.doc, self.unit = kind, default, doc, unit
+        self.bounds = bounds
 
     @property
     def required(self) -> bool:
         return self.default is ...
 
     def check(self, name: str, value, where: str):
+        value = self._check_kind(name, value, where)
+        if self.bounds is not None and value is not None:
+            lo, hi, why = self.bounds
+            items = value if isinstance(value, (list, tuple)) else (value,)
+            if any(not lo <= v <= hi for v in items):
+                unit = f" {self.unit}" if self.unit else ""
+                raise ConfigError(f"{where}: {name} = {value!r} is not physically plausible; "
+                                  f"allowed: {lo:g} to {hi:g}{unit} ({why})")
+        return value
+
+    def _check_kind(self, name: str, value, where: str):
         k = self.kind
         if k == "pos":
             return _check.positive(name, value, where=where)
@@ -128,13 +144,18 @@ class Section:
 class Airframe(Section):
     TABLE = "airframe"
     FIELDS = {
-        "mass_kg": Field("pos", doc="takeoff mass without payload", unit="kg"),
-        "arm_length_m": Field("pos", doc="centre to rotor axis", unit="m"),
+        "mass_kg": Field("pos", doc="takeoff mass without payload", unit="kg",
+                         bounds=(0.005, 50.0, "a 5 g nano drone to a 50 kg heavy-lift multirotor")),
+        "arm_length_m": Field("pos", doc="centre to rotor axis", unit="m",
+                              bounds=(0.01, 2.0, "centre to rotor axis, nano to heavy-lift frames")),
         "layout": Field("layout", "x"),
         "rotor_count": Field("rotors", 4),
-        "inertia_kg_m2": Field("vec3pos", doc="principal moments Ixx Iyy Izz", unit="kg m^2"),
-        "body_size_m": Field("vec3pos", doc="collision box L W H", unit="m"),
-        "drag_area_m2": Field("vec3pos", doc="Cd*A along body x y z", unit="m^2"),
+        "inertia_kg_m2": Field("vec3pos", doc="principal moments Ixx Iyy Izz", unit="kg m^2",
+                               bounds=(1e-7, 100.0, "principal moments of 5 g to 50 kg airframes")),
+        "body_size_m": Field("vec3pos", doc="collision box L W H", unit="m",
+                             bounds=(0.005, 5.0, "body box edges in metres, not millimetres")),
+        "drag_area_m2": Field("vec3pos", doc="Cd*A along body x y z", unit="m^2",
+                              bounds=(1e-5, 5.0, "Cd x area of a multirotor body")),
         "max_tilt_deg": Field("angle", 35.0, unit="deg"),
     }
 
@@ -142,11 +163,13 @@ class Airframe(Section):
 class Rotor(Section):
     TABLE = "rotor"
     FIELDS = {
-        "diameter_m": Field("pos", unit="m"),
+        "diameter_m": Field("pos", unit="m", bounds=(0.02, 1.6, "propellers from 20 mm to 63 in")),
         "thrust_coeff": Field("pos", doc="kf, N/(rad/s)^2"),
         "torque_coeff": Field("pos", doc="km, N m/(rad/s)^2"),
-        "max_speed_rad_s": Field("pos", unit="rad/s"),
-        "time_constant_s": Field("pos", unit="s"),
+        "max_speed_rad_s": Field("pos", unit="rad/s",
+                                 bounds=(50.0, 10000.0, "rad/s, not rpm: 480 to 95000 rpm")),
+        "time_constant_s": Field("pos", unit="s",
+                                 bounds=(0.002, 0.5, "motor and propeller spin-up, 2 ms to 0.5 s")),
     }
 
     @property
@@ -165,14 +188,17 @@ class Battery(Section):
 
     TABLE = "battery"
     FIELDS = {
-        "capacity_mah": Field("pos", unit="mAh"),
-        "voltage_v": Field("pos", doc="nominal (label) voltage", unit="V"),
+        "capacity_mah": Field("pos", unit="mAh", bounds=(10.0, 100000.0, "mAh, 10 mAh to 100 Ah packs")),
+        "voltage_v": Field("pos", doc="nominal (label) voltage", unit="V",
+                           bounds=(1.0, 60.0, "1S to 14S lithium packs")),
         "chemistry": Field("chemistry", "lipo", doc="lipo or li-ion"),
         "cells": Field("cells", None, doc="cells in series; default: voltage_v / nominal cell voltage"),
         "internal_resistance_mohm": Field("optpos", None, unit="mOhm",
+                                          bounds=(0.1, 2000.0, "per cell, high-rate to tiny cells"),
                                           doc="DC resistance of one cell at half charge; default: "
                                               "0.03 ohm Ah / capacity"),
         "cutoff_v_per_cell": Field("optpos", None, unit="V",
+                                   bounds=(2.0, 3.9, "per cell, below the open-circuit voltage"),
                                    doc="terminal voltage under load that ends the flight; "
                                        "default: the chemistry's datasheet cut-off"),
         "usable_fraction": Field("frac01", 1.0, doc="share of the charge that can be drawn "
@@ -255,6 +281,7 @@ class Camera(Section):
 class Sim(Section):
     TABLE = "sim"
     FIELDS = {
-        "physics_hz": Field("pos", 500.0, unit="Hz"),
-        "control_hz": Field("pos", 100.0, unit="Hz"),
+        "physics_hz": Field("pos", 500.0, unit="Hz", bounds=(50.0, 20000.0, "a physics step of 50 us to 20 ms")),
+        "control_hz": Field("pos", 100.0, unit="Hz",
+                            bounds=(10.0, 8000.0, "flight-controller loop rates, 10 Hz to 8 kHz")),
     }
