@@ -281,7 +281,7 @@ class Camera(Section):
 class Sim(Section):
     TABLE = "sim"
     FIELDS = {
-        "physics_hz": Field("pos", 500.0, unit="Hz", bounds=(50.0, 20000.0, "a physics step of 50 us to 20 ms")),
+        "physics_hz": Field("pos", 500.0, unit="Hz", bounds=(10.0, 20000.0, "a physics step of 50 us to 0.1 s")),
         "control_hz": Field("pos", 100.0, unit="Hz",
                             bounds=(10.0, 8000.0, "flight-controller loop rates, 10 Hz to 8 kHz")),
     }

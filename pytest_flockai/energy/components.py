@@ -241,6 +241,31 @@ class HoverPower(Component):
         return {"power_w": self.power_w, "efficiency": self.efficiency}
 
 
+#: Leishman, Principles of Helicopter Aerodynamics, 2nd ed. (2006), sec. 2.14: an empirical
+#: fit of measured induced velocity in axial descent through the vortex-ring and turbulent-
+#: wake states, v_i / v_h = kappa + k1 x + k2 x^2 + k3 x^3 + k4 x^4, x = V_c / v_h in [-2, 0].
+#: kappa is taken as 1 here (the curve then meets momentum theory at hover and at x = -2,
+#: the windmill-brake boundary); the induced power factor is applied separately.
+VRS_K = (-1.125, -1.372, -1.718, -0.655)
+
+
+def _descent_inflow(v_glauert: float, vax: float, vpar2: float, vh: float) -> float:
+    """Induced velocity in descent: the empirical vortex-ring curve in axial descent,
+    weighted by the axial share of the flow through the disc, V_ax^2 / (V_ax^2 + V_par^2)
+    (forward speed blows the ring away, Glauert's relation holds again); never below
+    Glauert's value. Our blend, not Leishman's: his curve is for axial flight only."""
+    if vh <= 0.0:
+        return v_glauert
+    x = vax / vh
+    if x < -2.0:
+        return v_glauert
+    k1, k2, k3, k4 = VRS_K
+    v_emp = vh * (1.0 + x * (k1 + x * (k2 + x * (k3 + x * k4))))
+    w = vax * vax / (vax * vax + vpar2)
+    v = w * v_emp + (1.0 - w) * v_glauert
+    return v if v > v_glauert else v_glauert
+
+
 class Motors(Component):
     """Rotor power from momentum theory, per rotor, every energy tick.
 
@@ -251,7 +276,9 @@ class Motors(Component):
 
     - induced velocity v_i from Glauert's relation
       v_i = T / (2 rho A sqrt(V_par^2 + (V_ax + v_i)^2)) (Leishman 2006, eq. 5.22),
-      so translational lift lowers it in forward flight;
+      so translational lift lowers it in forward flight; in descent through the
+      vortex-ring state, where momentum theory does not hold, the empirical
+      curve of ``_descent_inflow``;
     - induced power kappa T v_i, plus, for aft rotors, the share
       ``wake_interference`` of the fore rotors' wake they ingest, growing with
       the square of the wake skew sin(chi) = V_par / sqrt(V_par^2 + (V_ax + v_i)^2);
@@ -330,6 +357,8 @@ class Motors(Component):
                 if v < 0.0:
                     v = 0.0
             vi_state[i] = v
+            if vax < 0.0:
+                v = _descent_inflow(v, vax, vpar2, math.sqrt(vh2))
             induced += kappa * T * v
             axial += T * vax
             omega_r = math.sqrt(T * inv_kf) * R
