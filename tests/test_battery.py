@@ -2,6 +2,7 @@
 chemistry, internal resistance, I^2 R loss, sag under load, cut-off voltage."""
 
 import importlib.resources as res
+import re
 
 import pytest
 
@@ -97,10 +98,20 @@ def test_a_heavier_payload_loses_more_than_the_mass_1_5_power_ratio_alone():
 ])
 def test_bad_battery_fields_name_the_file_field_and_what_is_allowed(tmp_path, field, value, allowed):
     src = (res.files("pytest_flockai.airframe") / "blueprints" / "dji-mavic-2-pro.toml").read_text()
-    text = src.replace("[battery]\n", f"[battery]\n{field} = {value!r}\n".replace("'", '"'), 1)
+    line = f"{field} = {value!r}".replace("'", '"')
+    if re.search(rf"^{field} = .*$", src, flags=re.M):
+        text = re.sub(rf"^{field} = .*$", line, src, count=1, flags=re.M)
+    else:
+        text = src.replace("[battery]\n", f"[battery]\n{line}\n", 1)
     p = tmp_path / "mydrone.toml"
     p.write_text(text)
     with pytest.raises(ConfigError) as e:
         fa.drone(str(p))
     msg = str(e.value)
     assert "mydrone.toml" in msg and "[battery]" in msg and field in msg and allowed in msg, msg
+
+
+def test_cells_that_do_not_match_the_voltage_are_refused():
+    with pytest.raises(ConfigError, match=r"voltage_v = 15.4 V over cells = 6 .* allowed: 3.0 to 4.4 V"):
+        fa.drone("dji-mavic-2-pro", cells=6)
+    assert fa.drone("dji-mavic-2-pro", cells=4, chemistry="li-ion").battery.cell_count == 4

@@ -17,6 +17,7 @@ from pathlib import Path
 from .. import _check
 from ..compute import device as _device
 from ..energy import EnergyModel
+from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
 from ..physics import G, RHO_SEA_LEVEL  # G re-exported: airframe.drone.G
 from ..sensors import Sensor
@@ -170,6 +171,12 @@ class Drone:
         """Cross-field checks (thrust-to-weight in air of density ``rho``); run again
         before every flight."""
         where = where or self.source
+        b = self.battery
+        if b.cells is not None and not 3.0 <= b.voltage_v / b.cells <= 4.4:
+            raise ConfigError(
+                f"{where} [battery]: voltage_v = {b.voltage_v:g} V over cells = {b.cells} is "
+                f"{b.voltage_v / b.cells:.2f} V per cell; allowed: 3.0 to 4.4 V per cell "
+                f"(a {b.chemistry} pack's nominal voltage is cells x {_cells.NOMINAL_V[b.chemistry]} V)")
         tw = self.thrust_to_weight_at(rho)
         air = "" if rho == RHO_SEA_LEVEL else f" in air of {rho:.3f} kg/m^3"
         if not tw >= MIN_THRUST_TO_WEIGHT:
