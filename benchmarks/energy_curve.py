@@ -2,7 +2,8 @@
 
 Every point is a simulated flight: a straight level leg at constant speed
 (or a hover), the mean electrical power taken over the steady part from the
-telemetry, and endurance = usable battery energy / that power.
+telemetry (the battery's drain: load plus the pack's I^2 R loss), and endurance =
+usable battery energy / that power.
 
     python benchmarks/energy_curve.py
 """
@@ -25,7 +26,9 @@ def steady_power(speed_mps: float, payload_kg: float = 0.0, steady_s: float = 30
         pil = pil[(pil.vx - speed_mps).abs() < 0.05 * speed_mps + 0.1]
     else:
         pil = pil[pil.index > pil.index[0] + 5.0]
-    return float(pil.power_w.mean()), d.battery.energy_j
+    # the battery's drain: the load's power plus the pack's own I^2 R loss (energy_j counts both)
+    drain_w = (pil.energy_j.iloc[-1] - pil.energy_j.iloc[0]) / (pil.index[-1] - pil.index[0])
+    return float(drain_w), d.battery.energy_j
 
 
 def main():

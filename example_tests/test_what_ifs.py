@@ -45,15 +45,16 @@ def test_payload_costs_flight_time(payload_kg, budget, request):
 @settings(max_examples=12, deadline=None, database=None, derandomize=True)
 @given(wind=fst.winds(max_speed=9.0), mah=fst.batteries(3400.0, 4500.0))
 def test_fuzz_wind_and_battery_against_a_flight_time_budget(wind, mah):
-    """Hypothesis looks for a wind and battery that break a 25-minute budget
+    """Hypothesis looks for a wind and battery that break a 24-minute budget
     (derandomized: the same examples on every run, so CI is deterministic).
-    The hardest case is still air with the smallest battery (25.5 min): wind
-    lowers hover power through translational lift. A failure would print the
-    minimal wind and battery."""
+    The hardest case is still air with the smallest battery (24.5 min; 25.5 before
+    issue 15 added the pack's I^2 R loss and the vortex-ring descent power of the
+    landing): wind lowers hover power through translational lift. A failure would
+    print the minimal wind and battery."""
     d = fa.drone("dji-mavic-2-pro", battery_mah=mah)
     r = fa.Mission(d, fa.pilots.Hover(altitude=20.0, duration=20.0), wind=wind, seed=0).run()
-    fst.target_margin(r, endurance_s=">= 25 min")
-    check(r, endurance_s=">= 25 min", crashed="== 0")
+    fst.target_margin(r, endurance_s=">= 24 min")
+    check(r, endurance_s=">= 24 min", crashed="== 0")
 
 
 class Detections(fa.probes.Probe):

@@ -51,11 +51,11 @@ from .recording import recording
 from .ml import Task
 from .result import FlightResult
 from .sensors import Conditions
-from .world import Wind, World
+from .world import Atmosphere, Wind, World
 
 __version__ = "0.1.0"
 
-__all__ = ["Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
+__all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
            "kpis", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
 del _control

@@ -44,6 +44,8 @@ UNITS: dict[str, tuple[str, float]] = {
     "mWh": ("J", 3.6), "kWh": ("J", 3.6e6),
     # power
     "W": ("W", 1.0), "mW": ("W", 1e-3), "kW": ("W", 1e3),
+    # voltage
+    "V": ("V", 1.0), "mV": ("V", 1e-3),
     # length
     "m": ("m", 1.0), "mm": ("m", 1e-3), "cm": ("m", 1e-2), "km": ("m", 1e3),
     # speed

@@ -15,7 +15,7 @@ from .errors import ConfigError
 @dataclass(frozen=True)
 class KPI:
     name: str
-    unit: str          # "s", "J", "W", "m", "m/s", "kB", "fraction" (0..1), "count", "1" (custom, unitless)
+    unit: str          # "s", "J", "W", "m", "m/s", "kB", "V", "fraction" (0..1), "count", "1" (custom, unitless)
     better: str | None
     description: str
 
@@ -37,12 +37,14 @@ _ROWS = [
     ("energy_motors_j", "J", "lower", "energy drawn by the motors"),
     ("energy_proc_j", "J", "lower", "energy drawn by processing (flight controller, SoC, I/O, sensors)"),
     ("energy_comm_j", "J", "lower", "energy drawn by the radio"),
+    ("energy_battery_loss_j", "J", "lower", "I^2 R loss inside the battery (drains it on top of E_total)"),
+    ("battery_v_min", "V", "higher", "lowest battery terminal voltage under load"),
     ("energy_share_motors", "fraction", None, "E_motors / E_total"),
     ("energy_share_proc", "fraction", "lower", "E_proc / E_total"),
     ("energy_share_comm", "fraction", "lower", "E_comm / E_total"),
     ("mean_power_w", "W", "lower", "mean electrical power over the flight"),
     ("battery_remaining", "fraction", "higher", "usable battery energy left at the end, fraction"),
-    ("endurance_s", "s", "higher", "projected flight time to depletion at the mission's mean power"),
+    ("endurance_s", "s", "higher", "projected flight time to depletion at the mission's mean drain (load plus battery loss)"),
     # compute
     ("cpu_utilization", "fraction", "lower", "busy fraction of the on-board computer"),
     ("cpu_time_s", "s", "lower", "busy time of the on-board computer"),

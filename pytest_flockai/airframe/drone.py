@@ -17,8 +17,9 @@ from pathlib import Path
 from .. import _check
 from ..compute import device as _device
 from ..energy import EnergyModel
+from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
-from ..physics import G  # noqa: F401  (re-exported: airframe.drone.G)
+from ..physics import G, RHO_SEA_LEVEL  # G re-exported: airframe.drone.G
 from ..sensors import Sensor
 from .params import Airframe, Battery, Camera, EnergyParams, Radio, Rotor, Sim
 
@@ -85,7 +86,12 @@ class Drone:
         self.device = compute.get("device", "none")
         sensors = data.get("sensors", {})
         _no_unknown(sensors, {"names"}, f"{where} [sensors]")
-        self.sensors = list(sensors.get("names", []))
+        names = sensors.get("names", [])
+        if not isinstance(names, list) or not all(isinstance(n, str) and n for n in names):
+            raise ConfigError(f"{where} [sensors]: names = {names!r} is not allowed; expected a list "
+                              f"of sensor names, e.g. names = [\"gps\", \"imu\"] (a string would be "
+                              f"read one character at a time)")
+        self.sensors = list(names)
         self.payload_kg = 0.0
         self.extra_sensors = []
         energy = EnergyParams(data["energy"], where=f"{where} [energy]")
@@ -117,6 +123,15 @@ class Drone:
     @property
     def thrust_to_weight(self) -> float:
         return self.max_thrust_n / (self.mass_kg * G)
+
+    def thrust_to_weight_at(self, rho: float) -> float:
+        """Thrust-to-weight in air of density ``rho`` (kg/m^3): thrust scales with rho."""
+        return self.thrust_to_weight * rho / RHO_SEA_LEVEL
+
+    def max_payload_kg(self, rho: float = RHO_SEA_LEVEL) -> float:
+        """The largest payload that keeps the minimum thrust-to-weight in air of density rho."""
+        return max(0.0, self.max_thrust_n * rho / RHO_SEA_LEVEL / (MIN_THRUST_TO_WEIGHT * G)
+                   - self.airframe.mass_kg)
 
     @property
     def hover_thrust_per_rotor_n(self) -> float:
@@ -152,13 +167,22 @@ class Drone:
 
     addSensor = add_sensor
 
-    def check(self, where: str | None = None) -> None:
-        """Cross-field checks (thrust-to-weight); run again before every flight."""
+    def check(self, where: str | None = None, *, rho: float = RHO_SEA_LEVEL) -> None:
+        """Cross-field checks (thrust-to-weight in air of density ``rho``); run again
+        before every flight."""
         where = where or self.source
-        tw = self.thrust_to_weight
+        b = self.battery
+        if b.cells is not None and not 3.0 <= b.voltage_v / b.cells <= 4.4:
+            raise ConfigError(
+                f"{where} [battery]: voltage_v = {b.voltage_v:g} V over cells = {b.cells} is "
+                f"{b.voltage_v / b.cells:.2f} V per cell; allowed: 3.0 to 4.4 V per cell "
+                f"(a {b.chemistry} pack's nominal voltage is cells x {_cells.NOMINAL_V[b.chemistry]} V)")
+        tw = self.thrust_to_weight_at(rho)
+        air = "" if rho == RHO_SEA_LEVEL else f" in air of {rho:.3f} kg/m^3"
         if not tw >= MIN_THRUST_TO_WEIGHT:
             raise ConfigError(
-                f"{where}: thrust-to-weight = {tw:.2f} (max thrust {self.max_thrust_n:.3g} N "
+                f"{where}: thrust-to-weight{air} = {tw:.2f} (max thrust "
+                f"{self.max_thrust_n * rho / RHO_SEA_LEVEL:.3g} N "
                 f"for {self.mass_kg:.3g} kg incl. payload {self.payload_kg:g} kg) is below the "
                 f"minimum {MIN_THRUST_TO_WEIGHT}; raise [rotor] max_speed_rad_s or thrust_coeff, "
                 f"or lower the mass")

@@ -31,13 +31,15 @@ import math
 from ..physics import G, RHO_SEA_LEVEL
 
 
-def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:
+def build_spec(drone, world=None, *, physics_dt: float, rho: float = RHO_SEA_LEVEL) -> mujoco.MjSpec:
+    """The drone (and world) in air of density ``rho``: body drag and the rotors'
+    maximum thrust (T = kf rho / rho_0 omega^2, kf given at sea level) scale with it."""
     spec = mujoco.MjSpec()
     spec.modelname = drone.name
     spec.option.timestep = physics_dt
     spec.option.gravity = [0.0, 0.0, -G]
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
-    spec.option.density = RHO_SEA_LEVEL
+    spec.option.density = rho
     spec.option.viscosity = 0.0
     (world if world is not None else _EMPTY).add_to_spec(spec)
     af = drone.airframe
@@ -57,7 +59,7 @@ def build_spec(drone, world=None, *, physics_dt: float) -> mujoco.MjSpec:
     aero.fluid_coefs = [0.5 / AERO_SCALE ** 2, 0.0, 0.0, 0.0, 0.0]
     k = drone.rotor.torque_coeff / drone.rotor.thrust_coeff
     r_prop = 0.5 * drone.rotor.diameter_m
-    fmax = drone.rotor.max_thrust_n
+    fmax = drone.rotor.max_thrust_n * rho / RHO_SEA_LEVEL
     for i, (x, y, spin) in enumerate(drone.rotor_layout()):
         body.add_geom(name=f"arm{i}", type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0, 0, 0, x, y, 0],
                       size=[0.1 * H, 0, 0], contype=0, conaffinity=0, rgba=[0.2, 0.2, 0.2, 1])
@@ -95,5 +97,5 @@ class _Empty:
 _EMPTY = _Empty()
 
 
-def build_model(drone, world=None, *, physics_dt: float) -> mujoco.MjModel:
-    return build_spec(drone, world, physics_dt=physics_dt).compile()
+def build_model(drone, world=None, *, physics_dt: float, rho: float = RHO_SEA_LEVEL) -> mujoco.MjModel:
+    return build_spec(drone, world, physics_dt=physics_dt, rho=rho).compile()

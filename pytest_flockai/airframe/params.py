@@ -13,20 +13,37 @@ import copy
 import math
 
 from .. import _check
+from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
 
 
 class Field:
-    __slots__ = ("kind", "default", "doc", "unit")
+    """One blueprint field: its kind (how it is checked), default, doc and unit, and
+    optional physical-plausibility ``bounds`` (low, high, why), so a unit slip (a
+    propeller of 22.1 m, a 0.3 s control rate) is refused with the reason."""
 
-    def __init__(self, kind: str, default=..., doc: str = "", unit: str = ""):
+    __slots__ = ("kind", "default", "doc", "unit", "bounds")
+
+    def __init__(self, kind: str, default=..., doc: str = "", unit: str = "", bounds=None):
         self.kind, self.default, self.doc, self.unit = kind, default, doc, unit
+        self.bounds = bounds
 
     @property
     def required(self) -> bool:
         return self.default is ...
 
     def check(self, name: str, value, where: str):
+        value = self._check_kind(name, value, where)
+        if self.bounds is not None and value is not None:
+            lo, hi, why = self.bounds
+            items = value if isinstance(value, (list, tuple)) else (value,)
+            if any(not lo <= v <= hi for v in items):
+                unit = f" {self.unit}" if self.unit else ""
+                raise ConfigError(f"{where}: {name} = {value!r} is not physically plausible; "
+                                  f"allowed: {lo:g} to {hi:g}{unit} ({why})")
+        return value
+
+    def _check_kind(self, name: str, value, where: str):
         k = self.kind
         if k == "pos":
             return _check.positive(name, value, where=where)
@@ -56,6 +73,17 @@ class Field:
                 raise ConfigError(f"{where}: {name} = {value!r} is not allowed; "
                                   f"allowed: a whole number of pixels from 1 to 4096")
             return value
+        if k == "optpos":          # a positive number, or None: derived
+            return None if value is None else _check.positive(name, value, where=where)
+        if k == "cells":           # None: derived from the nominal voltage
+            if value is None:
+                return None
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 14:
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; allowed: a whole "
+                                  f"number of cells in series from 1 to 14 (1S to 14S packs)")
+            return value
+        if k == "chemistry":
+            return _check.choice(name, value, _cells.CHEMISTRIES, where=where)
         if k == "layout":
             return _check.choice(name, value, ("x",), where=where)
         if k == "str":
@@ -116,13 +144,18 @@ class Section:
 class Airframe(Section):
     TABLE = "airframe"
     FIELDS = {
-        "mass_kg": Field("pos", doc="takeoff mass without payload", unit="kg"),
-        "arm_length_m": Field("pos", doc="centre to rotor axis", unit="m"),
+        "mass_kg": Field("pos", doc="takeoff mass without payload", unit="kg",
+                         bounds=(0.005, 50.0, "a 5 g nano drone to a 50 kg heavy-lift multirotor")),
+        "arm_length_m": Field("pos", doc="centre to rotor axis", unit="m",
+                              bounds=(0.01, 2.0, "centre to rotor axis, nano to heavy-lift frames")),
         "layout": Field("layout", "x"),
         "rotor_count": Field("rotors", 4),
-        "inertia_kg_m2": Field("vec3pos", doc="principal moments Ixx Iyy Izz", unit="kg m^2"),
-        "body_size_m": Field("vec3pos", doc="collision box L W H", unit="m"),
-        "drag_area_m2": Field("vec3pos", doc="Cd*A along body x y z", unit="m^2"),
+        "inertia_kg_m2": Field("vec3pos", doc="principal moments Ixx Iyy Izz", unit="kg m^2",
+                               bounds=(1e-7, 100.0, "principal moments of 5 g to 50 kg airframes")),
+        "body_size_m": Field("vec3pos", doc="collision box L W H", unit="m",
+                             bounds=(0.005, 5.0, "body box edges in metres, not millimetres")),
+        "drag_area_m2": Field("vec3pos", doc="Cd*A along body x y z", unit="m^2",
+                              bounds=(1e-5, 5.0, "Cd x area of a multirotor body")),
         "max_tilt_deg": Field("angle", 35.0, unit="deg"),
     }
 
@@ -130,11 +163,13 @@ class Airframe(Section):
 class Rotor(Section):
     TABLE = "rotor"
     FIELDS = {
-        "diameter_m": Field("pos", unit="m"),
+        "diameter_m": Field("pos", unit="m", bounds=(0.02, 1.6, "propellers from 20 mm to 63 in")),
         "thrust_coeff": Field("pos", doc="kf, N/(rad/s)^2"),
         "torque_coeff": Field("pos", doc="km, N m/(rad/s)^2"),
-        "max_speed_rad_s": Field("pos", unit="rad/s"),
-        "time_constant_s": Field("pos", unit="s"),
+        "max_speed_rad_s": Field("pos", unit="rad/s",
+                                 bounds=(50.0, 10000.0, "rad/s, not rpm: 480 to 95000 rpm")),
+        "time_constant_s": Field("pos", unit="s",
+                                 bounds=(0.002, 0.5, "motor and propeller spin-up, 2 ms to 0.5 s")),
     }
 
     @property
@@ -147,20 +182,61 @@ class Rotor(Section):
 
 
 class Battery(Section):
-    """Battery: capacity, nominal voltage, usable fraction and reserve level."""
+    """Battery: capacity, nominal voltage, chemistry and cells, internal resistance,
+    cut-off voltage, usable fraction and reserve level (an equivalent circuit,
+    see ``energy/battery.py``)."""
 
     TABLE = "battery"
     FIELDS = {
-        "capacity_mah": Field("pos", unit="mAh"),
-        "voltage_v": Field("pos", unit="V"),
-        "usable_fraction": Field("frac01", 1.0, doc="share of nameplate energy that can be drawn"),
+        "capacity_mah": Field("pos", unit="mAh", bounds=(10.0, 100000.0, "mAh, 10 mAh to 100 Ah packs")),
+        "voltage_v": Field("pos", doc="nominal (label) voltage", unit="V",
+                           bounds=(1.0, 60.0, "1S to 14S lithium packs")),
+        "chemistry": Field("chemistry", "lipo", doc="lipo or li-ion"),
+        "cells": Field("cells", None, doc="cells in series; default: voltage_v / nominal cell voltage"),
+        "internal_resistance_mohm": Field("optpos", None, unit="mOhm",
+                                          bounds=(0.1, 2000.0, "per cell, high-rate to tiny cells"),
+                                          doc="DC resistance of one cell at half charge; default: "
+                                              "0.03 ohm Ah / capacity"),
+        "cutoff_v_per_cell": Field("optpos", None, unit="V",
+                                   bounds=(2.0, 3.9, "per cell, below the open-circuit voltage"),
+                                   doc="terminal voltage under load that ends the flight; "
+                                       "default: the chemistry's datasheet cut-off"),
+        "usable_fraction": Field("frac01", 1.0, doc="share of the charge that can be drawn "
+                                 "(the battery management system's 0 %)"),
         "reserve_fraction": Field("reserve", 0.15, doc="state of charge that triggers return home"),
     }
 
     @property
+    def cell_count(self) -> int:
+        if self.cells is not None:
+            return self.cells
+        return max(1, round(self.voltage_v / _cells.NOMINAL_V[self.chemistry]))
+
+    @property
+    def resistance_ohm(self) -> float:
+        """DC resistance of one cell at half charge (ohm)."""
+        if self.internal_resistance_mohm is not None:
+            return self.internal_resistance_mohm * 1e-3
+        return _cells.SPECIFIC_RESISTANCE_OHM_AH / (self.capacity_mah * 1e-3)
+
+    @property
+    def cutoff_v(self) -> float:
+        """Cut-off voltage of one cell under load (V)."""
+        c = self.cutoff_v_per_cell
+        return _cells.CUTOFF_V[self.chemistry] if c is None else c
+
+    @property
     def energy_j(self) -> float:
-        """Usable energy in joules: mAh x V x 3.6 x usable fraction."""
-        return self.capacity_mah * self.voltage_v * 3.6 * self.usable_fraction
+        """Usable chemical energy in joules: cells x capacity x the open-circuit voltage
+        integrated from full charge down to 1 - usable_fraction."""
+        return _cells.usable_energy_j(self.chemistry, self.cell_count, self.capacity_mah * 1e-3,
+                                      1.0 - self.usable_fraction)
+
+    def circuit(self) -> "_cells.Circuit":
+        """A fresh, full equivalent circuit of this pack for one flight."""
+        return _cells.Circuit(chemistry=self.chemistry, cells=self.cell_count,
+                              capacity_ah=self.capacity_mah * 1e-3, resistance_ohm=self.resistance_ohm,
+                              cutoff_v_per_cell=self.cutoff_v)
 
     @property
     def nameplate_wh(self) -> float:
@@ -205,6 +281,7 @@ class Camera(Section):
 class Sim(Section):
     TABLE = "sim"
     FIELDS = {
-        "physics_hz": Field("pos", 500.0, unit="Hz"),
-        "control_hz": Field("pos", 100.0, unit="Hz"),
+        "physics_hz": Field("pos", 500.0, unit="Hz", bounds=(10.0, 20000.0, "a physics step of 50 us to 0.1 s")),
+        "control_hz": Field("pos", 100.0, unit="Hz",
+                            bounds=(10.0, 8000.0, "flight-controller loop rates, 10 Hz to 8 kHz")),
     }

@@ -33,14 +33,14 @@ CASCADE_RATIO = 3.0
 
 
 class CascadedController:
-    def __init__(self, drone, control_dt: float):
+    def __init__(self, drone, control_dt: float, rho: float = RHO_SEA_LEVEL):
         self.dt = control_dt
         af, rot = drone.airframe, drone.rotor
         self.mass = drone.mass_kg
         self.J = tuple(af.inertia_kg_m2)
         n = af.rotor_count
         self.n = n
-        self.fmax = rot.max_thrust_n
+        self.fmax = rot.max_thrust_n * rho / RHO_SEA_LEVEL     # thrust scales with air density
         tau_eff = rot.time_constant_s + control_dt
         self.k_rate = 0.5 / tau_eff
         self.k_att = self.k_rate / CASCADE_RATIO
@@ -50,15 +50,20 @@ class CascadedController:
         self.k_vel_i = 0.35 * self.k_vel * self.k_vel
         self.k_pos = self.k_vel / CASCADE_RATIO
         self.max_tilt = math.radians(af.max_tilt_deg)
-        tw = drone.thrust_to_weight
+        tw = drone.thrust_to_weight_at(rho)
         self.tan_tilt = math.tan(self.max_tilt)
         self.a_up = max(0.5, 0.8 * (tw - 1.0) * G)   # keep 20% of the margin for attitude
         self.a_down = 0.6 * G
-        self.i_lim = 0.3 * G
+        # the integral term's acceleration limits (m/s^2): horizontally up to the
+        # tilt limit, so it can hold against any wind the airframe can fly in;
+        # vertically 0.3 g (mass and thrust errors). The state is clamped to
+        # limit / k_vel_i: the limit is on the acceleration the integral supplies.
+        self.i_lim_h = G * self.tan_tilt / self.k_vel_i
+        self.i_lim_z = 0.3 * G / self.k_vel_i
         # drag feed-forward: the reference velocity's expected body drag (still air),
         # 1/2 rho CdA / m with the frontal CdA horizontally and the top CdA vertically
-        self.kd_h = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[0] / self.mass
-        self.kd_v = 0.5 * RHO_SEA_LEVEL * af.drag_area_m2[2] / self.mass
+        self.kd_h = 0.5 * rho * af.drag_area_m2[0] / self.mass
+        self.kd_v = 0.5 * rho * af.drag_area_m2[2] / self.mass
         # allocation: [T, tau_x, tau_y, tau_z] = A f
         k = rot.torque_coeff / rot.thrust_coeff
         lay = drone.rotor_layout()
@@ -113,10 +118,10 @@ class CascadedController:
             sat = True
         if not sat:
             dt = self.dt
-            lim = self.i_lim
+            lim, lz = self.i_lim_h, self.i_lim_z
             self.ix = min(lim, max(-lim, self.ix + ex * dt))
             self.iy = min(lim, max(-lim, self.iy + ey * dt))
-            self.iz = min(lim, max(-lim, self.iz + ez * dt))
+            self.iz = min(lz, max(-lz, self.iz + ez * dt))
         # desired thrust direction b3d and attitude (yaw sp[9])
         nrm = math.sqrt(ax * ax + ay * ay + fz * fz)
         d2x, d2y, d2z = ax / nrm, ay / nrm, fz / nrm

@@ -58,6 +58,9 @@ class Component:
     def bind(self, drone) -> None:
         """Precompute from the drone before a flight (optional)."""
 
+    def set_air_density(self, rho: float) -> None:
+        """The flight's air density (kg/m^3), set before ``bind`` (optional)."""
+
     def power(self, u: Usage) -> float:  # pragma: no cover - interface
         raise NotImplementedError(f"{type(self).__name__}.power(usage) must return watts")
 
@@ -214,6 +217,10 @@ class HoverPower(Component):
         self.efficiency = None if efficiency is None else _check.fraction(
             "efficiency", efficiency, where=f"component {name!r}", allow_zero=False)
         self._p = 0.0
+        self._rho_air = RHO_SEA_LEVEL
+
+    def set_air_density(self, rho):
+        self._rho_air = rho
 
     def bind(self, drone):
         if self.power_w is not None:
@@ -225,13 +232,38 @@ class HoverPower(Component):
             eta = (m.figure_of_merit * m.motor_efficiency * m.esc_efficiency
                    if isinstance(m, Motors) else 0.4)
         area = drone.airframe.rotor_count * drone.rotor.disc_area_m2
-        self._p = (drone.mass_kg * G) ** 1.5 / math.sqrt(2.0 * RHO_SEA_LEVEL * area) / eta
+        self._p = (drone.mass_kg * G) ** 1.5 / math.sqrt(2.0 * self._rho_air * area) / eta
 
     def power(self, u):
         return self._p if u.airborne else 0.0
 
     def params(self):
         return {"power_w": self.power_w, "efficiency": self.efficiency}
+
+
+#: Leishman, Principles of Helicopter Aerodynamics, 2nd ed. (2006), sec. 2.14: an empirical
+#: fit of measured induced velocity in axial descent through the vortex-ring and turbulent-
+#: wake states, v_i / v_h = kappa + k1 x + k2 x^2 + k3 x^3 + k4 x^4, x = V_c / v_h in [-2, 0].
+#: kappa is taken as 1 here (the curve then meets momentum theory at hover and at x = -2,
+#: the windmill-brake boundary); the induced power factor is applied separately.
+VRS_K = (-1.125, -1.372, -1.718, -0.655)
+
+
+def _descent_inflow(v_glauert: float, vax: float, vpar2: float, vh: float) -> float:
+    """Induced velocity in descent: the empirical vortex-ring curve in axial descent,
+    weighted by the axial share of the flow through the disc, V_ax^2 / (V_ax^2 + V_par^2)
+    (forward speed blows the ring away, Glauert's relation holds again); never below
+    Glauert's value. Our blend, not Leishman's: his curve is for axial flight only."""
+    if vh <= 0.0:
+        return v_glauert
+    x = vax / vh
+    if x < -2.0:
+        return v_glauert
+    k1, k2, k3, k4 = VRS_K
+    v_emp = vh * (1.0 + x * (k1 + x * (k2 + x * (k3 + x * k4))))
+    w = vax * vax / (vax * vax + vpar2)
+    v = w * v_emp + (1.0 - w) * v_glauert
+    return v if v > v_glauert else v_glauert
 
 
 class Motors(Component):
@@ -244,7 +276,9 @@ class Motors(Component):
 
     - induced velocity v_i from Glauert's relation
       v_i = T / (2 rho A sqrt(V_par^2 + (V_ax + v_i)^2)) (Leishman 2006, eq. 5.22),
-      so translational lift lowers it in forward flight;
+      so translational lift lowers it in forward flight; in descent through the
+      vortex-ring state, where momentum theory does not hold, the empirical
+      curve of ``_descent_inflow``;
     - induced power kappa T v_i, plus, for aft rotors, the share
       ``wake_interference`` of the fore rotors' wake they ingest, growing with
       the square of the wake skew sin(chi) = V_par / sqrt(V_par^2 + (V_ax + v_i)^2);
@@ -259,7 +293,7 @@ class Motors(Component):
     parts = ("induced", "profile", "climb_and_drag")
 
     def __init__(self, name: str = "motors", *, figure_of_merit, induced_power_factor=1.15,
-                 motor_efficiency, esc_efficiency, wake_interference=0.0, rho=RHO_SEA_LEVEL,
+                 motor_efficiency, esc_efficiency, wake_interference=0.0, rho=None,
                  description: str = "rotors: momentum theory per rotor"):
         super().__init__(name, description)
         w = f"component {name!r}"
@@ -271,19 +305,25 @@ class Motors(Component):
         self.esc_efficiency = _check.fraction("esc_efficiency", esc_efficiency, where=w, allow_zero=False)
         self.wake_interference = _check.number("wake_interference", wake_interference, where=w,
                                                minimum=0.0, maximum=1.0)
-        self.rho = _check.positive("rho", rho, where=w)
+        # None: the flight's air (Mission(atmosphere=...), sea level by default)
+        self.rho = None if rho is None else _check.positive("rho", rho, where=w)
+        self._rho_air = RHO_SEA_LEVEL
         if self.figure_of_merit * self.induced_power_factor >= 1.0:
             raise ConfigError(f"{w}: figure_of_merit x induced_power_factor = "
                               f"{self.figure_of_merit * self.induced_power_factor:.3f} must be < 1 "
                               f"(the rest is profile power)")
         self._vi = []
 
+    def set_air_density(self, rho):
+        self._rho_air = rho
+
     def bind(self, drone):
         A = drone.rotor.disc_area_m2
-        self._inv2rhoA = 1.0 / (2.0 * self.rho * A)
-        self._c0 = (1.0 / self.figure_of_merit - self.induced_power_factor) / math.sqrt(2.0 * self.rho * A)
+        rho = self.rho if self.rho is not None else self._rho_air
+        self._inv2rhoA = 1.0 / (2.0 * rho * A)
+        self._c0 = (1.0 / self.figure_of_merit - self.induced_power_factor) / math.sqrt(2.0 * rho * A)
         self._R = 0.5 * drone.rotor.diameter_m
-        self._inv_kf = 1.0 / drone.rotor.thrust_coeff
+        self._inv_kf = RHO_SEA_LEVEL / (drone.rotor.thrust_coeff * rho)   # kf is given at sea level
         self._inv_eta = 1.0 / (self.motor_efficiency * self.esc_efficiency)
         lay = drone.rotor_layout()
         self._dirs = [(x / math.hypot(x, y), y / math.hypot(x, y)) for x, y, _ in lay]
@@ -317,6 +357,8 @@ class Motors(Component):
                 if v < 0.0:
                     v = 0.0
             vi_state[i] = v
+            if vax < 0.0:
+                v = _descent_inflow(v, vax, vpar2, math.sqrt(vh2))
             induced += kappa * T * v
             axial += T * vax
             omega_r = math.sqrt(T * inv_kf) * R

@@ -17,7 +17,10 @@ from .components import Usage
 
 class EnergyIntegrator(Clocked):
     """``meter``: an ``energy.Meter``; ``traffic``: the drone's ``comm.Traffic``;
-    ``tasks``: the task scheduler (SoC busy time and task traffic) or None."""
+    ``tasks``: the task scheduler (SoC busy time and task traffic) or None. The
+    energy used (``state.energy_j``) is the battery's drain: the load's energy
+    plus the battery circuit's I^2 R loss; its terminal voltage and cut-off go
+    to ``state.battery_v`` and ``state.battery_cutoff``."""
 
     def __init__(self, state, meter, data, traffic, tasks, *, energy_hz: float, n_rotors: int):
         self.st, self.meter, self.traffic, self.tasks = state, meter, traffic, tasks
@@ -27,6 +30,7 @@ class EnergyIntegrator(Clocked):
         self.next_due = self._t_next - CLOCK_EPS
         self.t_e = 0.0
         self.u = Usage(n_rotors)
+        self._battery = getattr(meter, "battery", None)   # the meter's battery circuit
 
     def step(self, t: float) -> None:
         s, u = self.st, self.u
@@ -43,8 +47,12 @@ class EnergyIntegrator(Clocked):
         u.tx_bytes, u.tx_packets, u.rx_bytes, u.rx_packets = self.traffic.drain()
         power = self.meter.step(u)
         s.power = power
-        s.energy_j += power * edt
+        s.energy_j += (power + getattr(self.meter, "last_loss", 0.0)) * edt   # drain: load + I^2 R
         s.battery_remaining = max(0.0, 1.0 - s.energy_j / s.e_usable)
+        c = self._battery
+        if c is not None:
+            s.battery_v = c.voltage_v
+            s.battery_cutoff = c.cutoff
         self.t_e = t
         self._t_next += self.period_s
         self.next_due = self._t_next - CLOCK_EPS
@@ -60,7 +68,8 @@ class EnergyIntegrator(Clocked):
             u.dt, u.t, u.airborne = t - t_e, t, s.airborne
             u.thrust = self._act.tolist()
             u.tx_bytes, u.tx_packets, u.rx_bytes, u.rx_packets = self.traffic.drain()
-            s.energy_j += self.meter.step(u) * (t - t_e)
+            p = self.meter.step(u)
+            s.energy_j += (p + getattr(self.meter, "last_loss", 0.0)) * (t - t_e)
             self.t_e = t
 
     def _take_tasks(self, t) -> float:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import copy
 
 from ..errors import ConfigError, close_matches
+from ..physics import RHO_SEA_LEVEL
 from .components import Component, Constant, Motors, RadioLinear, SoC, Usage
 
 
@@ -101,6 +102,10 @@ class Group(Component):
         for c in self._children.values():
             c.bind(drone)
 
+    def set_air_density(self, rho):
+        for c in self._children.values():
+            c.set_air_density(rho)
+
     def power(self, u):
         return sum(c.power(u) for c in self._children.values())
 
@@ -157,11 +162,17 @@ class Meter:
     """Integrates every leaf part of an energy model over a flight.
 
     ``step(usage)`` returns the total power of the tick and adds energy to each
-    part; ``parts`` names them ("motors.induced", "proc.fc", ...).
+    part; ``parts`` names them ("motors.induced", "proc.fc", ...). The load's
+    power is drawn from the drone's battery circuit (``battery``, see
+    ``energy/battery.py``): its I^2 R loss is not a load (E_total stays
+    E_motors + E_proc + E_comm) but drains the battery too; ``loss_j`` sums it and
+    ``last_loss`` is the loss of the last tick (W).
     """
 
-    def __init__(self, model: EnergyModel, drone):
+    def __init__(self, model: EnergyModel, drone, rho: float = RHO_SEA_LEVEL):
+        model.set_air_density(rho)
         model.bind(drone)
+        self.battery = drone.battery.circuit()
         self.model = model
         self._leaves = []
         self.parts: list[str] = []
@@ -173,6 +184,8 @@ class Meter:
                 self._leaves.append((comp.power, 0))
                 self.parts.append(path)
         self.energy = [0.0] * len(self.parts)
+        self.loss_j = 0.0
+        self.last_loss = 0.0
         self.top = [p.split(".", 1)[0] for p in self.parts]
         tops = list(dict.fromkeys(self.top))
         self._top_idx = [(name, [i for i, t in enumerate(self.top) if t == name]) for name in tops]
@@ -194,6 +207,9 @@ class Meter:
                 e[k] += p * dt
                 total += p
                 k += 1
+        loss = self.battery.draw(total, dt)
+        self.loss_j += loss * dt
+        self.last_loss = loss
         self.last_power = total
         return total
 

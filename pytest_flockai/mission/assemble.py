@@ -70,7 +70,8 @@ class Run:
         self.plan, self.mission = plan, mission
         drone = plan.drone
         self.suite = sensor_suite(plan)
-        spec = build_spec(drone, plan.world, physics_dt=plan.physics_dt)
+        rho = plan.atmosphere.density
+        spec = build_spec(drone, plan.world, physics_dt=plan.physics_dt, rho=rho)
         self.suite.add_to_spec(spec, "drone")
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
@@ -80,10 +81,10 @@ class Run:
         st.home = (0.0, 0.0, float(self.data.qpos[2]))
         self.suite.bind(self.model, self.data, seed_sequence(plan.seed, "sensors"), world=plan.world,
                         battery=lambda: st.battery_remaining)
-        self.controller = CascadedController(drone, plan.ctrl_dt)
+        self.controller = CascadedController(drone, plan.ctrl_dt, rho=rho)
         self.meter = Meter(flight_energy_model(
             drone.energy, extra_sensors=list(drone.extra_sensors) + list(plan.sensors),
-            device=plan.onboard_device, blueprint_device=drone.device), drone)
+            device=plan.onboard_device, blueprint_device=drone.device), drone, rho=rho)
         self.components = self._components(plan, subscribers, probes)
 
     def _components(self, plan, subscribers, probes) -> list:
@@ -91,7 +92,8 @@ class Run:
         n_rot = drone.airframe.rotor_count
         # trajectories' acceleration limit: a quarter of the thrust margin, at most 2.5 m/s^2,
         # and no more than the velocity loop can follow (1.5 x its bandwidth)
-        accel = min(2.5, 0.25 * (drone.thrust_to_weight - 1.0) * G, 1.5 * self.controller.k_vel)
+        tw = drone.thrust_to_weight_at(plan.atmosphere.density)
+        accel = min(2.5, 0.25 * (tw - 1.0) * G, 1.5 * self.controller.k_vel)
         self.stages = StageMachine(st, copy.deepcopy(plan.pilot), self.events, d, accel=accel,
                                    climb_speed=plan.climb_speed, descent_speed=plan.descent_speed,
                                    return_home=plan.return_home)

@@ -1,7 +1,8 @@
 """When a flight ends on the battery or the clock: the last component of a tick.
 
 The stage machine ends a flight that landed. This component ends it when the
-battery is depleted, sends the drone home to land when the battery falls to
+battery is depleted (its usable charge is drawn, or the voltage under load
+fell below the cut-off), sends the drone home to land when the battery falls to
 its reserve (``until="battery_reserve"``), and ends it at the time limit
 (``until`` seconds, or the mission's ``max_time_s`` cap). The energy used
 changes only on the energy integrator's clock, so it runs on that clock (the
@@ -31,9 +32,11 @@ class EndConditions(Clocked):
         s = self.st
         if s.end_reason is not None:      # landed, or a user component stopped the flight
             return
-        if s.energy_j >= s.e_usable:
+        if s.energy_j >= s.e_usable or s.battery_cutoff:
             s.end_reason = "battery_depleted"
-            self.events.add(t, "battery_depleted")
+            self.events.add(t, "battery_depleted",
+                            cause="cutoff_voltage" if s.battery_cutoff else "charge",
+                            voltage_v=s.battery_v)
             return
         if self.use_reserve and s.stage == PILOT and s.e_usable - s.energy_j <= self.reserve_j:
             self.events.add(t, "battery_reserve", remaining=(s.e_usable - s.energy_j) / s.e_usable)

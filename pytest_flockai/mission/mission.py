@@ -45,7 +45,7 @@ class Mission:
                  energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
                  dataset_dir=None, dataset_period_s: float = 1.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None,
-                 components=(), conditions: Conditions | None = None):
+                 components=(), conditions: Conditions | None = None, atmosphere=None):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
         if not isinstance(pilot, Pilot):
@@ -78,6 +78,7 @@ class Mission:
             raise ConfigError(f"Mission: conditions = {conditions!r} is not allowed; expected "
                               f"fa.Conditions(...) or None")
         self.conditions = conditions
+        self.atmosphere = atmosphere
         resolve(self)
 
     def subscribe(self, target) -> "Mission":
@@ -100,6 +101,7 @@ class Mission:
             "fly_on": self.fly_on,
             **({"components": [c.to_dict() for c in self.components]} if self.components else {}),
             **({"conditions": self.conditions.to_dict()} if self.conditions is not None else {}),
+            **({"atmosphere": self.atmosphere.to_dict()} if self.atmosphere is not None else {}),
         }
 
     def __repr__(self):

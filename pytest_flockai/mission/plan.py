@@ -25,6 +25,7 @@ from ..errors import ConfigError
 from ..ml import Task
 from ..probes.builtin import BUILTIN
 from ..sensors import Sensor
+from ..world.atmosphere import Atmosphere
 from ..world.wind import Wind
 
 UNTIL = ("landed", "battery_depleted", "battery_reserve")
@@ -63,6 +64,7 @@ class FlightPlan:
     dataset_period_s: float
     onboard_device: object    # compute.Device or None
     conditions: object = None  # sensors.Conditions for the blueprint's camera
+    atmosphere: Atmosphere = Atmosphere()   # the air: density for thrust, drag and power
 
     @property
     def use_reserve(self) -> bool:
@@ -153,7 +155,8 @@ def onboard_device(tasks, drone):
 def resolve(m) -> FlightPlan:
     """The flight plan of Mission ``m`` (raises ConfigError on bad input)."""
     drone = m.drone
-    drone.check()
+    atmosphere = Atmosphere.coerce(getattr(m, "atmosphere", None))
+    drone.check(rho=atmosphere.density)
     sim = drone.sim
     if sim.physics_hz < sim.control_hz:
         raise ConfigError(f"{drone.name} [sim]: physics_hz = {sim.physics_hz:g} must be >= "
@@ -173,4 +176,4 @@ def resolve(m) -> FlightPlan:
         ctrl_dt=physics_dt * substeps, telemetry_hz=m.telemetry_hz, energy_hz=m.energy_hz,
         climb_speed=m.climb_speed, descent_speed=m.descent_speed, return_home=m.return_home,
         fly_on=m.fly_on, dataset_dir=m.dataset_dir, dataset_period_s=m.dataset_period_s,
-        onboard_device=onboard_device(tasks, drone), conditions=m.conditions)
+        onboard_device=onboard_device(tasks, drone), conditions=m.conditions, atmosphere=atmosphere)

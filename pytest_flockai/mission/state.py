@@ -32,6 +32,8 @@ class VehicleState:
         "w",
         # energy integrator: power of the last interval (W), energy used (J), usable energy
         "power", "energy_j", "e_usable", "battery_remaining",
+        # battery circuit: terminal voltage (V); True once it fell below the cut-off
+        "battery_v", "battery_cutoff",
         # flight book: the phase now
         "phase",
         # end: why the flight ended (None while flying), whether it crashed
@@ -55,6 +57,8 @@ class VehicleState:
         self.energy_j = 0.0
         self.e_usable = e_usable
         self.battery_remaining = 1.0
+        self.battery_v = 0.0
+        self.battery_cutoff = False
         self.phase = int(Phase.TAKEOFF)
         self.end_reason: str | None = None
         self.crashed = False

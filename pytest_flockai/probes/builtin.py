@@ -39,10 +39,10 @@ class EnergyProbe(Probe):
     name = "energy"
     builtin = True
     metrics = (_metrics("energy_total_j", "energy_motors_j", "energy_proc_j", "energy_comm_j",
-                        kind="counter")
+                        "energy_battery_loss_j", kind="counter")
                + _metrics("energy_share_motors", "energy_share_proc", "energy_share_comm",
                           "battery_remaining", kind="ratio")
-               + _metrics("mean_power_w", "endurance_s"))
+               + _metrics("mean_power_w", "endurance_s", "battery_v_min"))
 
     def collect(self, v):
         tops = v.energy_by_top()
@@ -50,12 +50,14 @@ class EnergyProbe(Probe):
         e_m, e_p, e_c = tops.get("motors", 0.0), tops.get("proc", 0.0), tops.get("comm", 0.0)
         t = v.t
         mean_p = e_tot / t if t > 0 else 0.0
+        drain = e_tot + v.battery_loss_j          # the battery gives up the load and its own loss
         share = (lambda e: e / e_tot) if e_tot > 0 else (lambda e: 0.0)
         return {"energy_total_j": e_tot, "energy_motors_j": e_m, "energy_proc_j": e_p,
-                "energy_comm_j": e_c, "energy_share_motors": share(e_m), "energy_share_proc": share(e_p),
-                "energy_share_comm": share(e_c), "mean_power_w": mean_p,
-                "battery_remaining": max(0.0, 1.0 - e_tot / v.battery_usable_j),
-                "endurance_s": v.battery_usable_j / mean_p if mean_p > 0 else float("inf")}
+                "energy_comm_j": e_c, "energy_battery_loss_j": v.battery_loss_j,
+                "battery_v_min": v.battery_v_min, "energy_share_motors": share(e_m),
+                "energy_share_proc": share(e_p), "energy_share_comm": share(e_c), "mean_power_w": mean_p,
+                "battery_remaining": max(0.0, 1.0 - drain / v.battery_usable_j),
+                "endurance_s": v.battery_usable_j * t / drain if drain > 0 else float("inf")}
 
 
 class ComputeProbe(Probe):

@@ -27,7 +27,7 @@ class RunView:
     Attributes: ``t`` (s), ``position``, ``velocity`` (tuples), ``stage``,
     ``phase_time`` (takeoff, hover, move, accelerating, landing seconds),
     ``distance_m``, ``max_speed_mps``, ``tracking_error_max_m``, ``crashed``,
-    ``battery_usable_j``, ``cpu_time_s``, ``io_time_s``, ``mem_utilization``,
+    ``battery_usable_j``, ``battery_v_min``, ``battery_loss_j``, ``cpu_time_s``, ``io_time_s``, ``mem_utilization``,
     ``bytes_in``, ``bytes_out``, ``packets_in``, ``packets_out``,
     ``task_kpis`` (dict of the ML tasks' KPIs so far), ``sensors`` (latest
     readings by sensor name), ``drone`` and ``mission``.
@@ -51,6 +51,16 @@ class RunView:
         self.task_kpis: dict = {}
         self.task_kpis_by_task: dict = {}
         self.sensors: dict = {}
+
+    @property
+    def battery_v_min(self) -> float:
+        """Lowest terminal voltage of the battery under load so far (V)."""
+        return self._meter.battery.v_min
+
+    @property
+    def battery_loss_j(self) -> float:
+        """I^2 R loss inside the battery so far (J); it drains the battery, not a load."""
+        return self._meter.loss_j
 
     def energy_by_top(self) -> dict:
         return self._meter.totals_by_top()

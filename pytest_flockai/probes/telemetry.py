@@ -33,7 +33,7 @@ class TelemetryRecorder:
         self._sensor_hist = {n: [] for n in polled} if polled else None
         self._est_hist: list = []
         self.columns = list(BASE_COLS) + [f"thrust_{i}" for i in range(n_rotors)] + \
-            [f"energy_{k}_j" for k in ("motors", "proc", "comm")]
+            [f"energy_{k}_j" for k in ("motors", "proc", "comm")] + ["battery_v", "battery_a"]
         rows = max(rows, 16)
         self._buf = np.empty((rows, len(self.columns)))
         self._t = np.empty(rows)
@@ -57,7 +57,8 @@ class TelemetryRecorder:
         em, ep, ec = by_top.get("motors", 0.0), by_top.get("proc", 0.0), by_top.get("comm", 0.0)
         self._buf[i] = (q[0], q[1], q[2], v[0], v[1], v[2], roll, pitch, yaw, v[3], v[4], v[5],
                         sp[0], sp[1], sp[2], w[0], w[1], w[2], power, energy_j,
-                        max(0.0, 1.0 - energy_j / e_usable), *self.data.act.tolist(), em, ep, ec)
+                        max(0.0, 1.0 - energy_j / e_usable), *self.data.act.tolist(), em, ep, ec,
+                        self.meter.battery.voltage_v, self.meter.battery.current_a)
         self._t[i] = t
         if self._sensor_hist is not None:
             latest = self.suite.latest

@@ -1,7 +1,8 @@
-"""The world: ground, scenery, people and wind."""
+"""The world: ground, scenery, people, wind and the atmosphere."""
 
+from .atmosphere import Atmosphere
 from .truth import CameraModel, Truth, gimbal_pose, visible_people
 from .wind import Wind
 from .world import World
 
-__all__ = ["CameraModel", "Truth", "Wind", "World", "gimbal_pose", "visible_people"]
+__all__ = ["Atmosphere", "CameraModel", "Truth", "Wind", "World", "gimbal_pose", "visible_people"]

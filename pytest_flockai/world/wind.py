@@ -1,10 +1,26 @@
-"""Wind: a mean vector plus seeded gusts (Ornstein-Uhlenbeck per axis).
+"""Wind: a mean vector plus seeded turbulence after the Dryden model of MIL-F-8785C.
 
-Each axis follows dw = -(w - mean) / tau dt + sigma sqrt(2 / tau) dW, so the
-gust has standard deviation ``gust_std`` and correlation time ``gust_tau_s``.
-The default gust_std is 10% of the mean speed: MIL-F-8785C gives light
-low-altitude turbulence as sigma = 0.1 x the wind speed at 20 ft.
-The aerodynamic force comes from the drone's velocity relative to this air.
+Low-altitude turbulence (MIL-F-8785C, sec. 3.7.2.3, below 1000 ft), with h the
+height above ground in feet (at least 10 ft, the model's lower limit):
+
+- vertical intensity sigma_w = 0.1 W20 (light turbulence), W20 the wind speed at
+  20 ft, here the mean wind speed;
+- horizontal intensities sigma_u = sigma_v = sigma_w / (0.177 + 0.000823 h)^0.4,
+  1.7 to 1.9 sigma_w at 10 to 100 ft;
+- length scales L_w = h, L_u = L_v = h / (0.177 + 0.000823 h)^1.2 (ft).
+
+Each axis is a first-order (Ornstein-Uhlenbeck) process with the Dryden
+correlation time L / V, V the speed at which the frozen turbulence is carried
+past the drone (Taylor's hypothesis: the mean wind speed, at least 1 m/s).
+That is Dryden's longitudinal filter exactly; the lateral and vertical ones
+are second order in the specification and first order here. The intensities
+and time constants follow the drone's height every tick, so the gusts grow
+stronger and slower as it climbs.
+
+``gust_std`` given: the horizontal intensity sigma_u (the vertical one keeps the
+specification's ratio); ``gust_tau_s`` given: one fixed correlation time for all
+three axes instead of the length scales. The aerodynamic force comes from the
+drone's velocity relative to this air.
 """
 
 from __future__ import annotations
@@ -16,14 +32,45 @@ import numpy as np
 from .. import _check
 from ..clock import Clocked
 
+FT = 0.3048
+
+
+def dryden_low_altitude(h_m: float):
+    """(sigma_u / sigma_w, L_u (m), L_w (m)) of MIL-F-8785C at height h_m above ground."""
+    h = max(h_m / FT, 10.0)
+    h = min(h, 1000.0)
+    k = 0.177 + 0.000823 * h
+    return k ** -0.4, h / k ** 1.2 * FT, h * FT
+
 
 class Wind:
-    def __init__(self, mean=(0.0, 0.0, 0.0), *, gust_std: float | None = None, gust_tau_s: float = 2.0):
+    def __init__(self, mean=(0.0, 0.0, 0.0), *, gust_std: float | None = None,
+                 gust_tau_s: float | None = None):
         self.mean = _check.vector("mean", mean, 3, where="Wind")
         speed = math.sqrt(sum(c * c for c in self.mean))
-        self.gust_std = (0.1 * speed if gust_std is None
+        self.sigma_w20 = 0.1 * speed            # MIL-F-8785C light: sigma_w = 0.1 W20
+        self.gust_std = (None if gust_std is None
                          else _check.non_negative("gust_std", gust_std, where="Wind"))
-        self.gust_tau_s = _check.positive("gust_tau_s", gust_tau_s, where="Wind")
+        self.gust_tau_s = (None if gust_tau_s is None
+                           else _check.positive("gust_tau_s", gust_tau_s, where="Wind"))
+        self.carry_mps = max(1.0, speed)        # Taylor: turbulence carried past at the mean wind
+
+    @property
+    def turbulent(self) -> bool:
+        return (self.gust_std if self.gust_std is not None else self.sigma_w20) > 0.0
+
+    def intensities(self, h_m: float):
+        """(sigma_horizontal, sigma_vertical, tau_horizontal, tau_vertical) at height h_m."""
+        ratio, lu, lw = dryden_low_altitude(h_m)
+        if self.gust_std is None:
+            sw = self.sigma_w20
+            su = sw * ratio
+        else:
+            su = self.gust_std
+            sw = su / ratio
+        if self.gust_tau_s is not None:
+            return su, sw, self.gust_tau_s, self.gust_tau_s
+        return su, sw, lu / self.carry_mps, lw / self.carry_mps
 
     @classmethod
     def coerce(cls, value) -> "Wind | None":
@@ -34,47 +81,63 @@ class Wind:
         return cls(value)
 
     def to_dict(self) -> dict:
-        return {"mean": list(self.mean), "gust_std": self.gust_std, "gust_tau_s": self.gust_tau_s}
+        return {"mean": list(self.mean), "gust_std": self.gust_std, "gust_tau_s": self.gust_tau_s,
+                "turbulence": "MIL-F-8785C Dryden, low altitude"}
 
     def __repr__(self):
-        return f"Wind(mean={self.mean}, gust_std={self.gust_std:g}, gust_tau_s={self.gust_tau_s:g})"
+        g = "Dryden" if self.gust_std is None else f"{self.gust_std:g}"
+        return f"Wind(mean={self.mean}, gust_std={g}, gust_tau_s={self.gust_tau_s})"
 
     def sampler(self, rng: np.random.Generator, dt: float) -> "WindSampler":
         return WindSampler(self, rng, dt)
 
 
 class WindSampler:
-    """Steps the gust process on the simulated clock; draws in blocks (no per-tick allocation)."""
+    """Steps the turbulence on the simulated clock; draws in blocks (no per-tick
+    allocation). Each axis: g' = a g + sigma sqrt(1 - a^2) n, a = exp(-dt / tau),
+    the exact discretisation of the OU process; sigma and tau at the drone's height,
+    recomputed when it has moved by more than 0.5 m."""
 
     BLOCK = 4096
 
     def __init__(self, wind: Wind, rng, dt: float):
+        self.wind, self.dt = wind, dt
         self.mean = wind.mean
-        self.a = math.exp(-dt / wind.gust_tau_s)
-        self.b = wind.gust_std * math.sqrt(1.0 - self.a * self.a)   # exact OU discretisation
         self.rng = rng
+        self.active = wind.turbulent
+        self._h = None
+        self._coef = (0.0, 0.0, 0.0, 0.0)
         self.g = [0.0, 0.0, 0.0]
-        if wind.gust_std > 0:
-            self.g = list(rng.standard_normal(3) * wind.gust_std)
+        if self.active:
+            su, sw, _, _ = wind.intensities(0.0)
+            self.g = list(rng.standard_normal(3) * np.array([su, su, sw]))
         self._buf = []
         self._k = 0
-        self.active = wind.gust_std > 0
 
-    def step(self):
-        """Advance one period; returns the wind vector (wx, wy, wz)."""
+    def _at(self, h: float):
+        su, sw, tu, tw = self.wind.intensities(h)
+        ah, aw = math.exp(-self.dt / tu), math.exp(-self.dt / tw)
+        self._coef = (ah, su * math.sqrt(1.0 - ah * ah), aw, sw * math.sqrt(1.0 - aw * aw))
+        self._h = h
+
+    def step(self, h: float = 0.0):
+        """Advance one period at height h (m above ground); returns the wind (wx, wy, wz)."""
         m = self.mean
         if not self.active:
             return m
+        if self._h is None or abs(h - self._h) > 0.5:
+            self._at(h)
         k = self._k
         if k >= len(self._buf):
             self._buf = self.rng.standard_normal(3 * self.BLOCK).tolist()
             k = 0
-        buf, a, b, g = self._buf, self.a, self.b, self.g
-        g[0] = a * g[0] + b * buf[k]
-        g[1] = a * g[1] + b * buf[k + 1]
-        g[2] = a * g[2] + b * buf[k + 2]
+        buf, g = self._buf, self.g
+        ah, bh, aw, bw = self._coef
+        g[0] = ah * g[0] + bh * buf[k]
+        g[1] = ah * g[1] + bh * buf[k + 1]
+        g[2] = aw * g[2] + bw * buf[k + 2]
         self._k = k + 3
-        return (m[0] + g[0], m[1] + g[1], m[2] + 0.5 * g[2])
+        return (m[0] + g[0], m[1] + g[1], m[2] + g[2])
 
 
 class WindStep(Clocked):
@@ -91,6 +154,6 @@ class WindStep(Clocked):
         self._mwind[:] = wind.mean
 
     def step(self, t: float) -> None:
-        w = self.sampler.step()
+        w = self.sampler.step(self.st.q[2])
         self._mwind[0], self._mwind[1], self._mwind[2] = w
         self.st.w = w

@@ -52,11 +52,13 @@ def scenarios() -> dict:
             fa.drone("dji-mavic-2-pro"), fa.pilots.Waypoints([(20, 0, 10), (20, 20, 10)], speed=5),
             sensors=[fa.sensors.BatterySensor(), fa.sensors.IMU()], fly_on="estimate", seed=4),
         "reserve": lambda: fa.Mission(
-            fa.drone("dji-mavic-2-pro", battery_mah=300),
+            # the Mavic's cell resistance (3850 mAh pack): a short flight, not a weak battery
+            fa.drone("dji-mavic-2-pro", battery_mah=300, internal_resistance_mohm=7.8),
             fa.pilots.Waypoints([(30, 0, 10), (30, 30, 10)], speed=5, loop=True),
             until="battery_reserve", seed=5),
         "depleted": lambda: fa.Mission(
-            fa.drone("crazyflie-2-1", battery_mah=20), fa.pilots.Hover(1.0), until="battery_depleted"),
+            fa.drone("crazyflie-2-1", battery_mah=20, internal_resistance_mohm=120.0),  # the 250 mAh cell's
+            fa.pilots.Hover(1.0), until="battery_depleted"),
         "onboard-task": lambda: fa.Mission(
             fa.drone("dji-mavic-2-pro"), fa.pilots.ZigZag(**zz), world=_world(),
             tasks=[fa.Task(model(), period_s=2.0, execution="onboard", device="raspberry-pi-4")], seed=0),
