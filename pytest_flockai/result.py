@@ -33,7 +33,8 @@ class FlightResult:
     - ``events``: list of dicts (t, kind, ...): stage changes, crash, battery, probe errors
     - ``scenario``: JSON-ready description of what was flown (drone, pilot, seed...)
     - ``energy_breakdown``: J per energy component and sub-component
-    - ``end_reason``: "landed", "time", "battery_depleted", "crashed", "time_cap", "diverged"
+    - ``end_reason``: "landed", "time", "battery_depleted", "crashed", "time_cap", "diverged",
+      "wall_time" (stopped by ``Mission(max_wall_s=...)``)
     - ``probe_samples``: one DataFrame per probe, at the probe's own period
     - ``probe_errors``: failures of probes or subscribers (the flight went on)
     """

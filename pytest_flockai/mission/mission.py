@@ -37,6 +37,11 @@ class Mission:
     battery falls to its reserve), or a number of simulated seconds.
     components: your own clocked components (``fa.Clocked``), stepped every tick
     or on their own period, after the built-in ones.
+    max_time_s: the cap on simulated time (default 4 h, at most
+    ``limits.MAX_TIME_S``); a numeric ``until`` must not exceed it.
+    max_wall_s: seconds of host time after which the flight is stopped with a
+    ``SimulationError`` (``end_reason`` ``"wall_time"``) carrying the partial
+    result in ``.result`` (None: no limit).
     """
 
     def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
@@ -45,7 +50,8 @@ class Mission:
                  energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
                  dataset_dir=None, dataset_period_s: float = 1.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None,
-                 components=(), conditions: Conditions | None = None):
+                 components=(), conditions: Conditions | None = None,
+                 max_wall_s: float | None = None):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
         if not isinstance(pilot, Pilot):
@@ -78,6 +84,8 @@ class Mission:
             raise ConfigError(f"Mission: conditions = {conditions!r} is not allowed; expected "
                               f"fa.Conditions(...) or None")
         self.conditions = conditions
+        self.max_wall_s = (None if max_wall_s is None
+                           else _check.positive("max_wall_s", max_wall_s, where="Mission"))
         resolve(self)
 
     def subscribe(self, target) -> "Mission":
@@ -112,7 +120,7 @@ class Mission:
             loop.fly(run)
         except SimulationError as exc:
             exc.result = result.build(run, self, _time.perf_counter() - wall0, run.data.time,
-                                      "diverged")
+                                      getattr(exc, "end_reason", "diverged"))
             publish(exc.result, self)
             raise
         res = result.build(run, self, _time.perf_counter() - wall0, run.data.time,
