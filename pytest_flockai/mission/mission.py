@@ -11,6 +11,7 @@ in a ``SimulationError`` (then with the partial result).
 
 from __future__ import annotations
 
+import os
 import time as _time
 
 import numpy as np
@@ -23,6 +24,7 @@ from ..probes.hub import resolve_probes
 from ..recording import publish
 from ..result import FlightResult
 from ..sensors import Conditions
+from ..world import World
 from ..world.wind import Wind
 from . import loop, result
 from .assemble import Run
@@ -59,8 +61,17 @@ class Mission:
                               f"Waypoints, ZigZag, Orbit or a Pilot subclass)")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ConfigError(f"Mission: seed = {seed!r} is not allowed; expected an integer >= 0")
-        if name is not None and (not isinstance(name, str) or not name):
+        if name is not None and (not isinstance(name, str) or not name.strip()):
             raise ConfigError(f"Mission: name = {name!r} is not allowed; expected a non-empty str")
+        if world is not None and not isinstance(world, World):
+            raise ConfigError(f"Mission: world = {world!r} is not allowed; expected None or a "
+                              f"fa.World (World.urban(...), World.scene(...), World.from_mjcf(...))")
+        if not isinstance(return_home, (bool, np.bool_)):
+            raise ConfigError(f"Mission: return_home = {return_home!r} is not allowed; expected "
+                              f"True or False")
+        if dataset_dir is not None and not isinstance(dataset_dir, (str, os.PathLike)):
+            raise ConfigError(f"Mission: dataset_dir = {dataset_dir!r} is not allowed; expected "
+                              f"None or a folder path")
         self.drone, self.pilot, self.world = drone, pilot, world
         self.until = check_until(until)
         self.sensors = list(check_sensors(sensors))

@@ -10,27 +10,35 @@ The aerodynamic force comes from the drone's velocity relative to this air.
 from __future__ import annotations
 
 import math
+from numbers import Real
 
 import numpy as np
 
-from .. import _check
+from .. import _check, limits
 from ..clock import Clocked
+from ..errors import ConfigError
 
 
 class Wind:
     def __init__(self, mean=(0.0, 0.0, 0.0), *, gust_std: float | None = None, gust_tau_s: float = 2.0):
         self.mean = _check.vector("mean", mean, 3, where="Wind")
         speed = math.sqrt(sum(c * c for c in self.mean))
+        limits.check_at_most(f"mean = {self.mean!r}: speed", speed, "MAX_WIND_MPS", where="Wind",
+                             unit=" m/s")
         self.gust_std = (0.1 * speed if gust_std is None
                          else _check.non_negative("gust_std", gust_std, where="Wind"))
+        limits.check_at_most("gust_std", self.gust_std, "MAX_WIND_MPS", where="Wind", unit=" m/s")
         self.gust_tau_s = _check.positive("gust_tau_s", gust_tau_s, where="Wind")
 
     @classmethod
     def coerce(cls, value) -> "Wind | None":
         if value is None or isinstance(value, Wind):
             return value
-        if isinstance(value, (int, float)):
-            return cls((float(value), 0.0, 0.0))
+        if isinstance(value, Real) and not isinstance(value, bool):
+            return cls((value, 0.0, 0.0))
+        if isinstance(value, (str, bytes, dict)):
+            raise ConfigError(f"wind = {value!r} is not allowed; expected None, a speed in m/s, "
+                              f"(x, y, z) in m/s or fa.Wind(...)")
         return cls(value)
 
     def to_dict(self) -> dict:
