@@ -258,7 +258,7 @@ def _safe(name: str) -> str:
     of the full name (``a/b``, ``a_b``, ``a:b`` and ``a b`` get different
     folders; long ids stay unique; nothing becomes hidden, ``..`` or empty)."""
     clean = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_.")
-    if clean == name and len(clean) <= 150:
+    if clean and clean == name and len(clean) <= 150:
         return clean
     digest = hashlib.sha256(name.encode("utf-8", "surrogatepass")).hexdigest()[:10]
     return f"{clean[:120] or 'test'}-{digest}"
