@@ -23,7 +23,8 @@ from .errors import ConfigError
 #: (``max_time_s`` defaults to 4 h; a numeric ``until`` must not exceed ``max_time_s``)
 MAX_TIME_S = 24 * 3600.0
 #: rows of telemetry one flight may record: simulated time x ``telemetry_hz``
-MAX_TELEMETRY_ROWS = 1_000_000
+#: (13.9 h at the default 10 Hz; the DataFrame at the limit peaks near 0.5 GiB)
+MAX_TELEMETRY_ROWS = 500_000
 #: samples one probe may record in one flight: simulated time / its ``period_s``
 MAX_PROBE_SAMPLES = 250_000
 #: m: the longest side of a world (``World.urban``/``World.scene`` ``size``)
