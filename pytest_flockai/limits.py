@@ -36,7 +36,8 @@ MAX_VEHICLES = 5_000
 #: points of one ``Waypoints`` pilot (a ZigZag's legs included)
 MAX_WAYPOINTS = 100_000
 #: m: how far from home (horizontally or in altitude) a pilot may send the drone
-MAX_EXTENT_M = 50_000.0
+#: (a Mavic on one battery covers about 15 km)
+MAX_EXTENT_M = 100_000.0
 #: m/s: the strongest mean wind. The strongest gust ever measured at the surface is
 #: 113.3 m/s (WMO Archive of Weather and Climate Extremes, Barrow Island, 1996)
 MAX_WIND_MPS = 113.0
