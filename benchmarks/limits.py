@@ -62,6 +62,8 @@ what = (f"Mavic hover until the battery is depleted: {r.sim_time_s / 60:.1f} min
 CHILD = """
 import os, resource, sys, time, tracemalloc
 os.environ.setdefault("MUJOCO_GL", "egl")
+# a guard for the machine: an allocation past 4 GiB fails here instead of swapping
+resource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))
 tracemalloc.start()
 t0 = time.perf_counter()
 import pytest_flockai as fa

@@ -28,11 +28,11 @@ MAX_TELEMETRY_ROWS = 500_000
 #: samples one probe may record in one flight: simulated time / its ``period_s``
 MAX_PROBE_SAMPLES = 250_000
 #: m: the longest side of a world (``World.urban``/``World.scene`` ``size``)
-MAX_WORLD_SIDE_M = 5_000.0
+MAX_WORLD_SIDE_M = 2_000.0
 #: people in a world (scattered plus crowds, or listed)
-MAX_PEOPLE = 20_000
+MAX_PEOPLE = 10_000
 #: vehicles in a world
-MAX_VEHICLES = 5_000
+MAX_VEHICLES = 2_000
 #: points of one ``Waypoints`` pilot (a ZigZag's legs included)
 MAX_WAYPOINTS = 100_000
 #: m: how far from home (horizontally or in altitude) a pilot may send the drone
