@@ -47,7 +47,7 @@ what = (f"World.urban {L.MAX_WORLD_SIDE_M:g} m x {L.MAX_WORLD_SIDE_M:g} m, {len(
 """,
     "zigzag": """
 L = fa.limits
-p = fa.pilots.ZigZag(((0, 0), (50.0, 0.5 * (L.MAX_WAYPOINTS - 2))), altitude=10, spacing=0.5)
+p = fa.pilots.ZigZag(((0, 0), (50.0, 0.5 * (L.MAX_WAYPOINTS / 2 - 3))), altitude=10, spacing=0.5)
 r = fa.Mission(fa.drone("dji-mavic-2-pro"), p, until=5.0).run()
 what = f"ZigZag at limits.MAX_WAYPOINTS: {len(p.points):,} points, flown 5 s"
 """,

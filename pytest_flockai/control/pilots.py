@@ -147,10 +147,10 @@ class ZigZag(Waypoints):
         self.area = ((x0, y0), (x1, y1))
         alt = _alt(altitude, "ZigZag")
         self.spacing = _check.positive("spacing", spacing, where="ZigZag")
-        legs = abs(y1 - y0) / self.spacing + 2       # checked before any leg is built
-        limits.check_at_most(f"legs (|y1 - y0| / spacing = {abs(y1 - y0):g} m / "
-                             f"{self.spacing:g} m)", legs, "MAX_WAYPOINTS", where="ZigZag",
-                             how="give a larger spacing")
+        points = 2 * (abs(y1 - y0) / self.spacing + 2)    # checked before any leg is built
+        limits.check_at_most(f"points (2 per leg, |y1 - y0| / spacing = {abs(y1 - y0):g} m / "
+                             f"{self.spacing:g} m legs)", points, "MAX_WAYPOINTS",
+                             where="ZigZag", how="give a larger spacing")
         ys = []
         yy = y0
         step = self.spacing if y1 > y0 else -self.spacing
