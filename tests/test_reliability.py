@@ -63,6 +63,16 @@ def test_an_invalid_prediction_is_a_failed_inference_with_the_reason(pred):
     assert not np.isnan(k["bad.inference_failures"])
 
 
+@pytest.mark.parametrize("pred", ["boxes", None, float("nan")], ids=["string", "none", "nan"])
+def test_an_unparsable_detection_output_is_a_failed_inference_not_a_crash(pred):
+    task = fa.Task(PythonModel(lambda f: pred, macs=1000, name="det"), sensor="gps", period_s=1.0,
+                   evaluate="detection")
+    r = fa.Mission(CF, fa.pilots.Hover(1.0, 2.0), tasks=[task], until=3.0).run()
+    assert r.kpis["det.inference_failures"] >= 2 and r.end_reason == "time"
+    errors = [e["error"] for e in r.events if e["kind"] == "inference"]
+    assert errors and all(e.startswith("invalid prediction") for e in errors), errors[:1]
+
+
 def test_a_valid_count_is_still_a_successful_inference():
     task = fa.Task(PythonModel(lambda f: 3, macs=1000, name="ok"), sensor="gps", period_s=1.0)
     r = fa.Mission(CF, fa.pilots.Hover(1.0, 3.0), tasks=[task], until=4.0).run()
