@@ -39,7 +39,7 @@ def _import_mujoco():
 GL_IMPORT_ERROR = _import_mujoco()
 
 from . import control as _control  # noqa: E402
-from . import comm, kpis, ml, probes, sensors
+from . import comm, kpis, limits, ml, probes, sensors
 from .airframe import Drone, blueprints, drone
 from .compute import devices
 from .control import pilots
@@ -57,5 +57,5 @@ __version__ = "0.1.0"
 
 __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
-           "kpis", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
+           "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
 del _control

@@ -27,7 +27,9 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
+from numbers import Real
 
 from . import kpis as _kpis
 from .errors import ConfigError, close_matches
@@ -97,6 +99,9 @@ class Budget:
         """
         if actual is None:
             return False, math.nan
+        if isinstance(actual, (bool, str, bytes)) or not isinstance(actual, Real):
+            raise ConfigError(f"KPI {self.kpi}: value {actual!r} is not a number; budgets are "
+                              f"checked against numeric KPIs")
         a = float(actual)
         if math.isnan(a):
             return False, math.nan
@@ -185,6 +190,9 @@ def parse(kpi: str, text) -> Budget:
         raise ConfigError(f"{where}: unit {unit!r} measures {_dim_name(udim)}, but {kpi} is in "
                           f"{dim!r} ({_dim_name(dim)}); allowed units: {_allowed_units(dim)}")
     limit = value * factor
+    if not math.isfinite(limit):      # '<= 1e999 J' would never fail
+        raise ConfigError(f"{where}: the limit {num} is not a finite number (it overflows to "
+                          f"{limit}); allowed: a finite number")
     return Budget(kpi=kpi, op=op, limit=limit, text=text.strip(), unit=unit, factor=factor,
                   dimension=udim if udim is not None else "1")
 
@@ -272,6 +280,12 @@ def evaluate(result, budgets: dict | None = None, **more) -> list[Verdict]:
     A budget on a KPI the flight did not produce raises ConfigError naming it.
     """
     kpis = getattr(result, "kpis", result)
+    if not isinstance(kpis, Mapping):
+        raise ConfigError(f"budgets.evaluate: result = {result!r} is not a FlightResult or a "
+                          f"dict of KPIs")
+    if budgets is not None and not isinstance(budgets, Mapping):
+        raise ConfigError(f"budgets.evaluate: budgets = {budgets!r} is not allowed; expected a "
+                          f"dict {{kpi: '<op> <number> [unit]'}}")
     spec = dict(budgets or {})
     spec.update(more)
     out = []

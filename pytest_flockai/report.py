@@ -53,6 +53,7 @@ This module is used by the plugin only (it needs no pytest itself).
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 import json
 import math
 import os
@@ -67,6 +68,7 @@ from pathlib import Path
 from . import kpis as _kpis
 from . import plots
 from ._io import atomic_write
+from .errors import ConfigError
 
 SCHEMA = "pytest-flockai/1"
 BASELINE_SCHEMA = "pytest-flockai-baseline/1"
@@ -75,8 +77,9 @@ _PACKAGES = ("pytest-flockai", "pytest", "pytest-xdist", "mujoco", "numpy", "pan
              "hypothesis", "onnxruntime", "opencv-python-headless")
 
 
-class ReportError(Exception):
-    """A report or baseline file cannot be read or written (the plugin makes it a UsageError)."""
+class ReportError(ConfigError):
+    """A report or baseline file cannot be read or written (the plugin makes it a UsageError).
+    A ``ConfigError``: a bad report path or baseline file is bad input."""
 
 
 # -- JSON-ready values ----------------------------------------------------------
@@ -250,7 +253,15 @@ def regressions(flights: dict, base: dict, max_regression_pct: float, *,
 
 # -- artifacts -----------------------------------------------------------------------------
 def _safe(name: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_")[:150] or "test"
+    """A file name for a test id or flight name: the name itself when it is
+    already a plain file name, else a readable version of it with a short hash
+    of the full name (``a/b``, ``a_b``, ``a:b`` and ``a b`` get different
+    folders; long ids stay unique; nothing becomes hidden, ``..`` or empty)."""
+    clean = re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_.")
+    if clean and clean == name and len(clean) <= 150:
+        return clean
+    digest = hashlib.sha256(name.encode("utf-8", "surrogatepass")).hexdigest()[:10]
+    return f"{clean[:120] or 'test'}-{digest}"
 
 
 def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:

@@ -6,13 +6,18 @@
 probes' own samples; ``.jsonl`` writes JSON lines (a header line, then one
 line per telemetry row) for streaming tools. ``FlightResult.load(path)``
 reads any of them back; a reloaded result compares equal to the saved one.
-Files are written atomically (temporary file, then rename).
+Files are written atomically (temporary file, then rename); the header holds
+the telemetry's row count and SHA-256 and its own SHA-256, checked on load.
 """
 
 from __future__ import annotations
 
+import glob
+import hashlib
 import json
 import math
+import os
+import time
 from pathlib import Path
 
 import pandas as pd
@@ -22,6 +27,8 @@ from .errors import ConfigError
 from .phases import PHASES, STAGES
 
 FORMAT = "pytest-flockai-flight/1"
+#: s: a temporary file of a save left untouched this long was left by a killed process
+STALE_TEMP_S = 300.0
 _CATEGORIES = {"phase": PHASES, "stage": STAGES}
 
 
@@ -33,7 +40,8 @@ class FlightResult:
     - ``events``: list of dicts (t, kind, ...): stage changes, crash, battery, probe errors
     - ``scenario``: JSON-ready description of what was flown (drone, pilot, seed...)
     - ``energy_breakdown``: J per energy component and sub-component
-    - ``end_reason``: "landed", "time", "battery_depleted", "crashed", "time_cap", "diverged"
+    - ``end_reason``: "landed", "time", "battery_depleted", "crashed", "time_cap", "diverged",
+      "wall_time" (stopped by ``Mission(max_wall_s=...)``)
     - ``probe_samples``: one DataFrame per probe, at the probe's own period
     - ``probe_errors``: failures of probes or subscribers (the flight went on)
     """
@@ -78,19 +86,29 @@ class FlightResult:
                                   for name, df in self.probe_samples.items()}}
 
     def save(self, path) -> Path:
-        """Write this result; the format follows the extension (.csv, .parquet, .jsonl)."""
-        p = Path(path)
+        """Write this result; the format follows the extension (.csv, .parquet, .jsonl).
+
+        The telemetry's row count and SHA-256 go into the header (the sidecar
+        for .csv/.parquet, which is written after the data), and the header's
+        own SHA-256 with it, so ``load`` refuses a truncated file, a tampered
+        header, or data and sidecar from different saves."""
+        p = _path(path, "FlightResult.save")
         ext = p.suffix.lower()
         if ext not in (".csv", ".parquet", ".jsonl"):
             raise ConfigError(f"FlightResult.save: path {str(p)!r} must end in .csv, .parquet or .jsonl")
         p.parent.mkdir(parents=True, exist_ok=True)
+        _remove_stale_temps(p)
         if ext == ".jsonl":
+            lines = _jsonl_rows(self.telemetry)
+            digest = hashlib.sha256()
+            for line in lines:
+                digest.update(line.encode("utf-8"))
+            header = _sealed({**self._header(), "telemetry": {"rows": len(lines),
+                                                              "sha256": digest.hexdigest()}})
+
             def write(fh):
-                fh.write(json.dumps(self._header()) + "\n")
-                tel = self.telemetry
-                cols = list(tel.columns)
-                for t, row in zip(tel.index.tolist(), tel.itertuples(index=False)):
-                    fh.write(json.dumps({"t": t, **{c: _py(x) for c, x in zip(cols, row)}}) + "\n")
+                fh.write(json.dumps(header) + "\n")
+                fh.writelines(lines)
             _atomic(p, write, text=True)
             return p
         if ext == ".parquet":
@@ -102,36 +120,28 @@ class FlightResult:
             _atomic(p, lambda fh: self.telemetry.to_parquet(fh), text=False)
         else:
             _atomic(p, lambda fh: self.telemetry.to_csv(fh, float_format="%.17g"), text=True)
-        _atomic(_sidecar(p), lambda fh: json.dump(self._header(), fh), text=True)
+        header = _sealed({**self._header(), "telemetry": {
+            "file": p.name, "rows": int(len(self.telemetry)), "sha256": _file_sha256(p)}})
+        _atomic(_sidecar(p), lambda fh: json.dump(header, fh), text=True)
         return p
 
     @classmethod
     def load(cls, path) -> "FlightResult":
-        p = Path(path)
+        """Read a saved result back; ConfigError naming the file for anything that does
+        not check out (missing sidecar, truncated data, checksum or row count off)."""
+        p = _path(path, "FlightResult.load")
         ext = p.suffix.lower()
-        if not p.exists():
-            raise ConfigError(f"FlightResult.load: {str(p)!r} does not exist")
+        if ext not in (".csv", ".parquet", ".jsonl"):
+            raise ConfigError(f"FlightResult.load: {str(p)!r} must end in .csv, .parquet or .jsonl")
+        if not p.is_file():
+            raise ConfigError(f"FlightResult.load: {str(p)!r} does not exist or is not a file")
         try:
-            if ext == ".jsonl":
-                with open(p) as fh:
-                    header = json.loads(fh.readline())
-                    rows = [json.loads(line) for line in fh if line.strip()]
-                tel = pd.DataFrame(rows).set_index("t") if rows else pd.DataFrame()
-            else:
-                with open(_sidecar(p)) as fh:
-                    header = json.load(fh)
-                if ext == ".parquet":
-                    tel = pd.read_parquet(p)
-                elif ext == ".csv":
-                    tel = pd.read_csv(p, index_col="t")
-                else:
-                    raise ConfigError(f"FlightResult.load: {str(p)!r} must end in .csv, .parquet or .jsonl")
-        except (OSError, ValueError, KeyError) as exc:
+            header, tel = _read(p, ext)
+        except (OSError, ValueError, KeyError, TypeError, ImportError) as exc:
             if isinstance(exc, ConfigError):
                 raise
-            raise ConfigError(f"FlightResult.load: cannot read {str(p)!r}: {exc}") from None
-        if header.get("format") != FORMAT:
-            raise ConfigError(f"FlightResult.load: {str(p)!r} is not a {FORMAT} file")
+            raise ConfigError(f"FlightResult.load: cannot read {str(p)!r}: "
+                              f"{type(exc).__name__}: {exc}") from None
         tel.index = tel.index.astype(float)
         tel.index.name = "t"
         for c, cats in _CATEGORIES.items():
@@ -179,6 +189,103 @@ def _py(x):
 
 def _norm(d):
     return {k: ("nan" if isinstance(v, float) and v != v else v) for k, v in d.items()}
+
+
+def _path(path, where: str) -> Path:
+    if not isinstance(path, (str, os.PathLike)) or not os.fspath(path):
+        raise ConfigError(f"{where}: path = {path!r} is not allowed; expected a file path "
+                          f"ending in .csv, .parquet or .jsonl")
+    return Path(path)
+
+
+def _jsonl_rows(tel) -> list[str]:
+    cols = list(tel.columns)
+    return [json.dumps({"t": t, **{c: _py(x) for c, x in zip(cols, row)}}) + "\n"
+            for t, row in zip(tel.index.tolist(), tel.itertuples(index=False))]
+
+
+def _file_sha256(p: Path) -> str:
+    h = hashlib.sha256()
+    with open(p, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _digest(header: dict) -> str:
+    body = {k: v for k, v in header.items() if k != "sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode("utf-8")).hexdigest()
+
+
+def _sealed(header: dict) -> dict:
+    """The header with its own SHA-256 (of everything else in it)."""
+    return {**header, "sha256": _digest(header)}
+
+
+def _check_header(header, p: Path, src: str) -> dict:
+    where = f"FlightResult.load: {src}"
+    if not isinstance(header, dict) or header.get("format") != FORMAT:
+        raise ConfigError(f"{where} is not a {FORMAT} header")
+    tel = header.get("telemetry")
+    if not isinstance(tel, dict) or not isinstance(tel.get("rows"), int) or "sha256" not in tel:
+        raise ConfigError(f"{where} has no telemetry row count and checksum (saved by an older "
+                          f"pytest-flockai?); save the flight again")
+    if header.get("sha256") != _digest(header):
+        raise ConfigError(f"{where}: sha256 = {header.get('sha256')!r} does not match its "
+                          f"content; the header was changed after it was saved")
+    missing = [k for k in ("kpis", "events", "scenario", "energy_breakdown", "end_reason")
+               if k not in header]
+    if missing or not isinstance(header["kpis"], dict):
+        raise ConfigError(f"{where} lacks {', '.join(missing) or 'a kpis table'}")
+    return tel
+
+
+def _read(p: Path, ext: str):
+    """(header, telemetry) of a saved flight, both checked."""
+    if ext == ".jsonl":
+        with open(p, encoding="utf-8") as fh:
+            header = json.loads(fh.readline())
+            info = _check_header(header, p, f"{str(p)!r} (first line)")
+            lines = [line for line in fh if line.strip()]
+        digest = hashlib.sha256("".join(lines).encode("utf-8")).hexdigest()
+        _check_rows(p, len(lines), info, digest)
+        tel = pd.DataFrame([json.loads(x) for x in lines]).set_index("t") if lines else pd.DataFrame()
+        return header, tel
+    side = _sidecar(p)
+    if not side.is_file():
+        raise ConfigError(f"FlightResult.load: the sidecar {str(side)!r} of {str(p)!r} does not "
+                          f"exist; a saved .csv/.parquet flight is the pair data + <name>.json")
+    with open(side, encoding="utf-8") as fh:
+        header = json.load(fh)
+    info = _check_header(header, p, f"sidecar {str(side)!r}")
+    digest = _file_sha256(p)
+    # round_trip: the default C parser of some pandas releases (2.1, 3.0) is off by an ulp
+    tel = (pd.read_parquet(p) if ext == ".parquet"
+           else pd.read_csv(p, index_col="t", float_precision="round_trip"))
+    _check_rows(p, len(tel), info, digest)
+    return header, tel
+
+
+def _check_rows(p: Path, rows: int, info: dict, digest: str) -> None:
+    if digest != info["sha256"]:
+        raise ConfigError(f"FlightResult.load: {str(p)!r}: telemetry sha256 = {digest} does not "
+                          f"match the saved {info['sha256']}; the file is truncated, changed, or "
+                          f"from another save than its header")
+    if rows != info["rows"]:
+        raise ConfigError(f"FlightResult.load: {str(p)!r}: rows = {rows} but the header says "
+                          f"{info['rows']}")
+
+
+def _remove_stale_temps(p: Path, age_s: float = STALE_TEMP_S) -> None:
+    """Temporary files of an earlier save of ``p`` that a killed process left
+    behind (untouched for ``age_s``; a live save keeps writing to its own)."""
+    now = time.time()
+    for tmp in p.parent.glob(f".{glob.escape(p.name)}*.tmp"):
+        try:
+            if now - tmp.stat().st_mtime > age_s:
+                tmp.unlink()
+        except OSError:
+            pass
 
 
 def _sidecar(p: Path) -> Path:

@@ -1,15 +1,21 @@
 """The golden scenarios (tests/golden/scenarios.py) fly as they were recorded:
 the same KPIs, end reasons, event counts, telemetry rows and energy breakdown.
-A reshaping of the loop that moves any figure fails here, with the difference."""
+A reshaping of the loop that moves any figure fails here, with the difference.
+
+The figures were recorded on the newest dependency versions; other MuJoCo and
+numpy releases round differently (1e-8 relative on the lowest allowed ones), so
+``.ci/run``'s lowest-versions stage sets ``FLOCKAI_GOLDEN_REL_TOL=1e-6``."""
 
 import json
 import math
+import os
 
 import pytest
 
 from golden import scenarios as golden
 
 RECORDED = json.loads(golden.GOLDEN.read_text())
+REL_TOL = float(os.environ.get("FLOCKAI_GOLDEN_REL_TOL", "1e-9"))
 
 
 def _diff(path, want, got, out):
@@ -24,7 +30,7 @@ def _diff(path, want, got, out):
     elif isinstance(want, float) or isinstance(got, float):
         w, g = float(want), float(got)
         if not (w == g or (math.isnan(w) and math.isnan(g))
-                or math.isclose(w, g, rel_tol=1e-9, abs_tol=1e-12)):
+                or math.isclose(w, g, rel_tol=REL_TOL, abs_tol=1e-12)):
             out.append(f"{path[:-1]}: recorded {w!r}, now {g!r}")
     elif want != got:
         out.append(f"{path[:-1]}: recorded {want!r}, now {got!r}")

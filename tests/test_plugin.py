@@ -481,7 +481,7 @@ def test_hover(flight):
 ''')
     res = run(pytester, "--flockai-artifacts", "art")
     res.assert_outcomes(passed=1)
-    folder = pytester.path / "art" / "test_flights.py_test_hover"
+    folder, = (pytester.path / "art").glob("test_flights.py_test_hover-*")   # + hash of the id
     assert (folder / "flight.telemetry.csv").read_text().startswith("t,x,y,z")
     assert load(folder / "flight.json")["kpis"]["flight_time_s"] > 0
 

@@ -229,6 +229,12 @@ def load_blueprint(path: str | Path) -> dict:
         raise ConfigError(f"blueprint file {str(p)!r} does not exist") from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"blueprint file {str(p)!r} is not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"blueprint file {str(p)!r} is not UTF-8 text (byte {exc.object[exc.start]:#04x} "
+                          f"at offset {exc.start}); allowed: a UTF-8 TOML file") from None
+    except OSError as exc:     # a folder, no permission, ...
+        raise ConfigError(f"blueprint file {str(p)!r} cannot be read: {exc.strerror or exc}; "
+                          f"expected a readable TOML file") from None
 
 
 def drone(name_or_path: str | Path, **overrides) -> Drone:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 
-from .. import _check
+from .. import _check, limits
 from ..errors import ConfigError
 from .trajectory import Leg, Path, waypoint_path
 
@@ -43,7 +43,13 @@ class Pilot:
 
 
 def _alt(value, who):
-    return _check.positive("altitude", value, where=who)
+    return _extent("altitude", _check.positive("altitude", value, where=who), who)
+
+
+def _extent(field, value, who):
+    """A coordinate no farther from home than ``limits.MAX_EXTENT_M``."""
+    limits.check_at_most(field, abs(value), "MAX_EXTENT_M", where=who, unit=" m")
+    return value
 
 
 def _speed(value, who):
@@ -85,7 +91,11 @@ class Waypoints(Pilot):
             raise ConfigError(f"Waypoints: points = {points!r} is not a list of (x, y, z)") from None
         if not pts:
             raise ConfigError("Waypoints: points = [] is empty; give at least one (x, y, z)")
+        limits.check_at_most("len(points)", len(pts), "MAX_WAYPOINTS", where="Waypoints")
         self.points = [_check.vector(f"points[{i}]", p, 3, where="Waypoints") for i, p in enumerate(pts)]
+        for i, p in enumerate(self.points):
+            for axis, c in zip("xyz", p):
+                _extent(f"points[{i}] {axis}", c, "Waypoints")
         for i, p in enumerate(self.points):
             if p[2] <= 0:
                 raise ConfigError(f"Waypoints: points[{i}] altitude z = {p[2]!r} is not allowed; must be > 0")
@@ -132,9 +142,15 @@ class ZigZag(Waypoints):
                           (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)))
         if abs(x1 - x0) < 1e-6 or abs(y1 - y0) < 1e-6:
             raise ConfigError(f"ZigZag: area = {area!r} is degenerate; both sides must be longer than 0")
+        for n, v in (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)):
+            _extent(n, v, "ZigZag")
         self.area = ((x0, y0), (x1, y1))
         alt = _alt(altitude, "ZigZag")
         self.spacing = _check.positive("spacing", spacing, where="ZigZag")
+        points = 2 * (abs(y1 - y0) / self.spacing + 2)    # checked before any leg is built
+        limits.check_at_most(f"points (2 per leg, |y1 - y0| / spacing = {abs(y1 - y0):g} m / "
+                             f"{self.spacing:g} m legs)", points, "MAX_WAYPOINTS",
+                             where="ZigZag", how="give a larger spacing")
         ys = []
         yy = y0
         step = self.spacing if y1 > y0 else -self.spacing
@@ -161,7 +177,9 @@ class Orbit(Pilot):
     def __init__(self, center=(0.0, 0.0), radius: float = 20.0, altitude: float = 30.0,
                  speed: float = 5.0, *, laps: float | None = None):
         self.center = _check.vector("center", center, 2, where="Orbit")
-        self.radius = _check.positive("radius", radius, where="Orbit")
+        for axis, c in zip("xy", self.center):
+            _extent(f"center {axis}", c, "Orbit")
+        self.radius = _extent("radius", _check.positive("radius", radius, where="Orbit"), "Orbit")
         self.altitude = _alt(altitude, "Orbit")
         self.speed = _speed(speed, "Orbit")
         self.laps = None if laps is None else _check.positive("laps", laps, where="Orbit")

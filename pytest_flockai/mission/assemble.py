@@ -28,15 +28,13 @@ from ..sensors import (IMU, GPS, Barometer, BatterySensor, Camera, Compass, Rang
 from ..sensors.base import Sensing
 from ..world.wind import WindStep
 from .book import FlightBook
-from .ending import EndConditions
+from .ending import EndConditions, WallClockGuard
 from .plan import FlightPlan, seed_sequence
 from .probing import ProbeStep
 from .state import EventLog, VehicleState
 
 _NAV = {"gps": GPS, "barometer": Barometer, "imu": IMU, "compass": Compass,
         "rangefinder": Rangefinder, "battery": BatterySensor}
-#: s: telemetry rows are preallocated for this long when the end time is open
-TELEMETRY_ROWS_S = 1800.0
 
 
 def sensor_suite(plan: FlightPlan) -> SensorSuite:
@@ -108,8 +106,7 @@ class Run:
         self.hub.bind(self.view)
         self.probing = ProbeStep(self.hub, self.view, st, self.book, self.traffic, self.suite, tasks,
                                  memory_utilization(plan.tasks, plan.onboard_device))
-        rows = int(min(plan.t_end if not isinstance(plan.until, str) else TELEMETRY_ROWS_S,
-                       plan.t_end) * plan.telemetry_hz) + 16
+        rows = int(plan.t_end * plan.telemetry_hz) + 16     # the first chunk at most this big
         estimator = NavEstimator() if plan.fly_on == "estimate" else None
         self.telemetry = TelemetryRecorder(rows, n_rot, self.meter, d, self.suite, estimator)
         comps: list[Clocked] = [Sensing(self.suite, d)]
@@ -129,6 +126,10 @@ class Run:
         for c in plan.components:
             c.bind(self)
             comps.append(c)
+        if plan.max_wall_s is not None:
+            guard = WallClockGuard(plan.max_wall_s)
+            guard.bind(self)
+            comps.append(guard)
         comps.append(EndConditions(
             st, self.events, self.stages, t_end=plan.t_end, dt=plan.ctrl_dt,
             timed=not isinstance(plan.until, str), use_reserve=plan.use_reserve,

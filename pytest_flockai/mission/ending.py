@@ -11,8 +11,11 @@ same grid) and, near the time limit, every tick.
 
 from __future__ import annotations
 
+import time
+
 from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import PILOT
+from ..errors import SimulationError
 
 
 class EndConditions(Clocked):
@@ -43,3 +46,32 @@ class EndConditions(Clocked):
             self.stages.go_home(t)
         if t + 0.5 * self.dt >= self.t_end:
             s.end_reason = "time" if self.timed else "time_cap"
+
+
+class WallClockGuard(Clocked):
+    """Stops a flight that runs longer than ``max_wall_s`` seconds on the host
+    (``Mission(max_wall_s=...)``): raises a ``SimulationError`` whose
+    ``end_reason`` is ``"wall_time"``; ``Mission.run`` attaches the partial
+    result. Looks at the host clock every 16th control tick."""
+
+    EVERY = 16
+
+    def __init__(self, max_wall_s: float):
+        self.max_wall_s = max_wall_s
+        self._deadline = time.perf_counter() + max_wall_s     # the flight is being built now
+        self._k = 0
+
+    def bind(self, run) -> None:
+        super().bind(run)
+        self.every_tick = True
+
+    def step(self, t: float) -> None:
+        self._k += 1
+        if self._k % self.EVERY:
+            return
+        if time.perf_counter() > self._deadline:
+            exc = SimulationError(f"Mission: max_wall_s = {self.max_wall_s:g} s of host time "
+                                  f"exceeded at t = {t:.3f} s simulated; the flight was stopped "
+                                  f"(the partial result is on this error's .result)")
+            exc.end_reason = "wall_time"
+            raise exc

@@ -11,6 +11,7 @@ in a ``SimulationError`` (then with the partial result).
 
 from __future__ import annotations
 
+import os
 import time as _time
 
 import numpy as np
@@ -23,6 +24,7 @@ from ..probes.hub import resolve_probes
 from ..recording import publish
 from ..result import FlightResult
 from ..sensors import Conditions
+from ..world import World
 from ..world.wind import Wind
 from . import loop, result
 from .assemble import Run
@@ -37,6 +39,11 @@ class Mission:
     battery falls to its reserve), or a number of simulated seconds.
     components: your own clocked components (``fa.Clocked``), stepped every tick
     or on their own period, after the built-in ones.
+    max_time_s: the cap on simulated time (default 4 h, at most
+    ``limits.MAX_TIME_S``); a numeric ``until`` must not exceed it.
+    max_wall_s: seconds of host time after which the flight is stopped with a
+    ``SimulationError`` (``end_reason`` ``"wall_time"``) carrying the partial
+    result in ``.result`` (None: no limit).
     """
 
     def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
@@ -45,7 +52,8 @@ class Mission:
                  energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
                  dataset_dir=None, dataset_period_s: float = 1.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None,
-                 components=(), conditions: Conditions | None = None, atmosphere=None):
+                 components=(), conditions: Conditions | None = None, atmosphere=None,
+                 max_wall_s: float | None = None):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
         if not isinstance(pilot, Pilot):
@@ -53,8 +61,17 @@ class Mission:
                               f"Waypoints, ZigZag, Orbit or a Pilot subclass)")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ConfigError(f"Mission: seed = {seed!r} is not allowed; expected an integer >= 0")
-        if name is not None and (not isinstance(name, str) or not name):
+        if name is not None and (not isinstance(name, str) or not name.strip()):
             raise ConfigError(f"Mission: name = {name!r} is not allowed; expected a non-empty str")
+        if world is not None and not isinstance(world, World):
+            raise ConfigError(f"Mission: world = {world!r} is not allowed; expected None or a "
+                              f"fa.World (World.urban(...), World.scene(...), World.from_mjcf(...))")
+        if not isinstance(return_home, (bool, np.bool_)):
+            raise ConfigError(f"Mission: return_home = {return_home!r} is not allowed; expected "
+                              f"True or False")
+        if dataset_dir is not None and not isinstance(dataset_dir, (str, os.PathLike)):
+            raise ConfigError(f"Mission: dataset_dir = {dataset_dir!r} is not allowed; expected "
+                              f"None or a folder path")
         self.drone, self.pilot, self.world = drone, pilot, world
         self.until = check_until(until)
         self.sensors = list(check_sensors(sensors))
@@ -79,6 +96,8 @@ class Mission:
                               f"fa.Conditions(...) or None")
         self.conditions = conditions
         self.atmosphere = atmosphere
+        self.max_wall_s = (None if max_wall_s is None
+                           else _check.positive("max_wall_s", max_wall_s, where="Mission"))
         resolve(self)
 
     def subscribe(self, target) -> "Mission":
@@ -114,7 +133,7 @@ class Mission:
             loop.fly(run)
         except SimulationError as exc:
             exc.result = result.build(run, self, _time.perf_counter() - wall0, run.data.time,
-                                      "diverged")
+                                      getattr(exc, "end_reason", "diverged"))
             publish(exc.result, self)
             raise
         res = result.build(run, self, _time.perf_counter() - wall0, run.data.time,

@@ -16,7 +16,7 @@ from numbers import Real
 
 import numpy as np
 
-from .. import _check
+from .. import _check, limits
 from ..airframe.drone import Drone
 from ..clock import Clocked
 from ..compute import device as _device
@@ -65,6 +65,7 @@ class FlightPlan:
     onboard_device: object    # compute.Device or None
     conditions: object = None  # sensors.Conditions for the blueprint's camera
     atmosphere: Atmosphere = Atmosphere()   # the air: density for thrust, drag and power
+    max_wall_s: float | None = None  # s of host time before the flight is stopped
 
     @property
     def use_reserve(self) -> bool:
@@ -78,6 +79,26 @@ def check_until(until):
         return _check.positive("until", until, where="Mission")
     raise ConfigError(f"Mission: until = {until!r} is not allowed; allowed: "
                       f"{', '.join(map(repr, UNTIL))} or a number of seconds > 0")
+
+
+def check_time_limits(until, max_time_s: float, telemetry_hz: float, probes=()) -> float:
+    """The end time of the flight, within ``limits`` (ConfigError naming the field above one)."""
+    limits.check_at_most("max_time_s", max_time_s, "MAX_TIME_S", where="Mission", unit=" s")
+    if not isinstance(until, str) and until > max_time_s:
+        raise ConfigError(f"Mission: until = {until:g} s is above max_time_s = {max_time_s:g} s; "
+                          f"allowed: a number of seconds <= max_time_s (pass Mission(max_time_s=...) "
+                          f"to fly longer, up to limits.MAX_TIME_S = {limits.MAX_TIME_S:g} s)")
+    t_end = float(until) if not isinstance(until, str) else max_time_s
+    limits.check_at_most("telemetry rows (until or max_time_s x telemetry_hz)", t_end * telemetry_hz,
+                         "MAX_TELEMETRY_ROWS", where="Mission",
+                         how=f"lower telemetry_hz = {telemetry_hz:g} or the flight's {t_end:g} s")
+    for p in probes:
+        if getattr(p, "enabled", True):
+            limits.check_at_most(f"probe {p.name!r} samples (flight time / period_s = "
+                                 f"{t_end:g} s / {p.period_s:g} s)", t_end / p.period_s,
+                                 "MAX_PROBE_SAMPLES", where="Mission",
+                                 how="give the probe a longer period_s")
+    return t_end
 
 
 def check_tasks(tasks, drone, sensors) -> tuple:
@@ -165,7 +186,7 @@ def resolve(m) -> FlightPlan:
     physics_dt = 1.0 / sim.physics_hz
     tasks = check_tasks(m.tasks, drone, m.sensors)
     until = check_until(m.until)
-    t_end = min(float(until) if not isinstance(until, str) else m.max_time_s, m.max_time_s)
+    t_end = check_time_limits(until, m.max_time_s, m.telemetry_hz, m.probes)
     if m.dataset_dir is not None and drone.camera is None:
         raise ConfigError(f"Mission: dataset_dir = {str(m.dataset_dir)!r} needs a camera, and "
                           f"{drone.name} has no [camera] section")
@@ -176,4 +197,5 @@ def resolve(m) -> FlightPlan:
         ctrl_dt=physics_dt * substeps, telemetry_hz=m.telemetry_hz, energy_hz=m.energy_hz,
         climb_speed=m.climb_speed, descent_speed=m.descent_speed, return_home=m.return_home,
         fly_on=m.fly_on, dataset_dir=m.dataset_dir, dataset_period_s=m.dataset_period_s,
-        onboard_device=onboard_device(tasks, drone), conditions=m.conditions, atmosphere=atmosphere)
+        onboard_device=onboard_device(tasks, drone), conditions=m.conditions, atmosphere=atmosphere,
+        max_wall_s=getattr(m, "max_wall_s", None))

@@ -116,4 +116,26 @@ def crowd_metrics(truth, pred, threshold: float) -> dict:
     return out
 
 
-__all__ = ["count_of", "crowd_metrics", "percentile", "truth_count"]
+def invalid_prediction(pred, count, task, reason: str | None = None) -> str | None:
+    """Why a prediction is not a valid result (it then counts as a failed
+    inference), or None: None, a count that is not a finite number >= 0 (NaN,
+    inf, negative), nothing countable where the task scores counts, or
+    ``reason`` (a detection output that could not be parsed)."""
+    if pred is None:
+        return "invalid prediction: the model returned None"
+    if reason is not None:
+        return f"invalid prediction: {reason}"
+    if count is not None and not (math.isfinite(count) and count >= 0):
+        return f"invalid prediction {_short(pred)}: count {count!r} is not a finite number >= 0"
+    if count is None and task.evaluate == "count":
+        return (f"invalid prediction {_short(pred)}: no people count in it (expected a number, an "
+                f"array, a list of detections or {{'count': n}}; Task(count=...) reads other shapes)")
+    return None
+
+
+def _short(pred) -> str:
+    text = repr(pred)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+__all__ = ["count_of", "crowd_metrics", "invalid_prediction", "percentile", "truth_count"]

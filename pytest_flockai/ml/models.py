@@ -18,6 +18,7 @@ or ``H x W`` greyscale.
 
 from __future__ import annotations
 
+import math
 import os
 from numbers import Integral, Real
 
@@ -44,7 +45,11 @@ def _check_macs(macs, where: str, *, allow_none: bool):
             return None
         raise ConfigError(f"{where}: macs = None is not allowed; expected an int >= 0 "
                           f"(multiply-accumulates per inference)")
-    if isinstance(macs, bool) or not isinstance(macs, Real) or not np.isfinite(macs) or macs < 0:
+    try:
+        ok = not isinstance(macs, bool) and isinstance(macs, Real) and math.isfinite(float(macs))
+    except (OverflowError, TypeError, ValueError):   # an int too big for a float, ...
+        ok = False
+    if not ok or macs < 0:
         raise ConfigError(f"{where}: macs = {macs!r} is not allowed; expected an int >= 0 "
                           f"(multiply-accumulates per inference)")
     return int(macs)
@@ -131,15 +136,18 @@ class OnnxModel(Model):
     def __init__(self, path, *, input_size=None, layout=None, scale=None, mean=None, std=None,
                  providers=("CPUExecutionProvider",), macs=None, postprocess=None,
                  threads: int = 1, name: str | None = None):
+        if not isinstance(path, (str, os.PathLike)):
+            raise ConfigError(f"OnnxModel: path = {path!r} is not allowed; expected the path of "
+                              f"an .onnx file")
         self.path = os.fspath(path)
         self.name = name or os.path.splitext(os.path.basename(self.path))[0]
         where = f"OnnxModel {self.path!r}"
         if not os.path.isfile(self.path):
             raise ConfigError(f"model path = {self.path!r} does not exist or is not a file; "
                               f"expected an .onnx file")
-        with open(self.path, "rb") as f:
-            data = f.read()
-        self.session = self._session(data, providers, threads)
+        # by path, never by bytes: external data (weights.bin beside the model) then
+        # resolves from the model's folder, not from the working directory
+        self.session = self._session(self.path, providers, threads)
         self._layout_arg = layout
         if postprocess is not None and not callable(postprocess):
             raise ConfigError(f"{where}: postprocess = {postprocess!r} is not callable")
@@ -148,15 +156,15 @@ class OnnxModel(Model):
         hi, wi = (2, 3) if self.layout == "NCHW" else (1, 2)
         self.input_size = self._input_size(input_size, dims, shp, hi, wi, where, inp.name)
         self._normalisation(scale, mean, std, where, inp.name)
-        self._costs(data, macs, where)
+        self._costs(macs, where)
 
-    def _session(self, data, providers, threads):
+    def _session(self, path, providers, threads):
         opts = ort.SessionOptions()
         opts.intra_op_num_threads = int(threads)
         opts.inter_op_num_threads = 1
         opts.log_severity_level = 3
         try:
-            return ort.InferenceSession(data, opts, providers=list(providers))
+            return ort.InferenceSession(path, opts, providers=list(providers))
         except Exception as e:
             raise ConfigError(f"model path = {self.path!r} is not a valid ONNX model "
                               f"(ONNX Runtime: {type(e).__name__}: {str(e).strip()[:300]})") from None
@@ -229,7 +237,7 @@ class OnnxModel(Model):
         if self.std is not None and np.any(self.std == 0):
             raise ConfigError(f"{where}: std = {std!r} has a zero entry")
 
-    def _costs(self, data, macs, where):
+    def _costs(self, macs, where):
         """``macs`` and ``params``: given, or counted from the graph."""
         self._macs_given = _check_macs(macs, where, allow_none=True)
         self._mac_cache: dict = {}
@@ -237,9 +245,9 @@ class OnnxModel(Model):
         self.mac_report = None
         if self._macs_given is not None:
             self.macs = self._macs_given
-            self.params = self._params_from_graph(data, fail_ok=True)
+            self.params = self._params_from_graph(self.path, fail_ok=True)
             return
-        self._proto = self._load_proto(data)
+        self._proto = self._load_proto(self.path)
         # dynamic height/width: report the cost at the reference frame size
         # (the blueprints' 320x240 camera); latency uses macs_for(frame)
         self.macs = self._count(self.input_size if self.input_size is not None else REFERENCE_HW)
@@ -271,15 +279,15 @@ class OnnxModel(Model):
                               f"{self.channels} numbers (one per channel)")
         return arr
 
-    def _load_proto(self, data):
+    def _load_proto(self, path):
         try:
-            return onnx.load_model_from_string(data)
+            return onnx.load(path)   # external data from the model's own folder
         except Exception as e:
             raise ConfigError(f"model path = {self.path!r} is not a valid ONNX model: {e}") from None
 
-    def _params_from_graph(self, data, fail_ok):
+    def _params_from_graph(self, path, fail_ok):
         try:
-            return _param_count(self._load_proto(data))
+            return _param_count(self._load_proto(path))
         except Exception:
             if fail_ok:
                 return 0
@@ -357,8 +365,10 @@ def as_model(obj, field: str = "model") -> Model:
     if isinstance(obj, Model):
         return obj
     if callable(obj):
-        if hasattr(obj, "macs"):
-            return obj            # duck-typed model
+        if hasattr(obj, "macs"):  # duck-typed model: its macs must be a count (or None)
+            _check_macs(obj.macs, f"{field} {getattr(obj, 'name', type(obj).__name__)!r}",
+                        allow_none=True)
+            return obj
         return PythonModel(obj)
     raise ConfigError(f"{field} = {obj!r} is not a model; expected an OnnxModel, OpenCVModel, "
                       f"PythonModel, a template subclass instance or a callable frame -> prediction")

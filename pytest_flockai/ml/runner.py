@@ -60,7 +60,7 @@ from ..compute.latency import (calibrate, compute_seconds, modeled_latency, reso
 from ..errors import ConfigError
 from .events import DeviceClock, InferenceEvent
 from .jpeg import JPEG_MACS_PER_PIXEL, annotate, decode_jpeg, encode_jpeg, is_image
-from .metrics import percentile
+from .metrics import invalid_prediction, percentile
 from .scoring import Scorer
 from .task import Task
 from .templates import Template
@@ -295,6 +295,7 @@ class TaskRunner:
         done = start + compute
         free = done + self._update(task.model, frame, done)
         count = self.scorer.count(pred, idx, frame) if err is None else None
+        err = err or invalid_prediction(pred, count, task, self.scorer.parse_error)
         tx = 0
         alert = False
         if err is None:
@@ -342,6 +343,7 @@ class TaskRunner:
                 err = f"link {self.link.name!r} down at {dist:.0f} m on the downlink"
             if err is None:
                 count = self.scorer.count(pred, idx, frame_g)
+                err = invalid_prediction(pred, count, task, self.scorer.parse_error)
         ev = InferenceEvent(task=task.name, frame_index=idx, t_capture=t, t_start=start, t_done=done,
                             latency_s=done - t, compute_s=compute, prediction=pred, count=count,
                             truth_count=tc, ok=err is None, error=err, tx_bytes=up.payload_bytes,

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from ..errors import ConfigError
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord, classification_kpis, detection_kpis
 from .metrics import crowd_metrics, truth_count
@@ -27,6 +28,7 @@ class Scorer:
         self.pred: list[float] = []         # predicted count per frame (NaN: none)
         self.records: dict = {}             # frame index -> FrameRecord
         self._dets: dict = {}               # frame index -> Detections parsed for the count
+        self.parse_error: str | None = None  # why the last prediction could not be parsed
 
     def frame(self, idx: int, frame, truth, drone_pos) -> float | None:
         """A frame the task took; returns its true people count (None: unknown)."""
@@ -44,8 +46,13 @@ class Scorer:
         """The people count of a prediction; for a detection task, the person
         detections at the score threshold (parsed once, kept for scoring)."""
         t = self.task
+        self.parse_error = None
         if t.evaluate == "detection":
-            dets = self._parse(pred, np.shape(frame)[:2])
+            try:
+                dets = self._parse(pred, np.shape(frame)[:2])
+            except ConfigError as exc:      # one bad output: a failed inference, not a crash
+                self.parse_error = str(exc)
+                return None
             self._dets[idx] = dets
             sel = dets.above(t.score_threshold)
             if "person" in t.classes:

@@ -1,11 +1,13 @@
-"""The telemetry store: preallocated numpy rows written on the telemetry clock,
-turned into one pandas DataFrame at the end of the flight.
+"""The telemetry store: numpy rows written on the telemetry clock, turned into
+one pandas DataFrame at the end of the flight.
 
 Each row holds the state (position, velocity, attitude, body rates), the
 setpoint, the wind, power and energy (total and per top component), battery
 remaining, each rotor's thrust, the flight phase and the mission stage; the
 readings of the polled sensors and the navigation estimate are sampled at the
-same rows. The arrays grow by doubling (amortised), never per tick.
+same rows. The rows live in fixed-size chunks (``CHUNK_ROWS``): a new chunk
+is allocated when one is full, never per tick, and nothing is allocated for
+time not yet flown, whatever ``until`` says.
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from ..clock import CLOCK_EPS, Clocked
 from ..phases import PHASES, STAGES, Phase
 
 LANDED = int(Phase.LANDED)
+#: rows per telemetry chunk (at 10 Hz, 15 minutes of flight; about 1 MB)
+CHUNK_ROWS = 9000
 
 BASE_COLS = ("x", "y", "z", "vx", "vy", "vz", "roll", "pitch", "yaw", "wx", "wy", "wz",
              "sp_x", "sp_y", "sp_z", "wind_x", "wind_y", "wind_z", "power_w", "energy_j",
@@ -34,21 +38,23 @@ class TelemetryRecorder:
         self._est_hist: list = []
         self.columns = list(BASE_COLS) + [f"thrust_{i}" for i in range(n_rotors)] + \
             [f"energy_{k}_j" for k in ("motors", "proc", "comm")] + ["battery_v", "battery_a"]
-        rows = max(rows, 16)
-        self._buf = np.empty((rows, len(self.columns)))
-        self._t = np.empty(rows)
-        self._phase = np.empty(rows, dtype=np.int8)
-        self._stage = np.empty(rows, dtype=np.int8)
+        self._chunk = max(16, min(int(rows), CHUNK_ROWS))
+        self._full: list = []        # filled chunks: (buf, t, phase, stage)
+        self._new_chunk()
         self.n = 0
 
+    def _new_chunk(self):
+        k, cols = self._chunk, len(self.columns)
+        self._buf, self._t = np.empty((k, cols)), np.empty(k)
+        self._phase, self._stage = np.empty(k, dtype=np.int8), np.empty(k, dtype=np.int8)
+        self._i = 0
+
     def record(self, t, q, v, sp, w, phase, stage, power, energy_j, e_usable):
-        i = self.n
-        if i >= self._buf.shape[0]:   # grow by doubling: amortised, not per tick
-            k = self._buf.shape[0]
-            self._buf = np.concatenate([self._buf, np.empty_like(self._buf)])
-            self._t = np.concatenate([self._t, np.empty(k)])
-            self._phase = np.concatenate([self._phase, np.empty(k, dtype=np.int8)])
-            self._stage = np.concatenate([self._stage, np.empty(k, dtype=np.int8)])
+        i = self._i
+        if i >= self._chunk:          # chunk full: keep it, start a new one
+            self._full.append((self._buf, self._t, self._phase, self._stage))
+            self._new_chunk()
+            i = 0
         qw, qx, qy, qz = q[3], q[4], q[5], q[6]
         roll = math.atan2(2 * (qw * qx + qy * qz), 1 - 2 * (qx * qx + qy * qy))
         pitch = math.asin(max(-1.0, min(1.0, 2 * (qw * qy - qz * qx))))
@@ -68,15 +74,17 @@ class TelemetryRecorder:
                 self._est_hist.append(tuple(self.estimator.p))
         self._phase[i] = phase
         self._stage[i] = stage
-        self.n = i + 1
+        self._i = i + 1
+        self.n += 1
 
     def frame(self) -> pd.DataFrame:
         """The DataFrame (index: simulated time ``t``), built once."""
-        n = self.n
-        tel = pd.DataFrame(self._buf[:n].copy(), columns=self.columns,
-                           index=pd.Index(self._t[:n].copy(), name="t"))
-        tel["phase"] = pd.Categorical.from_codes(self._phase[:n], categories=list(PHASES))
-        tel["stage"] = pd.Categorical.from_codes(self._stage[:n], categories=list(STAGES))
+        n, i = self.n, self._i
+        parts = self._full + [(self._buf[:i], self._t[:i], self._phase[:i], self._stage[:i])]
+        buf, ts, phase, stage = (np.concatenate([p[j] for p in parts]) for j in range(4))
+        tel = pd.DataFrame(buf, columns=self.columns, index=pd.Index(ts, name="t"), copy=False)
+        tel["phase"] = pd.Categorical.from_codes(phase, categories=list(PHASES))
+        tel["stage"] = pd.Categorical.from_codes(stage, categories=list(STAGES))
         self._sensor_columns(tel, n)
         return tel
 

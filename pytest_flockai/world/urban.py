@@ -133,9 +133,19 @@ def inside_buildings(xy: np.ndarray, bld: np.ndarray, margin: float = PERSON_MAR
     """Boolean mask: which points (N, 2) are within ``margin`` of a building footprint."""
     if len(bld) == 0 or len(xy) == 0:
         return np.zeros(len(xy), dtype=bool)
-    dx = np.abs(xy[:, None, 0] - bld[None, :, 0]) - bld[None, :, 2]
-    dy = np.abs(xy[:, None, 1] - bld[None, :, 1]) - bld[None, :, 3]
-    return ((dx < margin) & (dy < margin)).any(axis=1)
+    out = np.empty(len(xy), dtype=bool)
+    step = max(1, _BLOCK // len(bld))      # points per block: a block is at most _BLOCK pairs
+    for i in range(0, len(xy), step):
+        p = xy[i:i + step]
+        dx = np.abs(p[:, None, 0] - bld[None, :, 0]) - bld[None, :, 2]
+        dy = np.abs(p[:, None, 1] - bld[None, :, 1]) - bld[None, :, 3]
+        out[i:i + step] = ((dx < margin) & (dy < margin)).any(axis=1)
+    return out
+
+
+#: point-building pairs compared at once by ``inside_buildings`` (about 32 MB per array):
+#: the whole points x buildings matrix of a large city would take gigabytes
+_BLOCK = 4_000_000
 
 
 def _place(rng, n, draw, bld, size, what) -> np.ndarray:

@@ -26,11 +26,13 @@ drone's velocity relative to this air.
 from __future__ import annotations
 
 import math
+from numbers import Real
 
 import numpy as np
 
-from .. import _check
+from .. import _check, limits
 from ..clock import Clocked
+from ..errors import ConfigError
 
 FT = 0.3048
 
@@ -49,8 +51,13 @@ class Wind:
         self.mean = _check.vector("mean", mean, 3, where="Wind")
         speed = math.sqrt(sum(c * c for c in self.mean))
         self.sigma_w20 = 0.1 * speed            # MIL-F-8785C light: sigma_w = 0.1 W20
+        limits.check_at_most(f"mean = {self.mean!r}: speed", speed, "MAX_WIND_MPS", where="Wind",
+                             unit=" m/s")
         self.gust_std = (None if gust_std is None
                          else _check.non_negative("gust_std", gust_std, where="Wind"))
+        if self.gust_std is not None:
+            limits.check_at_most("gust_std", self.gust_std, "MAX_WIND_MPS", where="Wind",
+                                 unit=" m/s")
         self.gust_tau_s = (None if gust_tau_s is None
                            else _check.positive("gust_tau_s", gust_tau_s, where="Wind"))
         self.carry_mps = max(1.0, speed)        # Taylor: turbulence carried past at the mean wind
@@ -76,8 +83,11 @@ class Wind:
     def coerce(cls, value) -> "Wind | None":
         if value is None or isinstance(value, Wind):
             return value
-        if isinstance(value, (int, float)):
-            return cls((float(value), 0.0, 0.0))
+        if isinstance(value, Real) and not isinstance(value, bool):
+            return cls((value, 0.0, 0.0))
+        if isinstance(value, (str, bytes, dict)):
+            raise ConfigError(f"wind = {value!r} is not allowed; expected None, a speed in m/s, "
+                              f"(x, y, z) in m/s or fa.Wind(...)")
         return cls(value)
 
     def to_dict(self) -> dict:

@@ -36,7 +36,7 @@ from numbers import Integral, Real
 import mujoco
 import numpy as np
 
-from .. import _check
+from .. import _check, limits
 from ..errors import ConfigError
 from . import urban as _urban
 from .mjcf import box_occluders, find_people
@@ -105,13 +105,18 @@ class World:
         size = _check.vector("size", size, 2, where=where, positive_entries=True)
         if min(size) < 20.0:
             raise ConfigError(f"{where}: size = {size!r} is too small; allowed: both sides >= 20 m")
+        _check_size(size, where)
         people = _count("people", people, where)
         n_cars = _count("vehicles", vehicles, where)
+        limits.check_at_most("people", people, "MAX_PEOPLE", where=where)
+        limits.check_at_most("vehicles", n_cars, "MAX_VEHICLES", where=where)
         density = _check.fraction("building_density", building_density, where=where)
         clear = _check.non_negative("clear_radius", clear_radius, where=where)
         hmax = (None if max_building_height is None
                 else _check.positive("max_building_height", max_building_height, where=where))
         cr = _crowds(crowds, size, where)
+        limits.check_at_most("people (scattered plus crowds)", people + sum(c[2] for c in cr),
+                             "MAX_PEOPLE", where=where)
         keep = [(x, y, 2.0 * s + 2.0) for x, y, _, s in cr]
         w = cls("urban")
         w.figures = _figures(figures, where)
@@ -143,10 +148,12 @@ class World:
         ``figures.draw_poses`` returns them."""
         where = "World.scene"
         size = _check.vector("size", size, 2, where=where, positive_entries=True)
+        _check_size(size, where)
         w = cls("urban")
         w.figures = _figures(figures, where)
         w.seed, w.size = 0, size
         w.people = _rows(people, 2, "people", "(x, y)", where)
+        limits.check_at_most("len(people)", len(w.people), "MAX_PEOPLE", where=where)
         w.people = np.column_stack([w.people, np.zeros(len(w.people))])
         cars = _rows(vehicles, 3, "vehicles", "(x, y, yaw)", where)
         w.vehicles = np.column_stack([cars[:, :2], np.zeros(len(cars)), cars[:, 2]])
@@ -317,6 +324,12 @@ def _count(field, value, where) -> int:
     if isinstance(value, bool) or not isinstance(value, Integral) or value < 0:
         raise ConfigError(f"{where}: {field} = {value!r} is not allowed; expected an integer >= 0")
     return int(value)
+
+
+def _check_size(size, where) -> None:
+    for axis, side in zip(("east-west", "north-south"), size):
+        limits.check_at_most(f"size = {tuple(size)!r}: {axis} side", side, "MAX_WORLD_SIDE_M",
+                             where=where, unit=" m")
 
 
 def _crowds(crowds, size, where) -> list:
