@@ -183,6 +183,9 @@ def parse(kpi: str, text) -> Budget:
         raise ConfigError(f"{where}: unit {unit!r} measures {_dim_name(udim)}, but {kpi} is in "
                           f"{dim!r} ({_dim_name(dim)}); allowed units: {_allowed_units(dim)}")
     limit = value * factor
+    if not math.isfinite(limit):
+        raise ConfigError(f"{where}: the limit {num} {unit or ''} is not a finite number "
+                          f"(it overflows to {limit}); write a finite limit")
     return Budget(kpi=kpi, op=op, limit=limit, text=text.strip(), unit=unit, factor=factor,
                   dimension=udim if udim is not None else "1")
 

@@ -45,8 +45,10 @@ from __future__ import annotations
 import pytest
 
 from . import hookspecs as _hookspecs
+from .harness import examples as _examples
 from .harness import markers as _markers
 from .harness import options as _options
+from .harness import rootdir as _rootdir
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
 from .harness.recorder import STATE, TestState
@@ -60,6 +62,11 @@ def pytest_addhooks(pluginmanager):
 
 def pytest_addoption(parser):
     _options.add_options(parser)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_load_initial_conftests(early_config, parser, args):
+    _rootdir.redo_setup(early_config, args)   # --flockai-baseline PATH must not move the rootdir
 
 
 def pytest_configure(config):
@@ -77,6 +84,7 @@ def pytest_configure(config):
 def pytest_unconfigure(config):
     session = config.stash.get(SESSION, None)
     if session is not None:
+        session.close()
         config.pluginmanager.unregister(session)
         del config.stash[SESSION]
 
@@ -103,6 +111,7 @@ def pytest_runtest_protocol(item, nextitem):
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
     st = _state(item)
+    st.reset()                     # each attempt (pytest-rerunfailures) starts clean
     if st.markers.error:
         pytest.fail(st.markers.error, pytrace=False)
 
@@ -113,16 +122,18 @@ def pytest_runtest_call(item):
     st.adopt_fixture_flights()
     session = item.config.stash[SESSION]
     try:
-        result = yield
+        with _examples.counted(item, st):
+            result = yield
     except BaseException:
         try:                       # for the report only: the body's error wins
+            _verdicts.check(item, st, session, body_failed=True)
             st.finish(session.artifacts)
-            _verdicts.check(item, st, session)
         except Exception:
             pass
         raise
-    st.finish(session.artifacts)
     message = _verdicts.check(item, st, session)
+    st.finish(session.artifacts)
+    _verdicts.warn(item, st, session)
     if message:
         pytest.fail(message, pytrace=False)
     return result
@@ -131,9 +142,8 @@ def pytest_runtest_call(item):
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_makereport(item, call):
     st = item.stash.get(STATE, None)
-    if st is not None:
-        st.sync_properties()
     report = yield
-    if st is not None and (st.flights or st.markers.budgets or st.markers.error):
+    if st is not None and (st.flights or st.markers.budgets or st.markers.error
+                           or st.hypothesis):
         report.flockai = st.payload()
     return report
