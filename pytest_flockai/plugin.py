@@ -69,6 +69,10 @@ def pytest_load_initial_conftests(early_config, parser, args):
     _rootdir.redo_setup(early_config, args)   # --flockai-baseline PATH must not move the rootdir
 
 
+def pytest_make_parametrize_id(config, val, argname):
+    return _rootdir.param_id(config, val)   # absolute paths: relative to the rootdir
+
+
 def pytest_configure(config):
     config.addinivalue_line(
         "markers", "kpi(**budgets, flight=None): KPI budgets such as "
@@ -99,6 +103,7 @@ def _state(item) -> TestState:
 def pytest_collection_modifyitems(session, config, items):
     for item in items:
         _state(item)
+        _markers.warn_ignored(item)
 
 
 @pytest.hookimpl(wrapper=True)

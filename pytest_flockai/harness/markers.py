@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import pytest
+
 from .. import budgets as _budgets
 from .. import kpis as _kpis
 from ..errors import ConfigError, close_matches
@@ -119,3 +121,37 @@ def regression_setting(value):
             out.append((kpi, pct(f"max_regression[{kpi!r}]", v)))
         return tuple(sorted(out))
     return pct("max_regression", value)
+
+
+#: marker settings read by the plugin's own fixture of that name (else by ``mission``)
+READ_BY = {"drone": "drone", "pilot": "pilot", "world": "world", "tasks": "tasks",
+           "probes": "probes", "seed": "mission", "until": "mission", "wind": "mission",
+           "name": "mission"}
+
+
+def ignored_settings(item) -> list[tuple[str, str]]:
+    """(setting, fixture) pairs of the ``flockai`` marker that a fixture the user
+    overrode will never read: the overriding fixture wins, as pytest's closest
+    fixture always does."""
+    info = getattr(item, "_fixtureinfo", None)
+    defs = getattr(info, "name2fixturedefs", None) or {}
+    out = []
+    for mark in item.iter_markers("flockai"):
+        for key in mark.kwargs:
+            fixture = READ_BY.get(key)
+            fds = defs.get(fixture) if fixture else None
+            if not fds:
+                continue
+            module = getattr(fds[-1].func, "__module__", "")
+            if module != __name__.rsplit(".", 1)[0] + ".fixtures" and (key, fixture) not in out:
+                out.append((key, fixture))
+    return out
+
+
+def warn_ignored(item) -> None:
+    for key, fixture in ignored_settings(item):
+        item.warn(pytest.PytestWarning(
+            f"pytest-flockai: @pytest.mark.flockai({key}=...) on {item.nodeid} is ignored: the "
+            f"`{fixture}` fixture is overridden (in a conftest.py or the test module) and an "
+            f"overridden fixture wins over the marker; set {key} in your fixture, or read the "
+            f"marker there with request.node.get_closest_marker('flockai')"))

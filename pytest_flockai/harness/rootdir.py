@@ -20,6 +20,8 @@ never runs silently on the wrong node ids.
 from __future__ import annotations
 
 import inspect
+import os
+from pathlib import Path
 
 import pytest
 from _pytest.config import findpaths   # private: pytest has no public API for the rootdir
@@ -78,3 +80,16 @@ def _determine(determine_setup, ns, config):
               "invocation_dir": config.invocation_params.dir}
     params = inspect.signature(determine_setup).parameters
     return determine_setup(**{k: v for k, v in kwargs.items() if k in params})
+
+
+def param_id(config, val) -> str | None:
+    """The id of a parametrized value that is an absolute path (a str; pytest
+    names Path objects ``argname0`` itself): relative to the rootdir, with ``/``,
+    so node ids and baseline entries are the same in every checkout. None
+    (pytest's own id) for anything else."""
+    if not isinstance(val, str) or not os.path.isabs(val):
+        return None
+    try:
+        return Path(val).relative_to(config.rootpath).as_posix()
+    except ValueError:
+        return None
