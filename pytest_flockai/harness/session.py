@@ -43,6 +43,7 @@ class FlockSession:
         self.held_signals: list[str] = []
         self.junit = False
         self._sigterm = None
+        self._holder = signals.Holder(self.held_signals)
         if getattr(config.option, "help", False) or getattr(config.option, "version", False):
             return   # pytest --help must work whatever the options say
         mb, _ = option(config, "missing-baseline")
@@ -93,6 +94,7 @@ class FlockSession:
             seen[key] = what
 
     def close(self) -> None:
+        self._holder.stop()
         signals.restore_sigterm(self._sigterm)
 
     # -- collecting reports (on the controller: also the ones xdist workers send) --
@@ -135,11 +137,20 @@ class FlockSession:
         signals held back, the unfinished tests marked, our files written first."""
         if self.worker:
             return (yield)
-        with signals.held_back(self.held_signals):
+        self._holder.start()
+        try:
             self._finish_tests(session)
             self.junit = junit.add_to_suite(self.config, self.entries())
             self._write_reports(session.exitstatus)
             return (yield)
+        finally:
+            self._holder.stop()
+
+    @pytest.hookimpl(tryfirst=True)
+    def pytest_keyboard_interrupt(self, excinfo):
+        """The run is being interrupted: a second Ctrl-C must not cut the reports off."""
+        if not self.worker:
+            self._holder.start()
 
     def _finish_tests(self, session) -> None:
         for nodeid, why in self.started.items():
@@ -183,7 +194,7 @@ class FlockSession:
             terminalreporter.write_line(f"flockai: WARNING: {e}", yellow=True, bold=True)
         if self.held_signals:
             terminalreporter.write_line(f"flockai: {', '.join(self.held_signals)} received while "
-                                        f"the reports were written: ignored")
+                                        f"the reports were written: held back")
 
 
 def _entry(nodeid: str) -> dict:

@@ -12,7 +12,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import signal
 import threading
 
@@ -41,23 +40,35 @@ def restore_sigterm(previous) -> None:
             signal.signal(signal.SIGTERM, previous)
 
 
-@contextlib.contextmanager
-def held_back(notes: list):
-    """SIGINT and SIGTERM held back (appended to ``notes``) inside the block."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    def hold(signum, frame):
-        notes.append(signal.Signals(signum).name)
-    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        for s in old:
-            signal.signal(s, hold)
-    except (ValueError, OSError):     # pragma: no cover - not the main interpreter
-        yield
-        return
-    try:
-        yield
-    finally:
-        for s, h in old.items():
+class Holder:
+    """SIGINT and SIGTERM held back (their names appended to ``notes``) from
+    ``start()`` (the first Ctrl-C, or the session's end) to ``stop()`` (the
+    reports written); a third one while held stops the run at once."""
+
+    def __init__(self, notes: list):
+        self.notes = notes
+        self.old: dict | None = None
+
+    def start(self) -> None:
+        if self.old is not None or threading.current_thread() is not threading.main_thread():
+            return
+        old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            for s in old:
+                signal.signal(s, self._hold)
+        except (ValueError, OSError):     # pragma: no cover - not the main interpreter
+            return
+        self.old = old
+
+    def _hold(self, signum, frame):
+        self.notes.append(signal.Signals(signum).name)
+        if len(self.notes) >= 2:
+            self.stop()
+            raise KeyboardInterrupt(f"{signal.Signals(signum).name} while the reports were written")
+
+    def stop(self) -> None:
+        if self.old is None:
+            return
+        for s, h in self.old.items():
             signal.signal(s, h if h is not None else signal.SIG_DFL)
+        self.old = None
