@@ -31,13 +31,16 @@ Recording
 
 Reports
     KPIs travel on the test reports (attribute ``flockai``, plain JSON data, so
-    pytest-xdist carries them to the controller) and as ``user_properties``
-    ``flockai.<kpi>`` (``flockai.<flight>.<kpi>`` with several flights) so
-    ``--junitxml`` shows them. Files are written by the controller only.
+    pytest-xdist carries them to the controller), and ``--junitxml`` gets them as
+    suite properties ``flockai[<nodeid>].<kpi>`` (``harness/junit.py``: the
+    schema allows no testcase properties). Files are written by the controller
+    only, also when the run is interrupted (``harness/signals.py``).
 
 Options (each also an ini option, same name with underscores)
     ``--flockai-json PATH``, ``--flockai-save PATH``, ``--flockai-baseline PATH``,
-    ``--flockai-max-regression PCT`` (5), ``--flockai-artifacts DIR``.
+    ``--flockai-max-regression PCT`` (5), ``--flockai-artifacts DIR``,
+    ``--flockai-missing-baseline warn|fail``. Path options are safe in the space
+    form too (``harness/rootdir.py``).
 """
 
 from __future__ import annotations
