@@ -5,9 +5,11 @@
   its session-finish hooks, so the JSON report and JUnit are written (exit
   status 2). Installed only on the controller's main thread, and only where
   nobody else installed a handler.
-- While the session-finish hooks write the reports, SIGINT and SIGTERM are
-  held back: a second Ctrl-C (with ``-n 2``, xdist is then waiting for its
-  workers) no longer cuts the writing off. They are reported and dropped.
+- From the first Ctrl-C (or the session's end) until the session-finish hooks
+  have written the reports, one more SIGINT or SIGTERM is held back and
+  reported: a second Ctrl-C (with ``-n 2``, while pytest formats the interrupt
+  or xdist waits for its workers) no longer cuts the writing off. A third one
+  stops the run at once, so a hung shutdown can still be left.
 """
 
 from __future__ import annotations
