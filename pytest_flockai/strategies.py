@@ -78,17 +78,29 @@ def wind_from(speed_mps: float, heading_rad: float = 0.0, gust_fraction: float =
 
 
 def conditions(*, max_exposure_s: float = 1 / 15, min_visibility_m: float = 20.0,
-               min_sun_elevation_deg: float = 2.0, noise: bool = True) -> st.SearchStrategy[Conditions]:
-    """Imaging conditions: shutter, sun elevation and haze; each shrinks towards the
-    ideal camera (no blur, overhead sun, clear air), so a failure hypothesis finds
-    shrinks to its simplest cause."""
+               min_sun_elevation_deg: float = 2.0, noise: bool = True,
+               max_readout_s: float = 0.0, weather=()) -> st.SearchStrategy[Conditions]:
+    """Imaging conditions: shutter, sun elevation and haze, and where asked a
+    rolling shutter (``max_readout_s`` > 0) and weather (``weather``: names from
+    ``sensors.weather.WEATHER``, severities 1-5). Each shrinks towards the ideal
+    camera (no blur, overhead sun, clear air, global shutter, no weather), so a
+    failure hypothesis finds shrinks to its simplest cause. Sun direction and
+    shadows are left out: they need a render per example (draw them yourself)."""
     clear = st.just(math.inf)
     hazy = st.floats(min_visibility_m, 2000.0, allow_nan=False)
-    return st.builds(Conditions,
-                     exposure_s=st.one_of(st.just(0.0), st.floats(1 / 4000, max_exposure_s)),
-                     sun_elevation_deg=st.one_of(st.just(60.0),
-                                                 st.floats(min_sun_elevation_deg, 90.0)),
-                     visibility_m=st.one_of(clear, hazy), noise=st.just(noise))
+    readout = (st.one_of(st.just(0.0), st.floats(1e-3, max_readout_s)) if max_readout_s > 0
+               else st.just(0.0))
+    wx = st.one_of(st.just((None, 3)), st.tuples(st.sampled_from(list(weather)),
+                                                 st.integers(1, 5))) if weather \
+        else st.just((None, 3))
+
+    def build(exposure_s, sun_elevation_deg, visibility_m, readout_s, w):
+        return Conditions(exposure_s=exposure_s, sun_elevation_deg=sun_elevation_deg,
+                          visibility_m=visibility_m, noise=noise, readout_s=readout_s,
+                          weather=w[0], severity=w[1])
+    return st.builds(build, st.one_of(st.just(0.0), st.floats(1 / 4000, max_exposure_s)),
+                     st.one_of(st.just(60.0), st.floats(min_sun_elevation_deg, 90.0)),
+                     st.one_of(clear, hazy), readout, wx)
 
 
 def batteries(min_mah: float = 1000.0, max_mah: float = 6000.0) -> st.SearchStrategy[float]:

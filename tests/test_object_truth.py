@@ -11,7 +11,8 @@ from pycocotools.coco import COCO
 
 import pytest_flockai as fa
 from pytest_flockai.sensors.views import render_views
-from pytest_flockai.world.objects import CAR_BOXES, HEAD_RADIUS, PERSON_HEIGHT, PERSON_RADIUS
+from pytest_flockai.world.figures import CAR
+from pytest_flockai.world.objects import HEAD_RADIUS, PERSON_HEIGHT, PERSON_RADIUS
 from pytest_flockai.world.truth import CLASSES, gimbal_pose
 
 W, H, FOV = 320, 240, 60.0
@@ -48,15 +49,15 @@ def _person_points(x, y):
     return pts
 
 
+def _figure_points(world, i):
+    """The vertices of person i as drawn (its articulated meshes), at its feet."""
+    return np.vstack([v for v, _ in world.figure_meshes()[i].values()]) + world.people[i]
+
+
 def _car_points(x, y, yaw):
-    pts = []
     c, s = math.cos(yaw), math.sin(yaw)
-    for cx, hx, hy, z0, z1 in CAR_BOXES:
-        for px in (cx - hx, cx + hx):
-            for py in (-hy, hy):
-                for z in (z0, z1):
-                    pts.append((x + c * px - s * py, y + s * px + c * py, z))
-    return pts
+    v = np.vstack([m[0] for m in CAR.values()])
+    return np.column_stack([x + c * v[:, 0] - s * v[:, 1], y + s * v[:, 0] + c * v[:, 1], v[:, 2]])
 
 
 def _expected_box(points, cam_pos, yaw):
@@ -69,7 +70,7 @@ def _expected_box(points, cam_pos, yaw):
 def planted():
     people = [(0.0, 0.0), (3.0, -2.0), (-4.0, 3.0)]
     cars = [(6.0, 4.0, 0.3)]
-    world = fa.World.scene(people=people, vehicles=cars, size=(60.0, 60.0))
+    world = fa.World.scene(people=people, vehicles=cars, size=(60.0, 60.0), figures="articulated")
     cam, yaw = np.array([0.5, 0.5, 20.0]), 0.4
     (frame, truth), = render_views(world, [(*cam, yaw)])
     return world, people, cars, cam, yaw, frame, truth
@@ -80,7 +81,7 @@ def test_every_truth_box_is_the_projection_of_its_object_to_the_pixel(planted):
     o = truth.objects
     assert sorted(o.ids.tolist()) == [0, 1, 2, 3]
     for j, oid in enumerate(o.ids):
-        pts = _person_points(*people[oid]) if oid < 3 else _car_points(*cars[oid - 3])
+        pts = _figure_points(world, oid) if oid < 3 else _car_points(*cars[oid - 3])
         np.testing.assert_allclose(o.boxes[j], _expected_box(pts, cam, yaw), atol=1e-6)
         assert CLASSES[o.cls[j]] == ("person" if oid < 3 else "vehicle")
     assert (o.visible == 1.0).all()
@@ -88,6 +89,15 @@ def test_every_truth_box_is_the_projection_of_its_object_to_the_pixel(planted):
     j0 = int(np.flatnonzero(o.ids == 0)[0])
     assert o.distance_m[j0] == pytest.approx(np.linalg.norm(centre - cam))
     assert o.gsd_m[j0] == pytest.approx((cam[2] - centre[2]) / F)
+
+
+def test_a_simple_figure_box_is_the_projection_of_its_prism_and_head():
+    """figures="simple" keeps the first release's figure: an octagonal prism and a head."""
+    world = fa.World.scene(people=[(1.0, -2.0)], size=(60.0, 60.0), figures="simple")
+    cam, yaw = np.array([0.5, 0.5, 20.0]), 0.4
+    (_, truth), = render_views(world, [(*cam, yaw)])
+    np.testing.assert_allclose(truth.objects.boxes[0],
+                               _expected_box(_person_points(1.0, -2.0), cam, yaw), atol=1e-6)
 
 
 def test_the_rendered_pixels_of_each_object_fill_its_box(planted):

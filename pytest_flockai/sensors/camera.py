@@ -38,11 +38,16 @@ from .. import _check
 from ..errors import ConfigError
 from ..world.truth import CameraModel, Truth, gimbal_pose
 from . import _gl
-from .conditions import Conditions, apply as apply_conditions, blur_vector
+from .conditions import Conditions, apply as apply_conditions, blur_vector, shift_boxes
 from .base import DroneBody, Sensor
 
 NEAR_M = 0.05       # near clipping plane
 FAR_M = 5000.0      # far clipping plane
+#: m, half the side of the square around the view centre in which the sun casts
+#: shadows (MuJoCo's directional shadow map covers +-extent*shadowclip)
+SHADOW_HALF_M = 60.0
+SHADOW_TEXELS = 2048     # shadow map side: 6 cm per texel over 120 m
+SUN_DISTANCE_M = 1000.0  # the shadow camera stands this far up the sun's ray
 
 
 def _size(field, value, where) -> int:
@@ -62,6 +67,9 @@ class FrameRenderer:
         vg = model.vis.global_
         vg.offwidth = max(int(vg.offwidth), width)
         vg.offheight = max(int(vg.offheight), height)
+        # the shadow map's size and reach are read when the context is made (render only)
+        model.vis.quality.shadowsize = SHADOW_TEXELS
+        model.vis.map.shadowclip = SHADOW_HALF_M / max(float(model.stat.extent), 1e-6)
         self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
         self.scene = mujoco.MjvScene(model, maxgeom=model.ngeom + 64)
@@ -85,12 +93,16 @@ class FrameRenderer:
         return z * np.sqrt(1.0 + (xx / f) ** 2 + (yy / f) ** 2)
 
     def render(self, data, cam_pos, cam_mat, fov_deg: float, *,
-               catmask=mujoco.mjtCatBit.mjCAT_STATIC, depth: bool = False) -> np.ndarray:
+               catmask=mujoco.mjtCatBit.mjCAT_STATIC, depth: bool = False,
+               sun_dir=None, shadows: bool = False) -> np.ndarray:
+        """The frame seen from (cam_pos, cam_mat); ``sun_dir``: the direction the
+        sunlight travels (None: the world's own), ``shadows``: the sun casts them."""
         self._ctx.make_current()
         scn = self.scene
         mujoco.mjv_updateScene(self.model, data, self.option, None, self._cam, int(catmask), scn)
         R = np.asarray(cam_mat).reshape(3, 3)
         up, fwd = R[:, 1], -R[:, 2]
+        self._light(cam_pos, fwd, sun_dir, shadows)
         half = NEAR_M * math.tan(math.radians(fov_deg) / 2.0)
         for c in scn.camera:           # both eyes at the same place: mono view
             c.pos[:] = cam_pos
@@ -106,6 +118,24 @@ class FrameRenderer:
         mujoco.mjr_render(self._rect, scn, self._con)
         mujoco.mjr_readPixels(self._buf, self._depth if depth else None, self._rect, self._con)
         return self._buf[::-1].copy()       # OpenGL rows start at the bottom
+
+    def _light(self, cam_pos, fwd, sun_dir, shadows) -> None:
+        """Point the world's sun (the shadow-casting directional light) and centre its
+        shadow map on the ground point the camera looks at."""
+        scn = self.scene
+        scn.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = int(bool(shadows))
+        if sun_dir is None and not shadows:
+            return
+        down = -fwd[2]
+        reach = min(cam_pos[2] / down, SHADOW_HALF_M) if down > 1e-3 else 0.0
+        target = np.asarray(cam_pos, float) + fwd * reach
+        for i in range(scn.nlight):
+            light = scn.lights[i]
+            if light.castshadow and light.type == mujoco.mjtLightType.mjLIGHT_DIRECTIONAL:
+                if sun_dir is not None:
+                    light.dir[:] = sun_dir
+                d = np.asarray(light.dir, float)
+                light.pos[:] = target - d / np.linalg.norm(d) * SUN_DISTANCE_M
 
     def close(self):
         if self._con is not None:
@@ -252,8 +282,11 @@ class Camera(Sensor):
     def render_pose(self, data, cam_pos, cam_mat) -> np.ndarray:
         if self._renderer is None:
             self._renderer = FrameRenderer(self.model, self.width, self.height)
-        depth = self.conditions is not None and self.conditions.needs_depth
-        return self._renderer.render(data, cam_pos, cam_mat, self.fov_deg, depth=depth)
+        c = self.conditions
+        if c is None:
+            return self._renderer.render(data, cam_pos, cam_mat, self.fov_deg)
+        return self._renderer.render(data, cam_pos, cam_mat, self.fov_deg, depth=c.needs_depth,
+                                     sun_dir=c.sun_dir, shadows=c.shadows)
 
     def _condition(self, frame, cam_pos, cam_mat, velocity, yaw_rate) -> np.ndarray:
         """Light, haze, motion blur, exposure and noise (``sensors.conditions``)."""
@@ -261,10 +294,14 @@ class Camera(Sensor):
         dist = self._renderer.distance(self.fov_deg) if c.needs_depth else None
         centre = (float(dist[self.height // 2, self.width // 2]) if dist is not None
                   else ground_distance(cam_pos, cam_mat))
+        jitter = math.radians(c.gimbal_jitter_dps)
         blur = blur_vector(cam_pos, cam_mat, velocity, yaw_rate, c.exposure_s, self.lens.focal_px,
-                           centre, math.radians(c.gimbal_jitter_dps))
+                           centre, jitter)
+        skew = blur_vector(cam_pos, cam_mat, velocity, yaw_rate, c.readout_s, self.lens.focal_px,
+                           centre, jitter)
+        record_skew(self.last_truth, skew, self.width, self.height)
         self.last_truth.blur_px = blur
-        return apply_conditions(frame, c, self.rng, distance=dist, blur=blur)
+        return apply_conditions(frame, c, self.rng, distance=dist, blur=blur, skew=skew)
 
     def close(self):
         if self._renderer is not None:
@@ -278,6 +315,15 @@ class Camera(Sensor):
     def __repr__(self):
         return (f"Camera({self.width}x{self.height}, fov_deg={self.fov_deg:g}, "
                 f"pitch_deg={self.pitch_deg:g}, rate_hz={self.rate_hz:g})")
+
+
+def record_skew(truth, skew, width: int, height: int) -> None:
+    """Put a rolling shutter's skew into a frame's truth: ``skew_px`` and the object boxes
+    (moved with their centre row, clipped to the image)."""
+    truth.skew_px = skew
+    if truth.objects is not None and len(truth.objects):
+        b = shift_boxes(truth.objects.boxes, skew, height)
+        truth.objects.boxes = np.clip(b, 0.0, [width, height, width, height])
 
 
 def ground_distance(cam_pos, cam_mat) -> float:

@@ -7,8 +7,13 @@ light reaches the sensor:
 - **light** (``sun_elevation_deg``): the sun's elevation sets the scene's
   irradiance, ``sin(elevation)`` of the overhead sun's for direct light plus a
   diffuse sky share (``SKY_SHARE``), so dusk (a few degrees) is several times
-  darker than noon (brightness only: the rendered sun keeps its direction and
-  casts no shadows);
+  darker than noon;
+- **sun direction and shadows** (``sun_azimuth_deg``, ``shadows``): with an
+  azimuth (compass degrees the sun stands at: 0 north, 90 east) the rendered
+  sun shines from there at ``sun_elevation_deg``, so walls facing away from it
+  darken; with ``shadows=True`` it casts shadows (MuJoCo's shadow map, 6 cm
+  per texel within 60 m of the view centre), long at a low sun. Both need a
+  render, not only a change of the pixels;
 - **haze** (``visibility_m``): Koschmieder's law, extinction ``3.912 / V`` for a
   meteorological visibility V (the distance at which contrast falls to 2 %):
   each pixel is attenuated by ``exp(-beta d)`` over its distance ``d`` from the
@@ -27,12 +32,18 @@ light reaches the sensor:
   collects shot noise (Poisson, ``full_well_e`` electrons at full scale) and
   read noise (``read_noise_e``), amplified by the gain, so a dark scene is a
   noisy one;
+- **rolling shutter** (``readout_s``): the rows are read one after the other
+  over ``readout_s`` (top first), so a moving camera sees the scene shift from
+  row to row (a skew, the image displacement over the readout times the row's
+  offset from mid-frame); the truth boxes move with their centre row;
+- **weather** (``weather`` in rain, snow, spatter at ``severity`` 1-5):
+  the standard image corruptions from albumentations (``sensors/weather.py``),
+  drawn before the sensor adds its noise;
 - **JPEG** stays on the radio link, as before.
 
 Everything random draws from the mission seed; the frame's truth records the
-blur length and direction (``truth.blur_px``). Optional extra corruptions
-(rain, snow, fog, frost at a severity) are left to a library such as
-albumentations, applied through a ``Camera(postprocess=...)`` hook.
+blur length and direction (``truth.blur_px``) and the rolling-shutter skew
+(``truth.skew_px``).
 """
 
 from __future__ import annotations
@@ -45,6 +56,7 @@ import numpy as np
 
 from .. import _check
 from ..errors import ConfigError
+from . import weather as _weather
 
 #: share of the overhead-sun irradiance that the diffuse sky adds at any sun height
 SKY_SHARE = 0.15
@@ -66,6 +78,11 @@ class Conditions:
     read_noise_e: float = 3.0
     noise: bool = True
     gimbal_jitter_dps: float = 0.0
+    sun_azimuth_deg: float | None = None
+    shadows: bool = False
+    readout_s: float = 0.0
+    weather: str | None = None
+    severity: int = 3
 
     def __post_init__(self):
         w = "Conditions"
@@ -84,11 +101,33 @@ class Conditions:
         _check.positive("full_well_e", self.full_well_e, where=w)
         _check.non_negative("read_noise_e", self.read_noise_e, where=w)
         _check.non_negative("gimbal_jitter_dps", self.gimbal_jitter_dps, where=w)
+        if self.sun_azimuth_deg is not None:
+            _check.number("sun_azimuth_deg", self.sun_azimuth_deg, where=w, minimum=0.0,
+                          maximum=360.0)
+        if not isinstance(self.shadows, bool):
+            raise ConfigError(f"{w}: shadows = {self.shadows!r} is not allowed; expected True "
+                              f"or False")
+        _check.number("readout_s", self.readout_s, where=w, minimum=0.0, maximum=0.2)
+        _weather.check(self.weather, self.severity, w)
 
     @property
     def irradiance(self) -> float:
         """Scene irradiance relative to an overhead sun."""
         return (math.sin(math.radians(self.sun_elevation_deg)) + SKY_SHARE) / (1.0 + SKY_SHARE)
+
+    @property
+    def sun_dir(self):
+        """The direction sunlight travels (x east, y north, z up), or None: the world's
+        own sun (no azimuth given)."""
+        if self.sun_azimuth_deg is None:
+            return None
+        az, el = math.radians(self.sun_azimuth_deg), math.radians(max(self.sun_elevation_deg, 0.5))
+        return (-math.sin(az) * math.cos(el), -math.cos(az) * math.cos(el), -math.sin(el))
+
+    @property
+    def relights(self) -> bool:
+        """True when the scene must be rendered under this sun (direction, shadows)."""
+        return self.shadows or self.sun_azimuth_deg is not None
 
     @property
     def extinction_per_m(self) -> float:
@@ -147,10 +186,40 @@ def motion_kernel(du: float, dv: float) -> np.ndarray | None:
     return k / k.sum()
 
 
-def apply(frame: np.ndarray, cond: Conditions, rng, *, distance=None, blur=(0.0, 0.0)) -> np.ndarray:
+def rolling_shift(frame: np.ndarray, skew) -> np.ndarray:
+    """The frame as a rolling shutter reads it: row r shows the scene shifted by
+    ``skew * (r / (H - 1) - 0.5)`` pixels (skew: the image displacement over the readout)."""
+    du, dv = skew
+    if math.hypot(du, dv) < 0.25:
+        return frame
+    h, w = frame.shape[:2]
+    f = (np.arange(h, dtype=np.float32) / max(h - 1, 1) - 0.5)[:, None]
+    xx = np.broadcast_to(np.arange(w, dtype=np.float32)[None, :], (h, w))
+    yy = np.broadcast_to(np.arange(h, dtype=np.float32)[:, None], (h, w))
+    return cv2.remap(frame, (xx - du * f).astype(np.float32), (yy - dv * f).astype(np.float32),
+                     cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+
+
+def shift_boxes(boxes: np.ndarray, skew, height: int) -> np.ndarray:
+    """(N, 4) x0, y0, x1, y1 boxes moved as ``rolling_shift`` moves their centre row."""
+    if len(boxes) == 0 or math.hypot(*skew) < 0.25:
+        return boxes
+    b = np.array(boxes, dtype=float)
+    f = ((b[:, 1] + b[:, 3]) / 2.0 / max(height - 1, 1) - 0.5)
+    b[:, [0, 2]] += (skew[0] * f)[:, None]
+    b[:, [1, 3]] += (skew[1] * f)[:, None]
+    return b
+
+
+def apply(frame: np.ndarray, cond: Conditions, rng, *, distance=None, blur=(0.0, 0.0),
+          skew=(0.0, 0.0)) -> np.ndarray:
     """The frame as the sensor records it (see the module docstring). ``frame``:
     uint8 RGB as rendered under an overhead sun; ``distance``: (H, W) metres
-    from the camera (needed for haze); ``blur``: (du, dv) pixels."""
+    from the camera (needed for haze); ``blur``: (du, dv) pixels over the
+    exposure; ``skew``: (du, dv) pixels over the rolling-shutter readout."""
+    frame = rolling_shift(frame, skew)
+    if distance is not None:
+        distance = rolling_shift(distance, skew)
     img = frame.astype(np.float32) / 255.0
     target = cond.target_level if cond.target_level is not None else float(img.mean())
     img *= cond.irradiance
@@ -160,6 +229,8 @@ def apply(frame: np.ndarray, cond: Conditions, rng, *, distance=None, blur=(0.0,
             raise ConfigError("Conditions: haze needs the depth of each pixel")
         t = np.exp(-beta * np.minimum(distance, 1e4)).astype(np.float32)[..., None]
         img = img * t + np.asarray(AIRLIGHT, np.float32) * cond.irradiance * (1.0 - t)
+    if cond.weather is not None:
+        img = _weather.apply(img, cond.weather, cond.severity, rng)
     k = motion_kernel(*blur)
     if k is not None:
         img = cv2.filter2D(img, -1, k, borderType=cv2.BORDER_REFLECT)

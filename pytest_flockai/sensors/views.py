@@ -5,12 +5,15 @@
 ``ViewSet(world, poses, camera)`` keeps the renders (and their depth) so that
 the same views can be seen under many imaging conditions cheaply:
 ``views.under(fa.Conditions(...), velocity=(12, 0, 0))`` only re-applies light,
-haze, blur and noise (numpy and OpenCV, no rendering), which is what a
-hypothesis search over conditions needs.
+haze, blur, rolling shutter, weather and noise (numpy and OpenCV, no
+rendering), which is what a hypothesis search over conditions needs; a sun
+direction or shadows (``Conditions.relights``) render the views again under
+that sun.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import mujoco
@@ -18,7 +21,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..world.truth import gimbal_pose
-from .camera import Camera, FrameRenderer, ground_distance
+from .camera import Camera, FrameRenderer, ground_distance, record_skew
 from .conditions import Conditions, apply as apply_conditions, blur_vector
 
 
@@ -62,24 +65,29 @@ class ViewSet:
         vg = spec.visual.global_
         vg.offwidth = max(int(vg.offwidth), cam.width)
         vg.offheight = max(int(vg.offheight), cam.height)
-        model = spec.compile()
-        data = mujoco.MjData(model)
-        mujoco.mj_forward(model, data)
+        self._model = spec.compile()
+        self._data = mujoco.MjData(self._model)
+        mujoco.mj_forward(self._model, self._data)
         points = world.truth_points()
         occ = world.occluders if cam.occlusion else None
         objects = world.objects if cam.objects else None
-        renderer = FrameRenderer(model, cam.width, cam.height)
-        self.frames, self.truths, self.poses, self.distances = [], [], [], []
+        self.poses = [gimbal_pose((x, y, z), yaw, cam.pitch_deg) for x, y, z, yaw in rows]
+        self.truths = [cam.lens.truth(0.0, points, p, m, occ, objects) for p, m in self.poses]
+        self.frames, self.distances = self._render(depth)
+
+    def _render(self, depth: bool, sun_dir=None, shadows: bool = False):
+        cam = self.camera
+        renderer = FrameRenderer(self._model, cam.width, cam.height)
+        frames, distances = [], []
         try:
-            for x, y, z, yaw in rows:
-                cam_pos, cam_mat = gimbal_pose((x, y, z), yaw, cam.pitch_deg)
-                self.frames.append(renderer.render(data, cam_pos, cam_mat, cam.fov_deg, depth=depth))
-                self.distances.append(renderer.distance(cam.fov_deg).astype(np.float32)
-                                      if depth else None)
-                self.truths.append(cam.lens.truth(0.0, points, cam_pos, cam_mat, occ, objects))
-                self.poses.append((cam_pos, cam_mat))
+            for cam_pos, cam_mat in self.poses:
+                frames.append(renderer.render(self._data, cam_pos, cam_mat, cam.fov_deg,
+                                              depth=depth, sun_dir=sun_dir, shadows=shadows))
+                distances.append(renderer.distance(cam.fov_deg).astype(np.float32)
+                                 if depth else None)
         finally:
             renderer.close()
+        return frames, distances
 
     def __len__(self) -> int:
         return len(self.frames)
@@ -95,16 +103,24 @@ class ViewSet:
             raise ConfigError(f"ViewSet.under: conditions = {conditions!r} is not a fa.Conditions")
         rng = np.random.default_rng(seed)
         cam, out = self.camera, []
-        for frame, truth, (pos, mat), dist in zip(self.frames, self.truths, self.poses,
-                                                  self.distances):
-            if conditions.needs_depth and dist is None:
-                raise ConfigError("ViewSet.under: haze needs depth; build the ViewSet with depth=True")
+        frames, distances = self.frames, self.distances
+        if conditions.needs_depth and any(d is None for d in distances):
+            raise ConfigError("ViewSet.under: haze needs depth; build the ViewSet with depth=True")
+        if conditions.relights:
+            frames, distances = self._render(conditions.needs_depth, conditions.sun_dir,
+                                             conditions.shadows)
+        for frame, truth, (pos, mat), dist in zip(frames, self.truths, self.poses, distances):
             centre = (float(dist[cam.height // 2, cam.width // 2]) if dist is not None
                       else ground_distance(pos, mat))
             blur = blur_vector(pos, mat, velocity, 0.0, conditions.exposure_s, cam.lens.focal_px,
                                centre)
-            t = type(truth)(**{**truth.__dict__, "blur_px": blur})
-            out.append((apply_conditions(frame, conditions, rng, distance=dist, blur=blur), t))
+            skew = blur_vector(pos, mat, velocity, 0.0, conditions.readout_s, cam.lens.focal_px,
+                               centre)
+            t = dataclasses.replace(truth, blur_px=blur,
+                                    objects=dataclasses.replace(truth.objects))
+            record_skew(t, skew, cam.width, cam.height)
+            out.append((apply_conditions(frame, conditions, rng, distance=dist, blur=blur,
+                                         skew=skew), t))
         return out
 
 

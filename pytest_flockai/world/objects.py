@@ -2,17 +2,18 @@
 
 For every object the table holds its class, its centre, the vertices of its
 geometry (the tight image box of an object is the box of its projected
-vertices: exact for the convex parts the figures are made of), sample points
+vertices: exact, since they are the vertices that are drawn), sample points
 spread through its volume (its visible fraction is the share of them a camera
 sees) and the axis-aligned boxes by which it hides other objects.
 
 Geometry (metres; a figure stands on the ground at its feet position):
 
-- person: an octagonal torso prism (radius ``PERSON_RADIUS``) and a low-poly head
-  sphere (``HEAD_RADIUS``), 1.7 m tall (the figures of ``World.urban``);
+- person: the articulated figures of ``figures.py`` (legs, torso, arms, head,
+  each in its own pose), or for ``figures="simple"`` worlds an octagonal torso
+  prism (radius ``PERSON_RADIUS``) and a low-poly head sphere (``HEAD_RADIUS``),
+  1.7 m tall; a person hides others by the axis-aligned box of its vertices;
 - vehicle: a compact car, 4.3 m x 1.8 m x 1.46 m (Volkswagen Golf 8 technical data:
-  4284 x 1789 x 1456 mm), as a body box from 0.15 m to 0.95 m over the ground
-  and a cabin (the glasshouse) box on top, 2.3 m x 1.6 m, set 0.2 m back.
+  4284 x 1789 x 1456 mm): painted body and roof, glasshouse, tyres (``figures.CAR``).
 """
 
 from __future__ import annotations
@@ -22,70 +23,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .figures import CAR as CAR_MESHES, prism, sphere
 from .truth import CLASSES
 
 PERSON_HEIGHT = 1.7          # m, adult figure
-PERSON_RADIUS = 0.22         # m, torso prism
-HEAD_RADIUS = 0.12           # m
+PERSON_RADIUS = 0.22         # m, torso prism of the simple figure
+HEAD_RADIUS = 0.12           # m, head of the simple figure
 PERSON, VEHICLE = CLASSES.index("person"), CLASSES.index("vehicle")
 
 CAR_LENGTH, CAR_WIDTH, CAR_HEIGHT = 4.3, 1.8, 1.46
-#: (centre x along the car, half length, half width, z0, z1) of the body and the cabin
-CAR_BOXES = ((0.0, CAR_LENGTH / 2, CAR_WIDTH / 2, 0.15, 0.95),
-             (-0.2, 1.15, 0.8, 0.95, CAR_HEIGHT))
+#: (centre x along the car, half length, half width, z0, z1) of the boxes by which a car
+#: hides other objects: the body (tyres included) and the cabin
+CAR_BOXES = ((0.0, CAR_LENGTH / 2, CAR_WIDTH / 2, 0.0, 0.95),
+             (-0.25, 1.2, 0.8, 0.95, CAR_HEIGHT))
 
-
-def prism(n, r, z0, z1):
-    """(vertices, faces) of an n-gon prism around the z axis, outward faces."""
-    a = 2 * np.pi * (np.arange(n) + 0.5) / n
-    ring = np.column_stack([r * np.cos(a), r * np.sin(a)])
-    v = np.vstack([np.column_stack([ring, np.full(n, z0)]), np.column_stack([ring, np.full(n, z1)]),
-                   [[0, 0, z0], [0, 0, z1]]])
-    f = []
-    for i in range(n):
-        j = (i + 1) % n
-        f += [(i, j, n + j), (i, n + j, n + i), (2 * n, j, i), (2 * n + 1, n + i, n + j)]
-    return v, np.array(f)
-
-
-def sphere(n, rings, r, zc):
-    """(vertices, faces) of a low-poly UV sphere centred at (0, 0, zc)."""
-    v = [[0, 0, zc - r], [0, 0, zc + r]]
-    for k in range(1, rings):
-        th = np.pi * k / rings - np.pi / 2
-        for i in range(n):
-            a = 2 * np.pi * i / n
-            v.append([r * np.cos(th) * np.cos(a), r * np.cos(th) * np.sin(a), zc + r * np.sin(th)])
-    f = []
-
-    def idx(k, i):
-        return 2 + (k - 1) * n + (i % n)
-    for i in range(n):
-        f.append((0, idx(1, i + 1), idx(1, i)))
-        f.append((1, idx(rings - 1, i), idx(rings - 1, i + 1)))
-        for k in range(1, rings - 1):
-            f += [(idx(k, i), idx(k, i + 1), idx(k + 1, i + 1)), (idx(k, i), idx(k + 1, i + 1), idx(k + 1, i))]
-    return np.array(v, dtype=float), np.array(f)
-
-
-def box(cx, hx, hy, z0, z1):
-    """(vertices, faces) of an axis-aligned box along the car's x axis."""
-    x0, x1 = cx - hx, cx + hx
-    v = np.array([[x, y, z] for z in (z0, z1) for y in (-hy, hy) for x in (x0, x1)], dtype=float)
-    f = np.array([(0, 2, 3), (0, 3, 1), (4, 5, 7), (4, 7, 6), (0, 1, 5), (0, 5, 4),
-                  (2, 6, 7), (2, 7, 3), (0, 4, 6), (0, 6, 2), (1, 3, 7), (1, 7, 5)])
-    return v, f
-
-
+#: the simple figure (``figures="simple"``)
 TORSO = prism(8, PERSON_RADIUS, 0.0, PERSON_HEIGHT - 2 * HEAD_RADIUS - 0.02)
 HEAD = sphere(8, 4, HEAD_RADIUS, PERSON_HEIGHT - HEAD_RADIUS)
-CAR_BODY = box(*CAR_BOXES[0])
-CAR_CABIN = box(*CAR_BOXES[1])
 
 
 def _person_samples():
-    """Points through a figure's volume: rings of 8 at the hips and the chest, the
-    axis at the knees and the shoulders, and the head."""
+    """Points through a simple figure's volume: rings of 8 at the hips and the
+    chest, the axis at the knees and the shoulders, and the head."""
     r = 0.7 * PERSON_RADIUS
     ring = [(r * math.cos(a), r * math.sin(a)) for a in (np.arange(8) + 0.5) * math.pi / 4]
     pts = [(x, y, z) for z in (0.6, 1.1) for x, y in ring]
@@ -101,7 +60,7 @@ def _car_samples():
 
 
 PERSON_VERTS = np.vstack([TORSO[0][:-2], HEAD[0]])         # hull extremes (no cap centres)
-CAR_VERTS = np.vstack([CAR_BODY[0], CAR_CABIN[0]])
+CAR_VERTS = np.vstack([m[0] for m in CAR_MESHES.values()])
 PERSON_SAMPLES, CAR_SAMPLES = _person_samples(), _car_samples()
 
 
@@ -139,16 +98,22 @@ class ObjectTable:
         return int(len(self.cls))
 
     @classmethod
-    def build(cls, people=(), vehicles=()) -> "ObjectTable":
-        """people: (N, 3) feet positions; vehicles: (M, 4) rows (x, y, z, yaw)."""
+    def build(cls, people=(), vehicles=(), shapes=None) -> "ObjectTable":
+        """people: (N, 3) feet positions; vehicles: (M, 4) rows (x, y, z, yaw);
+        shapes: None (simple figures) or, per person, (vertices (V, 3), samples
+        (S, 3)) relative to the feet (``figures.person`` in its pose)."""
         people = np.asarray(people, dtype=float).reshape(-1, 3)
         vehicles = np.asarray(vehicles, dtype=float).reshape(-1, 4)
         verts, samples, boxes, owner = [], [], [], []
         for i, p in enumerate(people):
-            verts.append(PERSON_VERTS + p)
-            samples.append(PERSON_SAMPLES + p)
-            boxes.append([p[0] - PERSON_RADIUS, p[1] - PERSON_RADIUS, p[2],
-                          p[0] + PERSON_RADIUS, p[1] + PERSON_RADIUS, p[2] + PERSON_HEIGHT])
+            v, s = (PERSON_VERTS, PERSON_SAMPLES) if shapes is None else shapes[i]
+            verts.append(v + p)
+            samples.append(s + p)
+            if shapes is None:
+                boxes.append([p[0] - PERSON_RADIUS, p[1] - PERSON_RADIUS, p[2],
+                              p[0] + PERSON_RADIUS, p[1] + PERSON_RADIUS, p[2] + PERSON_HEIGHT])
+            else:
+                boxes.append([*verts[-1].min(axis=0), *verts[-1].max(axis=0)])
             owner.append(i)
         for j, (x, y, z, yaw) in enumerate(vehicles):
             at = np.array([x, y, z])
@@ -159,8 +124,8 @@ class ObjectTable:
                 boxes.append([*corners.min(axis=0), *corners.max(axis=0)])
                 owner.append(len(people) + j)
         n = len(people) + len(vehicles)
-        nv = max(len(PERSON_VERTS), len(CAR_VERTS))
-        ns = max(len(PERSON_SAMPLES), len(CAR_SAMPLES))
+        nv = max([len(CAR_VERTS)] + [len(v) for v in verts])
+        ns = max([len(CAR_SAMPLES)] + [len(s) for s in samples])
         w = np.zeros((n, ns))
         for i, s in enumerate(samples):
             w[i, :len(s)] = 1.0

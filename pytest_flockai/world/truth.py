@@ -165,6 +165,9 @@ class Truth:
     objects: Objects = field(default_factory=Objects)
     #: (du, dv) pixels of motion blur in this frame (imaging conditions), (0, 0) without
     blur_px: tuple = (0.0, 0.0)
+    #: (du, dv) pixels the image moves over the rolling-shutter readout, (0, 0) without;
+    #: the object boxes already include the shift of their centre row
+    skew_px: tuple = (0.0, 0.0)
 
     @property
     def count(self) -> int:

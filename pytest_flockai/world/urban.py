@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from ..errors import ConfigError
+from .figures import draw_poses
 from .objects import CAR_LENGTH, CAR_WIDTH
 
 BLOCK_PITCH = 40.0        # m, street centre to street centre
@@ -40,6 +41,7 @@ HEIGHT_RANGE = (6.0, 45.0)
 # (streams of SeedSequence(seed)) -- fixed keys so streams never shift
 _S_BUILDINGS, _S_SCATTER, _S_CROWDS, _S_COLOURS = range(4)
 _S_VEHICLES = 5
+_S_FIGURES = 6
 #: m, lateral offsets of cars from a street's centre line: kerb parking and the two lanes
 LANES = (-2.6, -1.0, 1.0, 2.6)
 
@@ -178,12 +180,23 @@ CLOTHES = np.array([
 ])
 SKIN = np.array([(0.98, 0.84, 0.72), (0.90, 0.72, 0.57), (0.76, 0.57, 0.42),
                  (0.55, 0.38, 0.26), (0.36, 0.24, 0.16)])
+# trousers: denim blues, black, greys, khaki, brown, olive
+TROUSERS = np.array([(0.16, 0.22, 0.40), (0.25, 0.33, 0.52), (0.08, 0.08, 0.09),
+                     (0.35, 0.35, 0.37), (0.62, 0.56, 0.42), (0.36, 0.25, 0.16),
+                     (0.30, 0.34, 0.20)])
 
 
 def colours(seed: int, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(clothes index (N,), skin index (N,)) into CLOTHES and SKIN, drawn from the seed."""
     rng = _rng(seed, _S_COLOURS)
     return rng.integers(0, len(CLOTHES), n), rng.integers(0, len(SKIN), n)
+
+
+def figure_draws(seed: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(poses (N, 7) as ``figures.draw_poses``, trousers index (N,)) from their own
+    stream: articulated figures move no position and no other colour."""
+    rng = _rng(seed, _S_FIGURES)
+    return draw_poses(rng, n), rng.integers(0, len(TROUSERS), n)
 
 
 # -- figures as merged meshes ----------------------------------------------------
@@ -251,6 +264,7 @@ def out_ext(cars):
 CAR_COLOURS = np.array([(0.93, 0.93, 0.92), (0.08, 0.08, 0.09), (0.70, 0.71, 0.73),
                         (0.40, 0.41, 0.43), (0.12, 0.22, 0.55), (0.70, 0.08, 0.08)])
 GLASS = (0.12, 0.16, 0.20)
+TYRE = (0.06, 0.06, 0.06)
 
 
 def car_colours(seed: int, n: int) -> np.ndarray:

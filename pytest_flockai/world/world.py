@@ -40,11 +40,12 @@ from .. import _check
 from ..errors import ConfigError
 from . import urban as _urban
 from .mjcf import box_occluders, find_people
-from .objects import CAR_BODY, CAR_CABIN, HEAD, PERSON_HEIGHT, TORSO, ObjectTable, _rotate
+from . import figures as _fig
+from . import scenery as _scenery
+from .objects import PERSON_HEIGHT, ObjectTable
 
 GROUND_RGBA = (0.45, 0.5, 0.4, 1)
-
-_G_GROUND, _G_BUILDINGS, _G_PEOPLE = 0, 1, 2
+FIGURES = ("articulated", "simple")
 
 
 class World:
@@ -65,6 +66,9 @@ class World:
         self.car_idx = np.zeros(0, dtype=int)       # index into urban.CAR_COLOURS per car
         self.clothes_idx = np.zeros(0, dtype=int)   # index into urban.CLOTHES per person
         self.skin_idx = np.zeros(0, dtype=int)      # index into urban.SKIN per person
+        self.trousers_idx = np.zeros(0, dtype=int)  # index into urban.TROUSERS per person
+        self.poses = np.zeros((0, 7))               # figures.draw_poses rows per person
+        self.figures = "simple"
         self.path = None
         self._info: dict = {}
 
@@ -76,7 +80,8 @@ class World:
     @classmethod
     def urban(cls, seed: int = 0, size=(200.0, 200.0), people: int = 100, crowds=(), *,
               building_density: float = 0.7, clear_radius: float = 15.0,
-              max_building_height: float | None = None, vehicles: int = 0) -> "World":
+              max_building_height: float | None = None, vehicles: int = 0,
+              figures: str = "simple") -> "World":
         """A procedural city of ``size = (east-west, north-south)`` metres centred on home.
 
         people: scattered people (uniform over the area, outside buildings);
@@ -90,6 +95,9 @@ class World:
         kerbs and standing in the lanes of the streets (drawn from their own
         random stream: adding cars moves nothing else); like people, they are
         seen by the camera and counted by the truth, and do not collide.
+        figures: "articulated" (people with legs, arms and a head in varied poses and
+        clothing, see ``figures.py``) or "simple" (the first release's torso prism
+        and head, kept for comparisons).
         """
         where = "World.urban"
         if isinstance(seed, bool) or not isinstance(seed, Integral) or seed < 0:
@@ -106,12 +114,14 @@ class World:
         cr = _crowds(crowds, size, where)
         keep = [(x, y, 2.0 * s + 2.0) for x, y, _, s in cr]
         w = cls("urban")
+        w.figures = _figures(figures, where)
         w.seed, w.size, w.crowds, w.scattered = int(seed), size, cr, people
         w.buildings = _urban.buildings(int(seed), size, density=density, clear_radius=clear,
                                        keep_clear=keep, max_height=hmax)
         w.streets = _urban.streets(size)
         w.people = _urban.people(int(seed), size, people, cr, w.buildings)
         w.clothes_idx, w.skin_idx = _urban.colours(int(seed), len(w.people))
+        w.poses, w.trousers_idx = _urban.figure_draws(int(seed), len(w.people))
         if n_cars:
             w.vehicles = _urban.vehicles(int(seed), size, n_cars, w.buildings, w.people, clear)
             w.car_idx = _urban.car_colours(int(seed), n_cars)
@@ -124,13 +134,17 @@ class World:
         return w
 
     @classmethod
-    def scene(cls, people=(), vehicles=(), buildings=(), *, size=(100.0, 100.0)) -> "World":
+    def scene(cls, people=(), vehicles=(), buildings=(), *, size=(100.0, 100.0),
+              figures: str = "simple", poses=None) -> "World":
         """A test range: figures, cars and buildings exactly where you put them, on
         the urban world's ground and streets. people: (x, y) feet positions;
-        vehicles: (x, y, yaw) rows; buildings: (cx, cy, half_x, half_y, height)."""
+        vehicles: (x, y, yaw) rows; buildings: (cx, cy, half_x, half_y, height);
+        poses: None (drawn as in an urban world of seed 0) or (N, 7) rows as
+        ``figures.draw_poses`` returns them."""
         where = "World.scene"
         size = _check.vector("size", size, 2, where=where, positive_entries=True)
         w = cls("urban")
+        w.figures = _figures(figures, where)
         w.seed, w.size = 0, size
         w.people = _rows(people, 2, "people", "(x, y)", where)
         w.people = np.column_stack([w.people, np.zeros(len(w.people))])
@@ -141,6 +155,13 @@ class World:
         w.scattered = len(w.people)
         w.streets = _urban.streets(size)
         w.clothes_idx, w.skin_idx = _urban.colours(0, len(w.people))
+        w.poses, w.trousers_idx = _urban.figure_draws(0, len(w.people))
+        if poses is not None:
+            w.poses = _rows(poses, 7, "poses", "(yaw, scale, swing, left pitch, left roll, "
+                            "right pitch, right roll)", where)
+            if len(w.poses) != len(w.people):
+                raise ConfigError(f"{where}: poses has {len(w.poses)} rows; expected one per "
+                                  f"person ({len(w.people)})")
         b = w.buildings
         w.occluders = np.column_stack([b[:, 0] - b[:, 2], b[:, 1] - b[:, 3], np.zeros(len(b)),
                                        b[:, 0] + b[:, 2], b[:, 1] + b[:, 3], b[:, 4]])
@@ -198,78 +219,7 @@ class World:
             spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 1],
                                     rgba=list(GROUND_RGBA))
             return
-        self._add_urban(spec)
-
-    def _add_urban(self, spec) -> None:
-        G = mujoco.mjtGeom
-        wb = spec.worldbody
-        spec.add_texture(name="flockai_ground", type=mujoco.mjtTexture.mjTEXTURE_2D,
-                         builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, rgb1=[0.36, 0.42, 0.30],
-                         rgb2=[0.40, 0.46, 0.33], width=256, height=256,
-                         mark=mujoco.mjtMark.mjMARK_EDGE, markrgb=[0.30, 0.34, 0.26])
-        ground = spec.add_material(name="flockai_ground", texrepeat=[0.2, 0.2], texuniform=True,
-                                   specular=0.0, shininess=0.0, reflectance=0.0)
-        ground.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "flockai_ground"
-        spec.add_material(name="flockai_matte", specular=0.0, shininess=0.0, reflectance=0.0)
-        spec.add_material(name="flockai_building", specular=0.1, shininess=0.1, reflectance=0.0)
-        spec.add_texture(name="flockai_sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
-                         builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, rgb1=[0.55, 0.75, 0.95],
-                         rgb2=[0.95, 0.97, 1.0], width=64, height=384)
-        # lighting: sun + a weak headlight; a top face gets ~1.0 (no saturation of colours)
-        spec.visual.headlight.ambient = [0.0, 0.0, 0.0]
-        spec.visual.headlight.diffuse = [0.2, 0.2, 0.2]
-        spec.visual.headlight.specular = [0.0, 0.0, 0.0]
-        wb.add_light(name="sun", type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0, 0, 100],
-                     dir=[0.3, 0.2, -1.0], diffuse=[0.5, 0.5, 0.5], ambient=[0.3, 0.3, 0.3],
-                     specular=[0.0, 0.0, 0.0], castshadow=False)
-        wb.add_geom(name="ground", type=G.mjGEOM_PLANE, size=[0, 0, 1], material="flockai_ground",
-                    group=_G_GROUND)
-        for i, (x0, y0, x1, y1) in enumerate(self.streets):
-            wb.add_geom(name=f"street{i}", type=G.mjGEOM_BOX,
-                        pos=[(x0 + x1) / 2, (y0 + y1) / 2, 0.02],
-                        size=[(x1 - x0) / 2, (y1 - y0) / 2, 0.02], rgba=[0.22, 0.22, 0.24, 1],
-                        material="flockai_matte", contype=0, conaffinity=0, group=_G_GROUND)
-        shade = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(9,)))
-        for i, (cx, cy, hx, hy, h) in enumerate(self.buildings):
-            g = 0.55 + 0.3 * shade.random()
-            tint = shade.uniform(-0.05, 0.05, 3)
-            wb.add_geom(name=f"building{i}", type=G.mjGEOM_BOX, pos=[cx, cy, h / 2],
-                        size=[hx, hy, h / 2], rgba=[*np.clip(g + tint, 0, 1), 1],
-                        material="flockai_building", group=_G_BUILDINGS)
-        self._add_figures(spec)
-        self._add_vehicles(spec)
-
-    def _add_figures(self, spec) -> None:
-        """People: one mesh geom per colour holding all figures of that colour (group 2)."""
-        if len(self.people) == 0:
-            return
-        for kind, template, idx, palette in (("clothes", TORSO, self.clothes_idx, _urban.CLOTHES),
-                                             ("skin", HEAD, self.skin_idx, _urban.SKIN)):
-            for c in np.unique(idx):
-                verts, faces = _urban.merged(template, self.people[idx == c])
-                name = f"people_{kind}{int(c)}"
-                spec.add_mesh(name=name, uservert=verts.reshape(-1).tolist(),
-                              userface=faces.reshape(-1).tolist())
-                spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
-                                        rgba=[*palette[c], 1], material="flockai_matte",
-                                        contype=0, conaffinity=0, group=_G_PEOPLE)
-
-    def _add_vehicles(self, spec) -> None:
-        """Cars: one mesh per paint colour for the bodies, one for all glasshouses."""
-        if len(self.vehicles) == 0:
-            return
-        parts = [(f"cars_body{int(c)}", CAR_BODY, self.car_idx == c, _urban.CAR_COLOURS[c])
-                 for c in np.unique(self.car_idx)]
-        parts.append(("cars_glass", CAR_CABIN, np.ones(len(self.vehicles), bool), _urban.GLASS))
-        for name, (v, f), mask, rgba in parts:
-            cars = self.vehicles[mask]
-            verts = np.vstack([_rotate(v, yaw) + (x, y, z) for x, y, z, yaw in cars])
-            faces = np.vstack([f + k * len(v) for k in range(len(cars))])
-            spec.add_mesh(name=name, uservert=verts.reshape(-1).tolist(),
-                          userface=faces.reshape(-1).tolist())
-            spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
-                                    rgba=[*rgba, 1], material="flockai_building",
-                                    contype=0, conaffinity=0, group=_G_PEOPLE)
+        _scenery.add_urban(self, spec)
 
     def _add_mjcf(self, spec) -> None:
         try:
@@ -300,9 +250,20 @@ class World:
             feet = np.array(self.people, dtype=float).reshape(-1, 3)
             if self.path is not None:      # from_mjcf: the positions are figure centres
                 feet = feet - (0.0, 0.0, PERSON_HEIGHT / 2)
-            self._objects = ObjectTable.build(feet, self.vehicles)
+            shapes = None
+            if self.path is None and self.figures == "articulated":
+                shapes = [(np.vstack([m[0] for m in parts.values()]), _fig.person_samples(pose))
+                          for parts, pose in zip(self.figure_meshes(), self.poses)]
+            self._objects = ObjectTable.build(feet, self.vehicles, shapes)
             self._objects_key = key
         return self._objects
+
+    def figure_meshes(self) -> list:
+        """Per person, ``figures.person(pose)``: its meshes by material (cached)."""
+        if getattr(self, "_meshes_n", None) != len(self.poses):
+            self._meshes = [_fig.person(p) for p in self.poses]
+            self._meshes_n = len(self.poses)
+        return self._meshes
 
     def truth_points(self) -> np.ndarray:
         """(N, 3) points the camera truth projects: people lifted by ``truth_height``."""
@@ -316,6 +277,7 @@ class World:
             d["vehicles"] = int(len(self.vehicles))
         if self.name == "urban" and self.path is None:
             d.update(seed=self.seed, size=list(self.size), scattered=self.scattered,
+                     figures=self.figures,
                      crowds=[list(c) for c in self.crowds], buildings=int(len(self.buildings)),
                      **self._info)
         if self.path is not None:
@@ -342,6 +304,13 @@ def _rows(values, n, field, shape, where) -> np.ndarray:
     if not np.isfinite(arr).all():
         raise ConfigError(f"{where}: {field} has non-finite values; expected rows {shape}")
     return arr
+
+
+def _figures(value, where) -> str:
+    if value not in FIGURES:
+        raise ConfigError(f"{where}: figures = {value!r} is not allowed; expected one of "
+                          f"{', '.join(map(repr, FIGURES))}")
+    return value
 
 
 def _count(field, value, where) -> int:
