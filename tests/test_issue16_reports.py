@@ -9,6 +9,7 @@ and checksum in the file's first comment)."""
 
 import json
 import os
+import socket
 import stat
 from pathlib import Path
 
@@ -90,14 +91,24 @@ def test_written_files_follow_the_umask(pytester):
     assert stat.S_IMODE((pytester.path / "private.json").stat().st_mode) == 0o600
 
 
-@pytest.mark.parametrize("case", ["fifo", "device", "junit", "save", "empty"])
+@pytest.mark.parametrize("case", ["fifo", "socket", "device", "junit", "save", "empty"])
 def test_the_report_writer_refuses_what_it_would_destroy(pytester, case):
+    """Never the system's /dev/null: a writer without this check replaces it (it did,
+    on this machine, when these tests ran against the code before the fix)."""
     pytester.makepyfile(test_j=TESTS)
     if case == "fifo":
         os.mkfifo(pytester.path / "pipe")
         args, message = ["--flockai-json", "pipe"], "*/pipe' is a special file*"
+    elif case == "socket":
+        sock = socket.socket(socket.AF_UNIX)
+        sock.bind(str(pytester.path / "sock"))
+        args, message = ["--flockai-json", "sock"], "*/sock' is a special file*"
     elif case == "device":
-        args, message = ["--flockai-json", os.devnull], "*'/dev/null' is a special file*"
+        try:      # a null device of our own, in the test's folder (needs root)
+            os.mknod(pytester.path / "null", 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+        except PermissionError:
+            pytest.skip("creating a device node needs root")
+        args, message = ["--flockai-json", "null"], "*/null' is a special file*"
     elif case == "junit":
         args, message = ["--flockai-json", "x.xml", "--junitxml", "./x.xml"], \
             "*--junitxml and --flockai-json name the same file*"
@@ -109,7 +120,8 @@ def test_the_report_writer_refuses_what_it_would_destroy(pytester, case):
     res = run(pytester, *args)
     assert res.ret == pytest.ExitCode.USAGE_ERROR
     res.stderr.fnmatch_lines([message])
-    assert stat.S_ISCHR(os.stat(os.devnull).st_mode)
+    if case == "device":
+        assert stat.S_ISCHR(os.stat(pytester.path / "null").st_mode)   # left as it was
 
 
 def test_a_report_that_cannot_be_written_at_the_end_warns_and_keeps_the_verdicts(pytester):
