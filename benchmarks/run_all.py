@@ -11,6 +11,8 @@
 from __future__ import annotations
 
 import argparse
+import os
+import platform
 import statistics
 import subprocess
 import sys
@@ -27,6 +29,21 @@ import flight_core                  # noqa: E402
 import scenarios                    # noqa: E402
 
 import pytest_flockai as fa         # noqa: E402
+
+
+def machine() -> str:
+    """The machine and its load, printed with the table (figures depend on both)."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    load = " / ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+    return (f"machine: {cpu}, {os.cpu_count()} CPUs, Python {platform.python_version()}; "
+            f"load average (1/5/15 min) at the end: {load}")
 
 
 def main(argv=None):
@@ -62,6 +79,7 @@ def main(argv=None):
         last = (p.stdout.strip().splitlines() or ["?"])[-1]
         rows.append(("example suite, pytest -n 2: wall time", f"{time.perf_counter() - t0:.1f} s ({last})"))
     width = max(len(k) for k, _ in rows)
+    print(machine())
     print(f"{'benchmark':<{width}}  value")
     print("-" * width + "  " + "-" * 24)
     for k, v in rows:

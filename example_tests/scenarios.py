@@ -102,11 +102,14 @@ DETECTION = {   # name -> Task arguments: the detector every 1 s at 30 m
 
 
 def detection_mission(name: str, model, w) -> fa.Mission:
+    args = dict(DETECTION[name])
+    computer = args.pop("device", None)       # the drone's computer, not a second one
     task = fa.Task(model, period_s=1.0, evaluate="detection", score_threshold=0.4,
-                   name="det", **DETECTION[name])
+                   name="det", **args)
     pilot = fa.pilots.ZigZag(area=((-100.0, -100.0), (100.0, 100.0)), altitude=30.0,
                              spacing=50.0, speed=6.0)
-    return fa.Mission(fa.drone("dji-mavic-2-pro"), pilot, world=w, tasks=[task], seed=0, name=name)
+    drone = fa.drone("dji-mavic-2-pro", **({"device": computer} if computer else {}))
+    return fa.Mission(drone, pilot, world=w, tasks=[task], seed=0, name=name)
 
 
 def mission(name: str, models: dict, *, full: bool = False, w=None) -> fa.Mission:

@@ -31,13 +31,16 @@ Recording
 
 Reports
     KPIs travel on the test reports (attribute ``flockai``, plain JSON data, so
-    pytest-xdist carries them to the controller) and as ``user_properties``
-    ``flockai.<kpi>`` (``flockai.<flight>.<kpi>`` with several flights) so
-    ``--junitxml`` shows them. Files are written by the controller only.
+    pytest-xdist carries them to the controller), and ``--junitxml`` gets them as
+    suite properties ``flockai[<nodeid>].<kpi>`` (``harness/junit.py``: the
+    schema allows no testcase properties). Files are written by the controller
+    only, also when the run is interrupted (``harness/signals.py``).
 
 Options (each also an ini option, same name with underscores)
     ``--flockai-json PATH``, ``--flockai-save PATH``, ``--flockai-baseline PATH``,
-    ``--flockai-max-regression PCT`` (5), ``--flockai-artifacts DIR``.
+    ``--flockai-max-regression PCT`` (5), ``--flockai-artifacts DIR``,
+    ``--flockai-missing-baseline warn|fail``. Path options are safe in the space
+    form too (``harness/rootdir.py``).
 """
 
 from __future__ import annotations
@@ -45,8 +48,10 @@ from __future__ import annotations
 import pytest
 
 from . import hookspecs as _hookspecs
+from .harness import examples as _examples
 from .harness import markers as _markers
 from .harness import options as _options
+from .harness import rootdir as _rootdir
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
 from .harness.recorder import STATE, TestState
@@ -60,6 +65,15 @@ def pytest_addhooks(pluginmanager):
 
 def pytest_addoption(parser):
     _options.add_options(parser)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_load_initial_conftests(early_config, parser, args):
+    _rootdir.redo_setup(early_config, args)   # --flockai-baseline PATH must not move the rootdir
+
+
+def pytest_make_parametrize_id(config, val, argname):
+    return _rootdir.param_id(config, val)   # absolute paths: relative to the rootdir
 
 
 def pytest_configure(config):
@@ -77,6 +91,7 @@ def pytest_configure(config):
 def pytest_unconfigure(config):
     session = config.stash.get(SESSION, None)
     if session is not None:
+        session.close()
         config.pluginmanager.unregister(session)
         del config.stash[SESSION]
 
@@ -91,6 +106,7 @@ def _state(item) -> TestState:
 def pytest_collection_modifyitems(session, config, items):
     for item in items:
         _state(item)
+        _markers.warn_ignored(item)
 
 
 @pytest.hookimpl(wrapper=True)
@@ -103,6 +119,7 @@ def pytest_runtest_protocol(item, nextitem):
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
     st = _state(item)
+    st.reset()                     # each attempt (pytest-rerunfailures) starts clean
     if st.markers.error:
         pytest.fail(st.markers.error, pytrace=False)
 
@@ -113,16 +130,18 @@ def pytest_runtest_call(item):
     st.adopt_fixture_flights()
     session = item.config.stash[SESSION]
     try:
-        result = yield
+        with _examples.counted(item, st):
+            result = yield
     except BaseException:
         try:                       # for the report only: the body's error wins
+            _verdicts.check(item, st, session, body_failed=True)
             st.finish(session.artifacts)
-            _verdicts.check(item, st, session)
         except Exception:
             pass
         raise
-    st.finish(session.artifacts)
     message = _verdicts.check(item, st, session)
+    st.finish(session.artifacts)
+    _verdicts.warn(item, st, session)
     if message:
         pytest.fail(message, pytrace=False)
     return result
@@ -131,9 +150,8 @@ def pytest_runtest_call(item):
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_makereport(item, call):
     st = item.stash.get(STATE, None)
-    if st is not None:
-        st.sync_properties()
     report = yield
-    if st is not None and (st.flights or st.markers.budgets or st.markers.error):
+    if st is not None and (st.flights or st.markers.budgets or st.markers.error
+                           or st.hypothesis):
         report.flockai = st.payload()
     return report

@@ -127,8 +127,13 @@ def check_writable(path: Path, what: str) -> None:
     """Raise ReportError unless ``path`` can be written (its directory exists and
     accepts a new file; the path is not a directory)."""
     path = Path(path)
+    if str(path) in ("", "."):
+        raise ReportError(f"{what} {str(path)!r} is not allowed; expected a file path")
     if path.is_dir():
         raise ReportError(f"{what} {str(path)!r} is a directory; give a file path")
+    if path.exists() and not path.is_file():
+        raise ReportError(f"{what} {str(path)!r} is a special file (a device, a FIFO or a "
+                          f"socket); it would be replaced: give the path of a regular file")
     parent = path.parent
     if not parent.is_dir():
         raise ReportError(f"{what} {str(path)!r}: directory {str(parent)!r} does not exist")
@@ -211,11 +216,18 @@ def load_baseline(path: Path) -> dict:
         raise ReportError(f"baseline file {str(path)!r}: expected {{nodeid: {{flight: {{kpi: "
                           f"value}}}}}}, got {type(data).__name__}")
     for nodeid, flights in data.items():
-        if not isinstance(flights, dict) or not all(
-                isinstance(k, dict) and all(v is None or isinstance(v, (int, float))
-                                            for v in k.values()) for k in flights.values()):
+        if not isinstance(flights, dict) or not all(isinstance(k, dict) for k in flights.values()):
             raise ReportError(f"baseline file {str(path)!r}: entry {nodeid!r} must map flight "
                               f"names to {{kpi: number}}")
+        for fname, kp in flights.items():
+            for kpi, v in kp.items():
+                if v is None:       # a KPI that was not finite when saved: not compared
+                    continue
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                    raise ReportError(
+                        f"baseline file {str(path)!r}: {nodeid} flight {fname!r} KPI {kpi!r} "
+                        f"= {v!r} is not allowed; expected a finite number (or null for a KPI "
+                        f"that is not compared)")
     return data
 
 

@@ -14,10 +14,12 @@ velocity and acceleration feed-forward.
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
 
 from .. import _check, limits
-from ..errors import ConfigError
+from ..errors import ConfigError, close_matches
 from .trajectory import Leg, Path, waypoint_path
 
 
@@ -27,6 +29,27 @@ class Pilot:
     altitude: float = 10.0
     #: nominal path length in metres from the start position (None if unbounded)
     path_length: float | None = None
+
+    def __init_subclass__(cls, **kwargs):
+        """A misspelled keyword (``Hover(altitdue=5)``) is a ConfigError with a
+        did-you-mean, as everywhere else, not Python's plain TypeError."""
+        super().__init_subclass__(**kwargs)
+        init = cls.__dict__.get("__init__")
+        if init is None:
+            return
+        params = inspect.signature(init).parameters
+        if any(p.kind is p.VAR_KEYWORD for p in params.values()):
+            return
+        names = [n for n, p in params.items() if n != "self" and p.kind is not p.VAR_POSITIONAL]
+
+        @functools.wraps(init)
+        def checked(self, *args, **kw):
+            for key in kw:
+                if key not in names:
+                    raise ConfigError(f"{cls.__name__}: unknown argument {key!r}"
+                                      f"{close_matches(key, names)}; allowed: {', '.join(names)}")
+            return init(self, *args, **kw)
+        cls.__init__ = checked
 
     def start(self, t: float, position, accel: float) -> None:
         self.t0 = t

@@ -2,8 +2,10 @@
 
 The drone's model (``drone.energy``, built from its blueprint's parameters)
 is left untouched; a flight gets a copy when it differs: the power of sensors
-added to the drone or the mission goes into ``proc.sensors``, and the on-board
-tasks' computer becomes ``proc.soc`` when it is not the blueprint's.
+added to the drone or the mission goes into ``proc.sensors``, and the computer
+the on-board tasks run on becomes ``proc.soc`` when it is not the blueprint's,
+and the blueprint's own computer stays on board, idle, as ``proc.soc_blueprint``
+(a task that names another computer adds one; it does not take the drone's away).
 """
 
 from __future__ import annotations
@@ -23,9 +25,13 @@ def flight_energy_model(base, *, extra_sensors=(), device=None, blueprint_device
     model = base.copy()
     if swap_soc and "proc" in model:
         proc = model.component("proc")
-        soc = SoC("soc", device.idle_w, device.active_w, f"on-board computer {device.name}")
+        soc = SoC("soc", device.idle_w, device.active_w,
+                  f"on-board computer {device.name}, added for the tasks")
         if "soc" in proc:
+            own = proc.component("soc")
             proc.replace("soc", soc)
+            proc.add(Constant("soc_blueprint", getattr(own, "idle_w", 0.0),
+                              f"the blueprint's on-board computer {blueprint_device}, idle"))
         else:
             proc.add(soc)
     if not extra:

@@ -16,9 +16,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import pytest
+
 from .. import budgets as _budgets
 from .. import kpis as _kpis
 from ..errors import ConfigError, close_matches
+from ..probes.base import Probe
 
 FLOCKAI_KEYS = ("drone", "pilot", "world", "tasks", "probes", "seed", "until", "wind", "name",
                 "max_regression")
@@ -89,7 +92,48 @@ def _kpi_budgets(item) -> tuple:
                               "@pytest.mark.kpi(flight_time_s='>= 24 min')")
         for kpi, text in specs.items():
             seen.setdefault((flight, kpi), _budgets.parse(kpi, text))
+    known = None
+    for _, kpi in seen:
+        if "." in kpi and _kpis.get(kpi) is None:
+            known = _custom_kpis(item) if known is None else known
+            _check_custom(kpi, known)
     return tuple(FlightBudget(f, b) for (f, _), b in seen.items())
+
+
+def _custom_kpis(item) -> dict:
+    """{probe name: {its KPI names}} known at collection: the probe classes defined
+    in the test's module or a conftest.py (a probe publishes ``<name>.<metric>``)
+    and the ``flockai`` marker's probe objects. Probes made elsewhere are not
+    known here, and their KPIs are checked after the flight."""
+    out: dict = {}
+
+    def add(name, metrics):
+        if isinstance(name, str) and name:
+            out.setdefault(name, set()).update(
+                f"{name}.{getattr(m, 'name', m)}" for m in metrics or ())
+    module = getattr(getattr(item, "module", None), "__name__", None)
+    stack = list(Probe.__subclasses__())
+    while stack:
+        cls = stack.pop()
+        stack += cls.__subclasses__()
+        home = cls.__module__
+        if not getattr(cls, "builtin", False) and (home == module or
+                                                    home.rsplit(".", 1)[-1] == "conftest"):
+            add(cls.__dict__.get("name"), cls.__dict__.get("metrics"))
+    probes = closest(item, "probes")
+    for p in (probes if isinstance(probes, (list, tuple)) else [probes] if probes else []):
+        if isinstance(p, Probe) and not p.builtin:
+            add(p.name, p.metrics)
+    return out
+
+
+def _check_custom(kpi: str, known: dict) -> None:
+    prefix = kpi.split(".", 1)[0]
+    metrics = known.get(prefix)
+    if metrics and kpi not in metrics:
+        raise ConfigError(f"budget on {kpi!r}: probe {prefix!r} has no KPI {kpi!r}"
+                          f"{close_matches(kpi, sorted(metrics))}; it publishes: "
+                          f"{', '.join(sorted(metrics))}")
 
 
 def closest(item, key):
@@ -119,3 +163,37 @@ def regression_setting(value):
             out.append((kpi, pct(f"max_regression[{kpi!r}]", v)))
         return tuple(sorted(out))
     return pct("max_regression", value)
+
+
+#: marker settings read by the plugin's own fixture of that name (else by ``mission``)
+READ_BY = {"drone": "drone", "pilot": "pilot", "world": "world", "tasks": "tasks",
+           "probes": "probes", "seed": "mission", "until": "mission", "wind": "mission",
+           "name": "mission"}
+
+
+def ignored_settings(item) -> list[tuple[str, str]]:
+    """(setting, fixture) pairs of the ``flockai`` marker that a fixture the user
+    overrode will never read: the overriding fixture wins, as pytest's closest
+    fixture always does."""
+    info = getattr(item, "_fixtureinfo", None)
+    defs = getattr(info, "name2fixturedefs", None) or {}
+    out = []
+    for mark in item.iter_markers("flockai"):
+        for key in mark.kwargs:
+            fixture = READ_BY.get(key)
+            fds = defs.get(fixture) if fixture else None
+            if not fds:
+                continue
+            module = getattr(fds[-1].func, "__module__", "")
+            if module != __name__.rsplit(".", 1)[0] + ".fixtures" and (key, fixture) not in out:
+                out.append((key, fixture))
+    return out
+
+
+def warn_ignored(item) -> None:
+    for key, fixture in ignored_settings(item):
+        item.warn(pytest.PytestWarning(
+            f"pytest-flockai: @pytest.mark.flockai({key}=...) on {item.nodeid} is ignored: the "
+            f"`{fixture}` fixture is overridden (in a conftest.py or the test module) and an "
+            f"overridden fixture wins over the marker; set {key} in your fixture, or read the "
+            f"marker there with request.node.get_closest_marker('flockai')"))

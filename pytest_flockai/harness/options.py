@@ -5,6 +5,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import pytest
+
 OPTIONS = [
     # (name, metavar, help)
     ("json", "PATH", "write a JSON report of every flight, KPI and budget (schema "
@@ -18,7 +20,14 @@ OPTIONS = [
                               "(default: 5)"),
     ("artifacts", "DIR", "write each flight's telemetry (CSV) and result (JSON) under "
                          "DIR/<test nodeid>/"),
+    ("missing-baseline", "{warn,fail}", "what a test with flights but no entry in the "
+                                       "--flockai-baseline file (or a flight the entry does "
+                                       "not name) does: warn (default: noted in the terminal "
+                                       "and the JSON report) or fail"),
 ]
+#: the options whose value is a path (also safe in the space form, see rootdir.py)
+PATH_OPTIONS = ("json", "save", "baseline", "artifacts")
+MISSING_BASELINE = ("warn", "fail")
 DEFAULT_MAX_REGRESSION = 5.0
 
 
@@ -29,6 +38,10 @@ def add_options(parser) -> None:
         group.addoption(f"--flockai-{name}", dest=dest, metavar=metavar, default=None,
                         help=help_)
         parser.addini(dest, f"{help_} (ini form of --flockai-{name})", type="string", default="")
+
+
+def path_dests() -> list[str]:
+    return ["flockai_" + n for n in PATH_OPTIONS]
 
 
 def option(config, name: str):
@@ -43,6 +56,9 @@ def option(config, name: str):
 
 def path_option(config, name: str) -> Path | None:
     """A path option, relative to the ini file (ini) or the invocation folder."""
+    if config.getoption("flockai_" + name.replace("-", "_"), None) == "":
+        raise pytest.UsageError(f"pytest-flockai: --flockai-{name} = '' is not allowed; "
+                                f"expected a path")
     v, from_ini = option(config, name)
     if v is None:
         return None

@@ -33,6 +33,7 @@ class Flight:
     explicit: str | None = None    # Mission(name=...)
     fixture: str | None = None     # the fixture that returned it
     name: str = "flight"           # final, unique within the test
+    example: int = 0               # the hypothesis example that flew it (0: none)
 
     @property
     def kpis(self) -> dict:
@@ -50,13 +51,59 @@ class TestState:
     regressions: list = field(default_factory=list)
     problems: list = field(default_factory=list)      # kpi marker misuse found after the body
     finished: bool = False                              # names, hooks and artifacts done
-    _props: list = field(default_factory=list)        # user_properties we added
+    baseline_missing: list = field(default_factory=list)    # flights the baseline lacks
+    baseline_unmatched: list = field(default_factory=list)  # baseline flights not flown
+    example: int = 0                                    # hypothesis examples run so far
+    hypothesis: dict | None = None                      # their compact summary
+    warnings: list = field(default_factory=list)       # e.g. artifacts that could not be written
 
     __test__ = False  # not a pytest test class
 
+    def reset(self) -> None:
+        """A new attempt of the test (pytest-rerunfailures): nothing of the
+        earlier attempts counts, names start again at ``flight``."""
+        self.flights, self.verdicts, self.regressions, self.problems = [], [], [], []
+        self.baseline_missing, self.baseline_unmatched, self.warnings = [], [], []
+        self.finished, self.example, self.hypothesis = False, 0, None
+
     def record(self, mission, result) -> None:
         explicit = getattr(mission, "name", None) or (result.scenario or {}).get("name")
-        self._add(Flight(result, explicit=explicit))
+        self._add(Flight(result, explicit=explicit, example=self.example))
+
+    def next_example(self) -> None:
+        """A hypothesis example starts (the plugin wraps the test's inner function)."""
+        self.example += 1
+
+    def compact_examples(self, failed: bool) -> None:
+        """A hypothesis test keeps the flights of its last example in full when it
+        failed (hypothesis runs the shrunk failing example last) and none when it
+        passed; the rest is a count and the range of each KPI."""
+        if self.example < 2 and not any(f.example > 1 for f in self.flights):
+            return
+        ranges: dict = {}
+        for f in self.flights:
+            for k, v in f.kpis.items():
+                try:
+                    v = float(v)
+                except (TypeError, ValueError):
+                    continue
+                if math.isfinite(v):
+                    lo, hi = ranges.get(k, (v, v))
+                    ranges[k] = (min(lo, v), max(hi, v))
+        last = max((f.example for f in self.flights), default=0)
+        kept = [f for f in self.flights if failed and f.example == last]
+        self.hypothesis = {"examples": self.example, "flights": len(self.flights),
+                           "kept": len(kept), "kpi_ranges": {k: list(v) for k, v in ranges.items()}}
+        worst: dict = {}
+        for v in self.verdicts:           # per budget: a failing one, else the smallest margin
+            key = (v.kpi, v.budget)
+            w = worst.get(key)
+            if w is None or (w.passed and not v.passed) or (
+                    w.passed == v.passed and v.margin < w.margin):
+                worst[key] = v
+        self.verdicts = list(worst.values())
+        self.flights = kept
+        self._name()
 
     def _add(self, flight: Flight) -> None:
         """A flight of this test; the derived-KPI hooks run on it now, so the test
@@ -94,12 +141,19 @@ class TestState:
             taken.add(name)
 
     def finish(self, artifacts) -> None:
-        """After the body, when every flight has its final name: the artifacts."""
+        """After the body, when every flight has its final name: the artifacts.
+        One that cannot be written (a full disk) is a warning, not a failure."""
         if self.finished or artifacts is None:
             return
         self.finished = True
         for f in self.flights:
-            _report.write_artifacts(artifacts, self.item.nodeid, f.name, f.result)
+            try:
+                _report.write_artifacts(artifacts, self.item.nodeid, f.name, f.result)
+            except OSError as exc:
+                self.warnings.append(f"pytest-flockai: artifacts of {self.item.nodeid} flight "
+                                     f"{f.name!r} not written to {artifacts}: "
+                                     f"{exc.strerror or exc}")
+                return
 
     def payload(self) -> dict:
         """Plain JSON data for the test report (travels through pytest-xdist)."""
@@ -107,24 +161,14 @@ class TestState:
                     "sim_time_s": f.result.scenario.get("sim_time_s"),
                     "scenario": f.result.scenario, "kpis": f.result.kpis} for f in self.flights]
         error = self.markers.error or ("\n".join(self.problems) or None)
-        return _report.jsonable({"flights": flights,
-                                 "budgets": [v.to_dict() for v in self.verdicts],
-                                 "regressions": self.regressions, "error": error})
-
-    def sync_properties(self) -> None:
-        """``flockai.<kpi>`` (or ``flockai.<flight>.<kpi>``) user properties for JUnit."""
-        props = []
-        prefix_flight = len(self.flights) > 1
-        for f in self.flights:
-            for k, v in f.kpis.items():
-                props.append((f"flockai.{f.name}.{k}" if prefix_flight else f"flockai.{k}",
-                              _prop_value(v)))
-        if props == self._props:
-            return
-        old = {id(p) for p in self._props}
-        item = self.item
-        item.user_properties[:] = [p for p in item.user_properties if id(p) not in old] + props
-        self._props = props
+        out = {"flights": flights, "budgets": [v.to_dict() for v in self.verdicts],
+               "regressions": self.regressions, "error": error}
+        if self.baseline_missing or self.baseline_unmatched:
+            out["baseline_missing"] = self.baseline_missing
+            out["baseline_unmatched"] = self.baseline_unmatched
+        if self.hypothesis is not None:
+            out["hypothesis"] = self.hypothesis
+        return _report.jsonable(out)
 
 
 def _add_derived(result, extra) -> None:
@@ -139,11 +183,3 @@ def _add_derived(result, extra) -> None:
             raise ConfigError(f"pytest_flockai_derived_kpis: {key!r} = {value!r} is not "
                               f"allowed; expected a str name and a number")
         result.kpis[key] = float(value)
-
-
-def _prop_value(v) -> str:
-    try:
-        v = float(v)
-    except (TypeError, ValueError):
-        return str(v)
-    return repr(v) if math.isfinite(v) else str(v)

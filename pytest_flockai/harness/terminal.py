@@ -12,7 +12,8 @@ HEADLINE_KPIS = ("flight_time_s", "energy_total_j", "mean_power_w", "battery_rem
 
 
 def summary(tr, config, entries, files) -> None:
-    entries = [e for e in entries if e["flights"] or e["budgets"] or e["error"]]
+    entries = [e for e in entries if e["flights"] or e["budgets"] or e["error"]
+               or e["outcome"] in ("interrupted", "crashed") or e.get("baseline_missing")]
     if not entries and not files:
         return
     verbose = config.get_verbosity() > 0
@@ -27,7 +28,13 @@ def summary(tr, config, entries, files) -> None:
         broken = [b for b in budgets if b["verdict"] != "pass"]
         status = e["outcome"] + (f", {len(broken)} budget(s) broken" if broken else "") + (
             f", {len(e['regressions'])} regression(s)" if e["regressions"] else "")
+        if e.get("baseline_missing"):
+            status += ", not in baseline: " + ", ".join(e["baseline_missing"])
         tr.write_line(f"{e['nodeid']} ({status})")
+        if e["outcome"] in ("interrupted", "crashed") and e.get("message"):
+            tr.write_line(f"  {e['message']}")
+        if e.get("hypothesis"):
+            tr.write_line("  " + _hypothesis_line(e["hypothesis"]))
         for f in e["flights"]:
             kp = f["kpis"]
             if verbose:
@@ -37,8 +44,9 @@ def summary(tr, config, entries, files) -> None:
                 tr.write_line(_report.table(["KPI", "value", "better"], rows, indent="    "))
             else:
                 names = [k for k in HEADLINE_KPIS if k in kp]
-                names += [b["kpi"] for b in budgets
-                          if b["kpi"] in kp and b["kpi"] not in names]
+                for b in budgets:
+                    if b["kpi"] in kp and b["kpi"] not in names:
+                        names.append(b["kpi"])
                 cells = "  ".join(f"{k}={_report.format_kpi(k, kp[k])}" for k in names)
                 tr.write_line(f"  {f['name']}: {cells}")
         if verbose and budgets:
@@ -46,6 +54,14 @@ def summary(tr, config, entries, files) -> None:
                                          indent="    "))
     for line in files:
         tr.write_line(f"flockai: {line}")
+
+
+def _hypothesis_line(h: dict) -> str:
+    ranges = "  ".join(f"{k} {_report.format_kpi(k, lo)}..{_report.format_kpi(k, hi)}"
+                       for k, (lo, hi) in h.get("kpi_ranges", {}).items() if k in HEADLINE_KPIS)
+    kept = "the failing example in full" if h.get("kept") else "no example kept in full"
+    return (f"hypothesis: {h['examples']} example(s), {h['flights']} flight(s) ({kept}); "
+            f"{ranges}").rstrip("; ")
 
 
 def _better(kpi):

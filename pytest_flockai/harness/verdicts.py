@@ -3,26 +3,28 @@ baseline, and the failure message (None when everything holds)."""
 
 from __future__ import annotations
 
+import warnings
+
+import pytest
+
 from .. import budgets as _budgets
 from .. import kpis as _kpis
 from .. import report as _report
 from ..errors import ConfigError, close_matches
 
 
-def check(item, st, session) -> str | None:
-    """Evaluate budgets and the baseline into ``st``; return the failure message or None."""
+def check(item, st, session, body_failed: bool = False) -> str | None:
+    """Evaluate budgets and the baseline into ``st``; return the failure message or None.
+
+    ``body_failed``: the test body raised (its error is the test's verdict; a
+    timeout is not reported as "flew no mission")."""
     st.verdicts, st.regressions, st.problems = [], [], []
-    if st.markers.budgets:
+    st.baseline_missing, st.baseline_unmatched = [], []
+    if st.markers.budgets and (st.flights or not body_failed):
         _budget_verdicts(item, st)
+    st.compact_examples(failed=body_failed or any(not v.passed for v in st.verdicts))
     if session.baseline is not None and st.flights:
-        base = session.baseline.get(item.nodeid)
-        if base:
-            limit = session.max_regression
-            reg = st.markers.max_regression
-            if reg is not None and not isinstance(reg, tuple):
-                limit = reg
-            st.regressions = _report.regressions({f.name: f.kpis for f in st.flights}, base,
-                                                 limit, per_kpi=st.markers.per_kpi_regression)
+        _baseline(item, st, session)
     parts = list(st.problems)
     broken = [v for v in st.verdicts if not v.passed]
     if broken:
@@ -37,7 +39,43 @@ def check(item, st, session) -> str | None:
                      f"{item.nodeid}:\n"
                      + _report.table(["flight", "KPI", "baseline", "actual", "change",
                                       "better"], rows))
+    if st.baseline_missing and session.missing_baseline == "fail":
+        parts.append(missing_text(item.nodeid, st, session))
     return "\n".join(parts) or None
+
+
+def warn(item, st, session) -> None:
+    """Artifacts that could not be written: a warning, once per session."""
+    if st.warnings and not getattr(session, "warned_artifacts", False):
+        session.warned_artifacts = True
+        warnings.warn(pytest.PytestWarning(st.warnings[0]), stacklevel=2)
+
+
+def _baseline(item, st, session) -> None:
+    base = session.baseline.get(item.nodeid) or {}
+    flown = [f.name for f in st.flights]
+    st.baseline_missing = [n for n in flown if n not in base]
+    st.baseline_unmatched = [n for n in base if n not in flown]
+    if not base:
+        return
+    limit = session.max_regression
+    reg = st.markers.max_regression
+    if reg is not None and not isinstance(reg, tuple):
+        limit = reg
+    st.regressions = _report.regressions({f.name: f.kpis for f in st.flights}, base,
+                                         limit, per_kpi=st.markers.per_kpi_regression)
+
+
+def missing_text(nodeid, st, session) -> str:
+    """"not in baseline" for one test: the flights the baseline has no entry for."""
+    if not st.baseline_unmatched:
+        return (f"pytest-flockai: {nodeid} is not in baseline {session.baseline_path} "
+                f"(flights {', '.join(st.baseline_missing)}): its KPIs were not compared")
+    hints = "".join(f"; {n!r}{close_matches(n, st.baseline_unmatched)}"
+                    for n in st.baseline_missing)
+    return (f"pytest-flockai: {nodeid}: flight(s) {', '.join(st.baseline_missing)} not in "
+            f"baseline {session.baseline_path}, which has {', '.join(st.baseline_unmatched)} "
+            f"for this test (a renamed or mistyped flight?{hints}): not compared")
 
 
 def _budget_verdicts(item, st) -> None:

@@ -97,7 +97,8 @@ class Run:
                                    return_home=plan.return_home)
         recorder = DatasetRecorder(plan.dataset_period_s) if plan.dataset_dir is not None else None
         seeds = seed_sequence(plan.seed, "tasks").spawn(len(plan.tasks)) if plan.tasks else []
-        self.scheduler = TaskScheduler(st, plan.tasks, seeds, self.suite, d, recorder=recorder)
+        self.scheduler = TaskScheduler(st, plan.tasks, seeds, self.suite, d, recorder=recorder,
+                                       computer=plan.onboard_device)
         tasks = self.scheduler if self.scheduler.runners else None
         self.traffic = Traffic()
         self.book = FlightBook(st, self.events, plan.ctrl_dt)

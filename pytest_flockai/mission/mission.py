@@ -29,6 +29,7 @@ from ..world.wind import Wind
 from . import loop, result
 from .assemble import Run
 from .plan import check_components, check_sensors, check_tasks, check_until, resolve
+from .plan import computers as _computers
 
 
 class Mission:
@@ -115,6 +116,7 @@ class Mission:
             "wind": self.wind.to_dict() if self.wind is not None else None,
             "seed": self.seed, "until": self.until, "return_home": self.return_home,
             "tasks": [getattr(t, "to_dict", lambda: repr(t))() for t in self.tasks],
+            "computers": _computers(self.tasks, self.drone),
             "probes": [p.to_dict() for p in self.probes],
             "sensors": [sn.name for sn in self.drone.extra_sensors + self.sensors],
             "fly_on": self.fly_on,

@@ -62,7 +62,7 @@ class FlightPlan:
     fly_on: str
     dataset_dir: object
     dataset_period_s: float
-    onboard_device: object    # compute.Device or None
+    onboard_device: object    # compute.Device the on-board tasks run on (or the drone's), or None
     conditions: object = None  # sensors.Conditions for the blueprint's camera
     atmosphere: Atmosphere = Atmosphere()   # the air: density for thrust, drag and power
     max_wall_s: float | None = None  # s of host time before the flight is stopped
@@ -121,11 +121,18 @@ def check_tasks(tasks, drone, sensors) -> tuple:
                               f"give the task another name=")
         names.add(tk.name)
         _check_task_sensor(tk, drone, extra)
-    onboard = {tk.device.name for tk in tasks if tk.execution == "onboard"}
+    onboard = {tk.device.name if tk.device is not None else drone.device
+               for tk in tasks if tk.execution == "onboard"}
     if len(onboard) > 1:
-        raise ConfigError(f"Mission: on-board tasks name different computers "
-                          f"({', '.join(sorted(onboard))}); a drone has one on-board computer: "
-                          f"give them the same device")
+        raise ConfigError(f"Mission: on-board tasks run on different computers "
+                          f"({', '.join(sorted(onboard))}); the tasks of one drone share one "
+                          f"computer: give them the same device (or none: the drone's own)")
+    if "none" in onboard:
+        tk = next(tk for tk in tasks if tk.execution == "onboard")
+        raise ConfigError(f"task {tk.name!r} runs on the drone's on-board computer, and "
+                          f"{drone.name} has none ([compute] device = \"none\"); give the task "
+                          f"device=... (the computer is then carried and powered) or "
+                          f"execution='remote'")
     return tasks
 
 
@@ -166,11 +173,23 @@ def check_components(components) -> tuple:
 
 
 def onboard_device(tasks, drone):
-    """The on-board computer: the on-board tasks' device, else the blueprint's."""
+    """The computer the on-board tasks run on: the one they name, else the drone's own."""
     for tk in tasks:
-        if tk.execution == "onboard":
+        if tk.execution == "onboard" and tk.device is not None:
             return tk.device
     return _device(drone.device) if drone.device != "none" else None
+
+
+def computers(tasks, drone) -> list[dict]:
+    """The on-board computers a flight carries, for the scenario: the blueprint's,
+    and the one an on-board task names when it is another (added and powered)."""
+    out = [] if drone.device == "none" else [{"name": drone.device, "source": "blueprint"}]
+    for tk in tasks or ():
+        dev = getattr(tk, "device", None)
+        if getattr(tk, "execution", None) == "onboard" and dev is not None and \
+                dev.name != drone.device and all(c["name"] != dev.name for c in out):
+            out.append({"name": dev.name, "source": f"added by task {tk.name!r}"})
+    return out
 
 
 def resolve(m) -> FlightPlan:

@@ -69,6 +69,10 @@ _ZERO_USAGE = (0.0, 0, 0, 0, 0)
 _NO_EVENTS: tuple = ()
 
 
+#: the computer of a TaskRunner bound outside a Mission to a task without a device
+#: (a Mission binds the drone's own computer instead; FlockAI's drone carries a Pi 4)
+STANDALONE_DEVICE = "raspberry-pi-4"
+
 class TaskRunner:
     """Runs one ``Task`` on the simulated clock (see the module docstring)."""
 
@@ -88,7 +92,9 @@ class TaskRunner:
         ``device_clock``: a DeviceClock shared by the on-board tasks of one drone."""
         t = self.task
         self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-        self.device = resolve_device(device, "device") if device is not None else t.device
+        if device is None:          # outside a Mission there is no drone: the paper's Pi 4
+            device = t.device if t.device is not None else STANDALONE_DEVICE
+        self.device = resolve_device(device, "device")
         self.ground_device = (resolve_device(ground_device, "ground_device")
                               if ground_device is not None else t.ground_device)
         self.link = _link(link) if link is not None else t.link

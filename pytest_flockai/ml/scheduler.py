@@ -57,13 +57,15 @@ class DatasetRecorder:
 class TaskScheduler(Clocked):
     """``tasks``: the mission's Tasks; ``seeds``: one SeedSequence per task."""
 
-    def __init__(self, state, tasks, seeds, suite, data, *, recorder: DatasetRecorder | None = None):
+    def __init__(self, state, tasks, seeds, suite, data, *, recorder: DatasetRecorder | None = None,
+                 computer=None):
         self.st, self.suite, self.data = state, suite, data
         onboard_clock = DeviceClock()        # one on-board computer, shared by its tasks
         self.runners = []
         for tk, seed in zip(tasks, seeds):
             r = TaskRunner(tk)
-            r.bind(np.random.default_rng(seed), t0=0.0, device_clock=onboard_clock)
+            r.bind(np.random.default_rng(seed), t0=0.0, device_clock=onboard_clock,
+                   device=computer if tk.device is None else None)   # None: the drone's own
             self.runners.append(r)
         self.recorder = recorder
         self.consumers = self.runners + ([recorder] if recorder is not None else [])

@@ -40,6 +40,14 @@ class Task:
     ``crowd_threshold``: people count that makes a crowd (detection KPIs);
     ``ground_station``: (x, y, z) of the ground station, metres.
 
+    ``device``: the on-board computer the task runs on. None (the default): the
+    drone's own computer, from its blueprint's ``[compute] device``. A device
+    other than the blueprint's is carried as a second computer: it is added,
+    powered (its idle and active draw, in ``proc.soc``) and reported in the
+    scenario's ``computers``, while the blueprint's computer keeps drawing its
+    idle power (``proc.soc_blueprint``). To swap the computer instead, build the
+    drone with it: ``fa.drone(name, device="jetson-orin-nano")``.
+
     ``evaluate``: how the predictions are scored against the truth:
     ``"count"`` (people counting: ``count_mae`` and crowd detection, the
     default), ``"detection"`` (boxes: COCO mAP, precision, recall, per class,
@@ -55,7 +63,7 @@ class Task:
     """
 
     def __init__(self, model, sensor: str = "camera", period_s: float = 5.0,
-                 execution: str = "onboard", device="raspberry-pi-4", *, name: str | None = None,
+                 execution: str = "onboard", device=None, *, name: str | None = None,
                  ground_device="ground-gpu", link="wifi-80211n", on_busy: str = "drop",
                  latency: str = "modeled", result_bytes: int = 256, jpeg_quality: int = 90,
                  crowd_threshold: float = 10.0, count=None, alert: str = "frame",
@@ -74,7 +82,7 @@ class Task:
         self.sensor = sensor
         self.period_s = _check.positive("period_s", period_s, where=where)
         self.execution = _check.choice("execution", execution, EXECUTIONS, where=where)
-        self.device = self._device("device", device, where)
+        self.device = None if device is None else self._device("device", device, where)
         self.ground_device = self._device("ground_device", ground_device, where)
         try:
             self.link = _link(link)
@@ -142,7 +150,8 @@ class Task:
                                              "macs": getattr(m, "macs", None),
                                              "params": getattr(m, "params", None)},
                 "sensor": self.sensor, "period_s": self.period_s, "execution": self.execution,
-                "device": self.device.name, "ground_device": self.ground_device.name,
+                "device": self.device.name if self.device is not None else None,
+                "ground_device": self.ground_device.name,
                 "link": self.link.name, "on_busy": self.on_busy, "latency": self.latency,
                 "result_bytes": self.result_bytes, "jpeg_quality": self.jpeg_quality,
                 "crowd_threshold": self.crowd_threshold, "alert": self.alert,
@@ -155,7 +164,8 @@ class Task:
 
     def __repr__(self):
         return (f"Task({self.name!r}, sensor={self.sensor!r}, period_s={self.period_s}, "
-                f"execution={self.execution!r}, device={self.device.name!r})")
+                f"execution={self.execution!r}, "
+                f"device={self.device.name if self.device is not None else None!r})")
 
 
 __all__ = ["ALERTS", "EVALUATIONS", "EXECUTIONS", "ON_BUSY", "Task"]
