@@ -38,6 +38,8 @@ Reports
 Options (each also an ini option, same name with underscores)
     ``--flockai-json PATH``, ``--flockai-save PATH``, ``--flockai-baseline PATH``,
     ``--flockai-max-regression PCT`` (5), ``--flockai-artifacts DIR``.
+    Flight cache (``harness/flightcache.py``): ``--flockai-cache MODE``
+    (readwrite), ``--flockai-cache-clear``, marker ``flockai_cache(mode)``.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ import pytest
 from . import hookspecs as _hookspecs
 from .harness import markers as _markers
 from .harness import options as _options
+from .harness import flightcache as _flightcache
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
 from .harness.recorder import STATE, TestState
@@ -60,6 +63,7 @@ def pytest_addhooks(pluginmanager):
 
 def pytest_addoption(parser):
     _options.add_options(parser)
+    _flightcache.add_options(parser)
 
 
 def pytest_configure(config):
@@ -72,6 +76,7 @@ def pytest_configure(config):
     session = FlockSession(config)   # raises UsageError before anything flies
     config.stash[SESSION] = session
     config.pluginmanager.register(session, "flockai-session")
+    config.pluginmanager.register(_flightcache.CachePlugin(config), "flockai-cache")
 
 
 def pytest_unconfigure(config):
@@ -79,6 +84,9 @@ def pytest_unconfigure(config):
     if session is not None:
         config.pluginmanager.unregister(session)
         del config.stash[SESSION]
+    cache = config.pluginmanager.get_plugin("flockai-cache")
+    if cache is not None:
+        config.pluginmanager.unregister(cache)
 
 
 def _state(item) -> TestState:

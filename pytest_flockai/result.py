@@ -36,7 +36,10 @@ class FlightResult:
     - ``end_reason``: "landed", "time", "battery_depleted", "crashed", "time_cap", "diverged"
     - ``probe_samples``: one DataFrame per probe, at the probe's own period
     - ``probe_errors``: failures of probes or subscribers (the flight went on)
+    - ``cache``: where the flight cache got it (``pytest_flockai.cache``), or None
     """
+
+    cache: dict | None = None
 
     def __init__(self, kpis, telemetry: pd.DataFrame, events, scenario, energy_breakdown,
                  end_reason: str, wall_time_s: float = float("nan"), *, probe_samples=None,

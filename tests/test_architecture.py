@@ -18,7 +18,7 @@ LAYERS = [
     {"energy", "sensors"},
     {"comm", "airframe"},
     {"control", "ml", "probes"},
-    {"mission"},
+    {"mission", "cache"},
     {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness",
      "plugin", "__init__"},
 ]

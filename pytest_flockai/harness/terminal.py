@@ -40,12 +40,16 @@ def summary(tr, config, entries, files) -> None:
                 names += [b["kpi"] for b in budgets
                           if b["kpi"] in kp and b["kpi"] not in names]
                 cells = "  ".join(f"{k}={_report.format_kpi(k, kp[k])}" for k in names)
-                tr.write_line(f"  {f['name']}: {cells}")
+                tr.write_line(f"  {f['name']}{_cached(f)}: {cells}")
         if verbose and budgets:
             tr.write_line(_budgets.table([_budgets.Verdict.from_dict(b) for b in budgets],
                                          indent="    "))
     for line in files:
         tr.write_line(f"flockai: {line}")
+
+
+def _cached(flight: dict) -> str:
+    return " (cached)" if (flight.get("cache") or {}).get("status") == "hit" else ""
 
 
 def _better(kpi):
