@@ -40,6 +40,8 @@ Options (each also an ini option, same name with underscores)
     ``--flockai-max-regression PCT`` (5), ``--flockai-artifacts DIR``.
     Flight cache (``harness/flightcache.py``): ``--flockai-cache MODE``
     (readwrite), ``--flockai-cache-clear``, marker ``flockai_cache(mode)``.
+    CI reports (``harness/ci_reports.py``): ``--flockai-md PATH`` (and
+    ``GITHUB_STEP_SUMMARY``), ``--flockai-html PATH``, ``--flockai-history DIR``.
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ import pytest
 from . import hookspecs as _hookspecs
 from .harness import markers as _markers
 from .harness import options as _options
+from .harness import ci_reports as _ci_reports
 from .harness import flightcache as _flightcache
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
@@ -64,6 +67,7 @@ def pytest_addhooks(pluginmanager):
 def pytest_addoption(parser):
     _options.add_options(parser)
     _flightcache.add_options(parser)
+    _ci_reports.add_options(parser)
 
 
 def pytest_configure(config):
@@ -77,6 +81,7 @@ def pytest_configure(config):
     config.stash[SESSION] = session
     config.pluginmanager.register(session, "flockai-session")
     config.pluginmanager.register(_flightcache.CachePlugin(config), "flockai-cache")
+    config.pluginmanager.register(_ci_reports.ReportsPlugin(config), "flockai-reports")
 
 
 def pytest_unconfigure(config):
@@ -84,9 +89,10 @@ def pytest_unconfigure(config):
     if session is not None:
         config.pluginmanager.unregister(session)
         del config.stash[SESSION]
-    cache = config.pluginmanager.get_plugin("flockai-cache")
-    if cache is not None:
-        config.pluginmanager.unregister(cache)
+    for name in ("flockai-cache", "flockai-reports"):
+        extra = config.pluginmanager.get_plugin(name)
+        if extra is not None:
+            config.pluginmanager.unregister(extra)
 
 
 def _state(item) -> TestState:

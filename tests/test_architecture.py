@@ -19,7 +19,7 @@ LAYERS = [
     {"comm", "airframe"},
     {"control", "ml", "probes"},
     {"mission", "cache"},
-    {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness",
+    {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
      "plugin", "__init__"},
 ]
 PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__"}
