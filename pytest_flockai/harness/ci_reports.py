@@ -56,6 +56,7 @@ class ReportsPlugin:
         self.step_summary = os.environ.get("GITHUB_STEP_SUMMARY") or None
         self.written: list[str] = []
         self._pictures: dict[int, list] = {}
+        self.pictures: dict[str, list] = {}          # nodeid -> pictures (controller)
         if not self.worker:
             try:
                 for p, what in ((self.md, "--flockai-md"), (self.html, "--flockai-html")):
@@ -70,9 +71,10 @@ class ReportsPlugin:
     @pytest.hookimpl(wrapper=True, tryfirst=True)
     def pytest_runtest_makereport(self, item, call):
         report = yield
-        payload = getattr(report, "flockai", None)
-        if self.want_pictures and payload is not None and call.when == "call":
-            payload["pictures"] = self._pictures_of(item)
+        if self.want_pictures and call.when == "call":
+            pics = self._pictures_of(item)
+            if pics:       # a plain attribute: pytest-xdist carries it to the controller
+                report.flockai_pictures = pics
         return report
 
     def _pictures_of(self, item) -> list[dict]:
@@ -106,6 +108,11 @@ class ReportsPlugin:
         return [{"title": f"{name}: {kind}", "data": data} for kind, data in self._pictures[key]]
 
     # -- on the controller -------------------------------------------------------------------------
+    def pytest_runtest_logreport(self, report):
+        pics = getattr(report, "flockai_pictures", None)
+        if pics and not self.worker:
+            self.pictures[report.nodeid] = pics
+
     def pytest_sessionfinish(self, session, exitstatus):
         if self.worker or not (self.md or self.html or self.history or self.step_summary):
             return
@@ -128,7 +135,8 @@ class ReportsPlugin:
                 except OSError as exc:
                     self.written.append(f"GITHUB_STEP_SUMMARY not written: {exc}")
         if self.html is not None:
-            _html.write(self.html, doc, baseline=flock.baseline if flock else None,
+            _html.write(self.html, doc, pictures=self.pictures,
+                        baseline=flock.baseline if flock else None,
                         threshold_pct=flock.max_regression if flock else 5.0)
             self.written.append(f"HTML dashboard written to {self.html}")
         if self.history is not None:

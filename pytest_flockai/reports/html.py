@@ -31,7 +31,8 @@ th.desc:after{content:" \\25BC"}
 tr.fail td,td.fail{background:#fde2e2}tr.pass td.verdict,td.better{color:#176e2f}
 td.regression{background:#fde2e2;font-weight:bold}td.worse{color:#a35b00}
 .scroll{overflow-x:auto;max-width:100%}.ok{color:#176e2f}.bad{color:#b3261e}
-.pics img{max-width:48%;border:1px solid #ddd;margin:4px;background:#fff}
+.pics figure{display:inline-block;width:48%;margin:4px;vertical-align:top}
+.pics img{width:100%;border:1px solid #ddd;background:#fff}
 .muted{color:#777}
 """
 
@@ -111,7 +112,7 @@ def _deltas(doc, baseline: dict | None, threshold_pct: float) -> str:
     cmp = _compare(baseline, current, threshold_pct)
     rows = []
     for d in cmp.deltas:
-        if d.better is None or d.status == "n/a":
+        if d.better is None or d.status in ("n/a", "same"):
             continue
         rows.append(([(d.test, None, ""), (d.flight, None, ""), (d.kpi, None, ""),
                       (_s.fmt(d.kpi, d.base), _num(d.base), ""),
@@ -119,7 +120,7 @@ def _deltas(doc, baseline: dict | None, threshold_pct: float) -> str:
                       (format_change(d), _num(d.change_pct), ""), (d.better, None, ""),
                       (d.status, None, d.status)], ""))
     if not rows:
-        return '<p class="muted">No test of this run is in the baseline.</p>'
+        return '<p class="muted">No KPI changed against the baseline.</p>'
     return _table("deltas", ["test", "flight", "KPI", "base", "new", "change", "better",
                              "status"], rows)
 
@@ -139,13 +140,13 @@ def _kpis(doc) -> str:
     return _table("kpis", headers, rows)
 
 
-def _pictures(doc) -> str:
+def _pictures(doc, pictures: dict) -> str:
     out = []
     for t in doc.get("tests", ()):
-        pics = t.get("pictures") or []
+        pics = pictures.get(t["nodeid"]) or []
         if not pics:
             continue
-        imgs = "".join(f'<figure style="display:inline-block;margin:0"><img alt="{_e(p["title"])}" '
+        imgs = "".join(f'<figure><img alt="{_e(p["title"])}" '
                        f'src="data:{_e(p.get("mime", "image/png"))};base64,{p["data"]}">'
                        f'<figcaption class="muted">{_e(p["title"])}</figcaption></figure>'
                        for p in pics)
@@ -153,10 +154,12 @@ def _pictures(doc) -> str:
     return "".join(out) or '<p class="muted">No pictures (they need matplotlib).</p>'
 
 
-def dashboard(doc: dict, *, baseline: dict | None = None, threshold_pct: float = 5.0,
-              title: str = "pytest-flockai") -> str:
-    """The dashboard of a ``pytest-flockai/1`` report (tests may carry ``pictures``:
-    ``[{"title", "data" (base64 PNG)}]``) as one HTML string."""
+def dashboard(doc: dict, *, pictures: dict | None = None, baseline: dict | None = None,
+              threshold_pct: float = 5.0, title: str = "pytest-flockai") -> str:
+    """The dashboard of a ``pytest-flockai/1`` report as one HTML string.
+
+    pictures: ``{nodeid: [{"title": str, "data": base64 PNG}]}``; baseline:
+    ``{nodeid: {flight: {kpi: value}}}`` (``report.load_baseline``)."""
     broken = _s.broken_budgets(doc)
     regs = _s.regressions(doc)
     ok = not broken and not regs and not doc.get("summary", {}).get("failed")
@@ -174,7 +177,7 @@ def dashboard(doc: dict, *, baseline: dict | None = None, threshold_pct: float =
         "<h2>Budgets</h2>", _budgets(doc),
         "<h2>Against the baseline</h2>", _deltas(doc, baseline, threshold_pct),
         "<h2>KPIs</h2>", _kpis(doc),
-        "<h2>Pictures</h2>", _pictures(doc),
+        "<h2>Pictures</h2>", _pictures(doc, pictures or {}),
         f"<script>{_JS}</script></body></html>",
     ]
     return "\n".join(parts)
