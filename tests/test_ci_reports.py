@@ -4,6 +4,7 @@ loaded in a real headless Chromium (skipped where none is installed)."""
 
 import html.parser
 import json
+import re
 import shutil
 import subprocess
 
@@ -206,3 +207,20 @@ def test_dashboard_without_flights_or_baseline():
     assert "No test has a kpi budget." in text and "No baseline given" in text
 
 
+
+
+def test_pytest_html_extras(pytester):
+    """With pytest-html, each test's row carries its KPI and budget tables and pictures."""
+    pytest.importorskip("pytest_html")
+    pytest.importorskip("matplotlib")
+    pytester.makepyfile(test_flights=BODY.replace("PNG)", f"{PNG_BYTES!r})"))
+    out = pytester.path / "report.html"
+    res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--html", str(out),
+                                       "--self-contained-html")
+    res.assert_outcomes(passed=1, failed=1)
+    text = out.read_text()
+    assert text.count("flockai-kpis") == 2 and text.count("flockai-budgets") == 2
+    assert "flight_time_s" in text
+    assert re.search(r"(>|&gt;|&amp;gt;)= 1 h", text)             # the budget, however escaped
+    # 2 flights x (path, energy) + the attached map; pytest-html escapes the extras' markup
+    assert text.count("data:image/png;base64") >= 5

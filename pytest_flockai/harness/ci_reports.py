@@ -7,7 +7,9 @@
   attaches with ``record_property("flockai_picture", path)`` (a robustness map,
   say) and sends them with the test report;
 - ``--flockai-history DIR``: this run's KPIs with its git commit, for
-  ``flockai history``.
+  ``flockai history``;
+- with pytest-html (``--html``): each test's KPI/budget table and pictures as
+  extras (``html_extras.py``).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from .. import report as _report
 from ..reports import history as _history
 from ..reports import html as _html
 from ..reports import markdown as _markdown
+from . import html_extras as _html_extras
 from .options import path_option
 from .recorder import STATE
 from .session import SESSION
@@ -65,7 +68,8 @@ class ReportsPlugin:
             except _report.ReportError as exc:
                 raise pytest.UsageError(f"pytest-flockai: {exc}") from None
         # workers learn from the controller's options (the same command line)
-        self.want_pictures = self.html is not None
+        self.pytest_html = _html_extras.active(config)
+        self.want_pictures = self.html is not None or self.pytest_html
 
     # -- on the workers (or the only process): pictures travel with the test report --
     @pytest.hookimpl(wrapper=True, tryfirst=True)
@@ -73,8 +77,11 @@ class ReportsPlugin:
         report = yield
         if self.want_pictures and call.when == "call":
             pics = self._pictures_of(item)
-            if pics:       # a plain attribute: pytest-xdist carries it to the controller
+            if pics and self.html is not None:   # a plain attribute: xdist carries it over
                 report.flockai_pictures = pics
+            payload = getattr(report, "flockai", None)
+            if self.pytest_html and payload is not None:
+                _html_extras.add(report, payload, pics)
         return report
 
     def _pictures_of(self, item) -> list[dict]:
