@@ -114,3 +114,39 @@ def test_xdist_workers_share_the_cache(pytester):
     res.assert_outcomes(passed=2)
     assert statuses(out) == {"test_fixture_flight": ["hit"], "test_body_flight": ["hit"]}
     res.stdout.fnmatch_lines(["flockai cache: 2 from the cache"])
+
+
+def test_a_bad_cache_marker_fails_that_test_only(pytester):
+    pytester.makepyfile(test_cached=BODY + '''
+
+@pytest.mark.flockai_cache("sometimes")
+def test_bad_marker():
+    fly()
+''')
+    res = pytester.runpytest_inprocess("-p", "no:randomly")
+    res.assert_outcomes(passed=2, errors=1)
+    res.stdout.fnmatch_lines(["*flockai_cache('sometimes') is not allowed; allowed: off, read, "
+                              "write, readwrite*"])
+
+
+def test_a_shared_flight_is_counted_once(pytester):
+    pytester.makepyfile(test_cached='''
+import pytest
+import pytest_flockai as fa
+
+
+@pytest.fixture(scope="session")
+def shared():
+    return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=2.0)).run()
+
+
+def test_one(shared):
+    pass
+
+
+def test_two(shared):
+    pass
+''')
+    res = pytester.runpytest_inprocess()
+    res.assert_outcomes(passed=2)
+    res.stdout.fnmatch_lines(["flockai cache: 1 flown and stored"])

@@ -68,23 +68,35 @@ class CachePlugin:
                 and self.directory is not None:
             FlightCache(self.directory).clear()
 
-    def cache_for(self, item) -> FlightCache | None:
-        if self.off_reason is not None:
-            return None
-        mode = self.mode
+    def mode_for(self, item) -> tuple[str, str | None]:
+        """(mode, error) for one test: its flockai_cache marker, else off for a
+        hypothesis test, else the session's mode."""
         mark = item.get_closest_marker(MARKER)
         if mark is not None:
             mode = mark.args[0] if mark.args else mark.kwargs.get("mode")
             if mode not in MODES:
-                raise pytest.UsageError(f"{item.nodeid}: @pytest.mark.{MARKER}({mode!r}) is not "
-                                        f"allowed; allowed: {', '.join(MODES)}")
-        elif getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
-            mode = "off"
+                return "off", (f"@pytest.mark.{MARKER}({mode!r}) is not allowed; allowed: "
+                               f"{', '.join(MODES)}")
+            return mode, None
+        if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
+            return "off", None
+        return self.mode, None
+
+    def cache_for(self, item) -> FlightCache | None:
+        if self.off_reason is not None:
+            return None
+        mode, _ = self.mode_for(item)
         if mode == "off":
             return None
         if mode not in self._caches:
             self._caches[mode] = FlightCache(self.directory, mode)
         return self._caches[mode]
+
+    @pytest.hookimpl(tryfirst=True)
+    def pytest_runtest_setup(self, item):
+        _, error = self.mode_for(item)
+        if error:
+            pytest.fail(error, pytrace=False)
 
     @pytest.hookimpl(wrapper=True)
     def pytest_runtest_protocol(self, item, nextitem):
@@ -110,6 +122,11 @@ def summary_line(flights: list[dict], off_reason: str | None = None) -> str | No
     """One line: how many flights came from the cache, were flown and stored, bypassed."""
     if off_reason is not None:
         return f"flockai cache: off ({off_reason})" if flights else None
+    unique = {}
+    for f in flights:   # a session fixture's flight is listed by every test that uses it
+        c = f.get("cache") or {}
+        unique[c.get("key") or id(f)] = f
+    flights = list(unique.values())
     statuses = Counter((f.get("cache") or {}).get("status") for f in flights)
     statuses.pop(None, None)
     if not statuses:
