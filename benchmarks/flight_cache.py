@@ -54,7 +54,8 @@ def cache_counts(report: Path) -> dict:
 
 def main(argv: list[str]) -> None:
     workers = [int(a) for a in argv] or [1, 2]
-    print(f"example suite, {os.cpu_count()} CPU(s) on this machine")
+    print(f"example suite, {os.cpu_count()} CPU(s) on this machine, load average "
+          f"{os.getloadavg()[0]:.1f} at the start (other jobs slow every figure alike)")
     print(f"{'run':<14}{'wall s':>9}  cache")
     cold = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -67,7 +68,8 @@ def main(argv: list[str]) -> None:
         n = workers[-1]
         wall, out = run(n, Path(tmp) / f"cache-n{n}", Path(tmp) / "r.json")
         print(f"{f'-n {n} warm':<14}{wall:9.1f}  {cache_counts(Path(tmp) / 'r.json')}")
-    print(f"warm speed-up at -n {n}: {cold[n] / wall:.1f}x (cold {cold[n]:.1f} s / warm {wall:.1f} s)")
+    print(f"warm speed-up at -n {n}: {cold[n] / wall:.1f}x (cold {cold[n]:.1f} s / warm {wall:.1f} s);"
+          f" load average now {os.getloadavg()[0]:.1f}")
     if len(cold) > 1 and 1 in cold:
         for k, v in cold.items():
             if k != 1:
