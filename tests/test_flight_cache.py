@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai.cache import (CacheWarning, FlightCache, Uncacheable, caching, flight_key)
+from pytest_flockai.cache import (CacheWarning, FlightCache, Uncacheable, cacheable, caching,
+                                  flight_key)
 from pytest_flockai.cache import key as cache_key
 from pytest_flockai.cache.store import MAGIC, entries
 
@@ -68,6 +69,7 @@ def test_modes_read_write_and_off(tmp_path):
 
 
 # -- the key: one test per part ----------------------------------------------------------------------
+@cacheable
 def _one(view):
     return {"z": 1.0}
 
@@ -177,23 +179,47 @@ def test_the_key_is_stable_across_flights():
     assert flight_key(mission()) == before
 
 
-def test_your_own_function_is_keyed_by_its_file(tmp_path, monkeypatch):
-    """A PythonModel around your function: the function's file bytes are in the key."""
+def test_your_own_function_bypasses_unless_marked_and_then_its_file_is_keyed(tmp_path,
+                                                                           monkeypatch):
+    """A PythonModel around your function: flown every time (it may count frames,
+    say); marked ``cacheable``, its file's bytes are in the key."""
     mod = tmp_path / "my_counter.py"
     mod.write_text("def count(frame):\n    return 1.0\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     import my_counter
 
-    def key():
-        model = fa.ml.PythonModel(my_counter.count, macs=1000, name="c")
-        return flight_key(fa.Mission(fa.drone("dji-mavic-2-pro"),
-                                     fa.pilots.Hover(altitude=10.0, duration=2.0),
-                                     tasks=[fa.Task(model, period_s=1.0, name="c")]))
-    before = key()
-    assert key() == before
+    def mission(fn):
+        model = fa.ml.PythonModel(fn, macs=1000, name="c")
+        return fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(altitude=10.0, duration=2.0),
+                          tasks=[fa.Task(model, period_s=1.0, name="c")])
+    with pytest.raises(Uncacheable, match="is your code.*cacheable"):
+        flight_key(mission(my_counter.count))
+    cacheable(my_counter.count)
+    before = flight_key(mission(my_counter.count))
+    assert flight_key(mission(my_counter.count)) == before
     mod.write_text("def count(frame):\n    return 2.0\n")
-    assert key() != before
+    assert flight_key(mission(my_counter.count)) != before
     sys.modules.pop("my_counter", None)
+
+
+def test_a_model_that_counts_its_frames_still_sees_them(tmp_path):
+    """The regression this rule prevents: a test that observes its model during the
+    flight must see the frames on every run, not a cached result without them."""
+    seen = []
+
+    def model(frame):
+        seen.append(1)
+        return 0.0
+
+    def mission():
+        return fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(altitude=10.0, duration=3.0),
+                          tasks=[fa.Task(fa.ml.PythonModel(model, macs=1000), period_s=1.0)])
+    with caching(FlightCache(tmp_path)):
+        first = mission().run()
+        n = len(seen)
+        again = mission().run()
+    assert n > 0 and len(seen) == 2 * n
+    assert first.cache["status"] == again.cache["status"] == "bypass"
 
 
 # -- what bypasses the cache -----------------------------------------------------------------------------
@@ -218,7 +244,7 @@ def test_subscribers_and_unkeyable_objects_bypass_the_cache(tmp_path):
         flight_key(m)
     ns: dict = {}
     exec("def count(frame):\n    return 0.0\n", ns)          # no file behind it
-    model = fa.ml.PythonModel(ns["count"], macs=1000, name="c")
+    model = fa.ml.PythonModel(cacheable(ns["count"]), macs=1000, name="c")
     m = fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(altitude=10.0, duration=2.0),
                    tasks=[fa.Task(model, period_s=1.0, name="c")])
     with pytest.raises(Uncacheable, match="outside a readable file"):

@@ -19,7 +19,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 
 from ..errors import ConfigError
-from .key import Uncacheable, flight_key
+from .key import Uncacheable, cacheable, flight_key
 from .store import MODES, CacheWarning, CorruptEntry, FlightCache, Lookup
 
 _ACTIVE: ContextVar[FlightCache | None] = ContextVar("pytest_flockai_flight_cache", default=None)
@@ -49,4 +49,4 @@ def lookup(mission) -> Lookup | None:
 
 
 __all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MODES", "Uncacheable",
-           "active", "caching", "flight_key", "lookup"]
+           "active", "cacheable", "caching", "flight_key", "lookup"]

@@ -8,18 +8,21 @@ limit of the mission, plus the environment that flies it: the package version
 and a hash of the package's own source files, and the versions of Python,
 NumPy, MuJoCo, ONNX Runtime and OpenCV.
 
-Objects are keyed by their class and their attributes, recursively. Objects of
-your own classes and your own functions (a ``PythonModel`` around a lambda, a
-``Pilot`` subclass) are keyed by their state *and the bytes of the file that
-defines them*; a function also by its closure values and defaults. What cannot
-be keyed makes the flight bypass the cache (``Uncacheable`` says why): your
+Objects are keyed by their class and their attributes, recursively. A flight
+that runs code of yours (your functions, a ``PythonModel`` around a lambda, a
+``Pilot`` or ``Probe`` subclass) bypasses the cache, since the cache cannot
+replay what that code does besides returning values (a test that counts the
+frames its model saw would see none). Mark such code ``cacheable(...)`` when
+it has no such effects: it is then keyed by its state *and the bytes of the
+file that defines it*, a function also by its closure values and defaults.
+What else makes the flight bypass the cache (``Uncacheable`` says why): your
 own clocked components (``Mission(components=...)``, they act on the run at
 every tick), live subscribers, a dataset recorder (it writes files), objects
-of third-party classes the key knows nothing about, and functions whose file
-cannot be read (defined in a notebook cell or ``python -c``).
+of third-party classes the key knows nothing about, and marked functions
+whose file cannot be read (defined in a notebook cell or ``python -c``).
 
-A change the key cannot see: code your function calls in *another* file of
-yours. Clear the cache then (``--flockai-cache-clear``).
+A change the key cannot see: code your marked function calls in *another*
+file of yours. Clear the cache then (``--flockai-cache-clear``).
 """
 
 from __future__ import annotations
@@ -124,6 +127,18 @@ def _own(module: str | None) -> bool:
     return bool(module) and (module == _PKG or module.startswith(_PKG + "."))
 
 
+@functools.lru_cache(maxsize=1024)
+def _library(module: str | None) -> bool:
+    """A module of the standard library or an installed package (not your code)."""
+    if not module:
+        return False
+    top = module.split(".")[0]
+    if top in sys.stdlib_module_names or top in sys.builtin_module_names:
+        return True
+    f = getattr(sys.modules.get(module), "__file__", None) or ""
+    return any(part in ("site-packages", "dist-packages") for part in Path(f).parts)
+
+
 def _defining_file(obj, where: str) -> str:
     mod = sys.modules.get(getattr(obj, "__module__", None) or "")
     code = getattr(obj, "__code__", None)
@@ -132,6 +147,22 @@ def _defining_file(obj, where: str) -> str:
         raise Uncacheable(f"{where}: {getattr(obj, '__qualname__', obj)!r} is defined outside a "
                           f"readable file ({fname or 'no file'}), so its code cannot be keyed")
     return file_digest(fname)
+
+
+def cacheable(obj):
+    """Mark your function or class as safe to cache: its flights depend only on its
+    code (the file that defines it is keyed), its state and its closure, and the
+    test observes nothing it does besides what the flight returns. Returns ``obj``
+    (use it as a decorator, or around a lambda)."""
+    obj.__flockai_cacheable__ = True
+    return obj
+
+
+def _require_cacheable(obj, where: str) -> None:
+    if not getattr(obj, "__flockai_cacheable__", False):
+        raise Uncacheable(f"{where}: {getattr(obj, '__qualname__', obj)!r} is your code, which "
+                          f"may do things the cache cannot replay (mark it with "
+                          f"pytest_flockai.cache.cacheable if it does not)")
 
 
 class _Walker:
@@ -222,8 +253,9 @@ class _Walker:
 
     def _function(self, fn, where: str):
         out = {"function": f"{fn.__module__}.{fn.__qualname__}"}
-        if _own(fn.__module__):
+        if _own(fn.__module__) or _library(fn.__module__):
             return out
+        _require_cacheable(fn, where)
         out["file"] = _defining_file(fn, where)
         out["code"] = hashlib.sha256(fn.__code__.co_code).hexdigest()
         cells = [c.cell_contents for c in (fn.__closure__ or ())]
@@ -234,7 +266,8 @@ class _Walker:
 
     def _class(self, cls: type, where: str):
         out = {"class": f"{cls.__module__}.{cls.__qualname__}"}
-        if not _own(cls.__module__) and cls.__module__ != "builtins":
+        if not _own(cls.__module__) and not _library(cls.__module__):
+            _require_cacheable(cls, where)
             out["file"] = _defining_file(cls, where)
         return out
 
