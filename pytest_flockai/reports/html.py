@@ -30,7 +30,8 @@ th{background:#eef;cursor:pointer;user-select:none}th.asc:after{content:" \\25B2
 th.desc:after{content:" \\25BC"}
 tr.fail td,td.fail{background:#fde2e2}tr.pass td.verdict,td.better{color:#176e2f}
 td.regression{background:#fde2e2;font-weight:bold}td.worse{color:#a35b00}
-.scroll{overflow-x:auto;max-width:100%}.ok{color:#176e2f}.bad{color:#b3261e}
+.scroll{overflow:auto;max-width:100%;max-height:420px}
+th{position:sticky;top:0}.ok{color:#176e2f}.bad{color:#b3261e}
 .pics figure{display:inline-block;width:48%;margin:4px;vertical-align:top}
 .pics img{width:100%;border:1px solid #ddd;background:#fff}
 .muted{color:#777}
@@ -75,6 +76,11 @@ def _num(v) -> str:
     return repr(f) if math.isfinite(f) else ""
 
 
+def _short(v) -> str:
+    n = _num(v)
+    return f"{float(n):.4g}" if n else "n/a"
+
+
 def _table(tid: str, headers: list[str], rows: list[tuple[list, str]]) -> str:
     """rows: ([(text, sort value or None, css class or ""), ...], row class)."""
     head = "".join(f'<th data-col="{_e(h)}">{_e(h)}</th>' for h in headers)
@@ -96,7 +102,7 @@ def _budgets(doc) -> str:
                       (b.get("budget"), None, ""),
                       (b.get("actual_text") or _s.fmt(b["kpi"], b.get("actual")),
                        _num(b.get("actual")), ""),
-                      (b.get("margin_text") or _num(b.get("margin")), _num(b.get("margin")), ""),
+                      (b.get("margin_text") or _short(b.get("margin")), _num(b.get("margin")), ""),
                       (v, None, "verdict")], "pass" if v == "pass" else "fail"))
     if not rows:
         return '<p class="muted">No test has a kpi budget.</p>'
