@@ -6,6 +6,7 @@ import hashlib
 import json
 import shutil
 import sys
+import types
 import warnings
 from pathlib import Path
 
@@ -316,3 +317,9 @@ def test_caching_takes_a_flight_cache_or_none():
     with pytest.raises(fa.ConfigError, match="expected a FlightCache"):
         with caching("yes"):
             pass
+
+
+def test_a_module_held_by_an_object_is_keyed_by_its_name():
+    """A sensor holding a module (cv2) is keyed by the module's name, not by walking it."""
+    walked = cache_key._Walker().walk(types, "m")
+    assert walked == {"module": "types"}

@@ -186,6 +186,8 @@ class _Walker:
             return self._array(obj, where)
         if isinstance(obj, PurePath):
             return self._path(obj)
+        if isinstance(obj, types.ModuleType):
+            return {"module": obj.__name__}
         if isinstance(obj, enum.Enum):
             return {"enum": f"{type(obj).__module__}.{type(obj).__qualname__}.{obj.name}"}
         if id(obj) in self.stack:

@@ -136,5 +136,9 @@ def summary_line(flights: list[dict], off_reason: str | None = None) -> str | No
     parts = [f"{statuses[k]} {w}" for k, w in words.items() if statuses.get(k)]
     reasons = sorted({(f.get("cache") or {}).get("reason") for f in flights
                       if (f.get("cache") or {}).get("status") == "bypass"})
-    tail = f" ({'; '.join(r for r in reasons if r)})" if reasons else ""
+    reasons = [r for r in reasons if r]
+    shown = "; ".join(r if len(r) <= 120 else r[:117] + "..." for r in reasons[:3])
+    more = f"; and {len(reasons) - 3} more (flights[].cache in --flockai-json)" \
+        if len(reasons) > 3 else ""
+    tail = f" ({shown}{more})" if reasons else ""
     return "flockai cache: " + ", ".join(parts) + tail
