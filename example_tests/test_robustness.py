@@ -23,11 +23,12 @@ def recall_map(det_model, det_city, tmp_path_factory):
                   speeds_mps=(0.0, 8.0, 16.0), conditions=fa.Conditions(exposure_s=1 / 30),
                   views=12, area=90.0, camera={"fov_deg": 51.0})
     out = os.environ.get("FLOCKAI_ENVELOPE_DIR") or tmp_path_factory.mktemp("envelope")
-    plots.save_envelope(df, os.path.join(out, "detector-recall"))
+    written = plots.save_envelope(df, os.path.join(out, "detector-recall"))
+    df.attrs["pictures"] = [str(p) for p in written if str(p).endswith(".png")]
     return df
 
 
-def test_detector_envelope_over_altitude_and_speed(recall_map):
+def test_detector_envelope_over_altitude_and_speed(recall_map, record_property):
     """With a 1/30 s shutter, recall >= 0.7 holds from 25 m to 50 m when hovering
     and at 8 m/s, and breaks at 16 m/s, where the blur smears people away; below
     20 m the figures seen from the side are outside what the detector learned."""
@@ -37,6 +38,8 @@ def test_detector_envelope_over_altitude_and_speed(recall_map):
     assert not (lo <= 25.0 and hi >= 50.0)
     low = recall_map[recall_map.altitude_m == 15.0].recall.max()
     assert low < 0.5
+    for png in recall_map.attrs["pictures"]:     # the heat map, in the --flockai-html dashboard
+        record_property("flockai_picture", ("robustness map: detector recall", png))
 
 
 @pytest.fixture(scope="session")

@@ -42,6 +42,7 @@ def test_payload_costs_flight_time(payload_kg, budget, request):
     assert fa.Mission(d, scenarios.survey(), seed=0, **SHORT).run().kpis["crashed"] == 0
 
 
+@pytest.mark.flockai_cache("readwrite")   # derandomized: the same flights each run, so cache them
 @settings(max_examples=12, deadline=None, database=None, derandomize=True)
 @given(wind=fst.winds(max_speed=9.0), mah=fst.batteries(3400.0, 4500.0))
 def test_fuzz_wind_and_battery_against_a_flight_time_budget(wind, mah):

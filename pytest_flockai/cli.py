@@ -4,7 +4,8 @@
 ``--flockai-json`` on several machines or CI shards (e.g. ``pytest
 --splits``/``-k`` per job, or xdist ``--tx`` across hosts) into one report
 with the same schema; a test present in several inputs keeps its last entry.
-``flockai blueprints`` lists the built-in drones.
+``flockai blueprints`` lists the built-in drones. ``flockai compare`` and
+``flockai history`` compare runs across commits (``reports/commands.py``).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pathlib import Path
 
 from . import report as _report
 from .airframe import blueprints
+from .reports import commands as _commands
 
 
 def merge_reports(paths) -> dict:
@@ -52,7 +54,11 @@ def main(argv=None) -> int:
     m.add_argument("out", type=Path)
     m.add_argument("inputs", type=Path, nargs="+")
     sub.add_parser("blueprints", help="list the built-in drone blueprints")
+    _commands.add_parsers(sub)
     a = ap.parse_args(argv)
+    rc = _commands.run(a)
+    if rc is not None:
+        return rc
     if a.cmd == "blueprints":
         print("\n".join(blueprints()))
         return 0

@@ -41,6 +41,10 @@ Options (each also an ini option, same name with underscores)
     ``--flockai-max-regression PCT`` (5), ``--flockai-artifacts DIR``,
     ``--flockai-missing-baseline warn|fail``. Path options are safe in the space
     form too (``harness/rootdir.py``).
+    Flight cache (``harness/flightcache.py``): ``--flockai-cache MODE``
+    (readwrite), ``--flockai-cache-clear``, marker ``flockai_cache(mode)``.
+    CI reports (``harness/ci_reports.py``): ``--flockai-md PATH`` (and
+    ``GITHUB_STEP_SUMMARY``), ``--flockai-html PATH``, ``--flockai-history DIR``.
 """
 
 from __future__ import annotations
@@ -52,6 +56,8 @@ from .harness import examples as _examples
 from .harness import markers as _markers
 from .harness import options as _options
 from .harness import rootdir as _rootdir
+from .harness import ci_reports as _ci_reports
+from .harness import flightcache as _flightcache
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
 from .harness.recorder import STATE, TestState
@@ -65,6 +71,8 @@ def pytest_addhooks(pluginmanager):
 
 def pytest_addoption(parser):
     _options.add_options(parser)
+    _flightcache.add_options(parser)
+    _ci_reports.add_options(parser)
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -86,6 +94,8 @@ def pytest_configure(config):
     session = FlockSession(config)   # raises UsageError before anything flies
     config.stash[SESSION] = session
     config.pluginmanager.register(session, "flockai-session")
+    config.pluginmanager.register(_flightcache.CachePlugin(config), "flockai-cache")
+    config.pluginmanager.register(_ci_reports.ReportsPlugin(config), "flockai-reports")
 
 
 def pytest_unconfigure(config):
@@ -94,6 +104,10 @@ def pytest_unconfigure(config):
         session.close()
         config.pluginmanager.unregister(session)
         del config.stash[SESSION]
+    for name in ("flockai-cache", "flockai-reports"):
+        extra = config.pluginmanager.get_plugin(name)
+        if extra is not None:
+            config.pluginmanager.unregister(extra)
 
 
 def _state(item) -> TestState:

@@ -19,7 +19,10 @@ JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
          "outcome": "passed" | "failed" | "error" | "skipped" | "xfailed" | "xpassed",
          "error": null or "the flockai configuration error of this test",
          "flights": [{"name": "flight", "end_reason": "landed", "sim_time_s": 45.9,
-                      "scenario": {...}, "kpis": {"flight_time_s": 45.96, ...}}],
+                      "scenario": {...}, "kpis": {"flight_time_s": 45.96, ...},
+                      "cache": {"status": "hit" | "stored" | "flown" | "replaced" | "bypass",
+                                "key": "<sha256>" or null, "reason": str or null}
+                               or null (no flight cache; see pytest_flockai/cache)}],
          "budgets": [{"flight": "flight", "kpi": "flight_time_s", "budget": ">= 24 min",
                       "op": ">=", "limit": 1440.0, "actual": 45.96, "margin": -1394.04,
                       "verdict": "pass" | "fail",

@@ -44,7 +44,10 @@ class FlightResult:
       "wall_time" (stopped by ``Mission(max_wall_s=...)``)
     - ``probe_samples``: one DataFrame per probe, at the probe's own period
     - ``probe_errors``: failures of probes or subscribers (the flight went on)
+    - ``cache``: where the flight cache got it (``pytest_flockai.cache``), or None
     """
+
+    cache: dict | None = None
 
     def __init__(self, kpis, telemetry: pd.DataFrame, events, scenario, energy_breakdown,
                  end_reason: str, wall_time_s: float = float("nan"), *, probe_samples=None,

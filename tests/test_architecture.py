@@ -19,8 +19,8 @@ LAYERS = [
     {"energy", "sensors"},
     {"comm", "airframe"},
     {"control", "ml", "probes"},
-    {"mission"},
-    {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness",
+    {"mission", "cache"},
+    {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
      "plugin", "__init__"},
 ]
 PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__"}

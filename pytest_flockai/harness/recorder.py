@@ -159,7 +159,8 @@ class TestState:
         """Plain JSON data for the test report (travels through pytest-xdist)."""
         flights = [{"name": f.name, "end_reason": getattr(f.result, "end_reason", None),
                     "sim_time_s": f.result.scenario.get("sim_time_s"),
-                    "scenario": f.result.scenario, "kpis": f.result.kpis} for f in self.flights]
+                    "scenario": f.result.scenario, "kpis": f.result.kpis,
+                    "cache": getattr(f.result, "cache", None)} for f in self.flights]
         error = self.markers.error or ("\n".join(self.problems) or None)
         out = {"flights": flights, "budgets": [v.to_dict() for v in self.verdicts],
                "regressions": self.regressions, "error": error}

@@ -48,7 +48,7 @@ def summary(tr, config, entries, files) -> None:
                     if b["kpi"] in kp and b["kpi"] not in names:
                         names.append(b["kpi"])
                 cells = "  ".join(f"{k}={_report.format_kpi(k, kp[k])}" for k in names)
-                tr.write_line(f"  {f['name']}: {cells}")
+                tr.write_line(f"  {f['name']}{_cached(f)}: {cells}")
         if verbose and budgets:
             tr.write_line(_budgets.table([_budgets.Verdict.from_dict(b) for b in budgets],
                                          indent="    "))
@@ -62,6 +62,10 @@ def _hypothesis_line(h: dict) -> str:
     kept = "the failing example in full" if h.get("kept") else "no example kept in full"
     return (f"hypothesis: {h['examples']} example(s), {h['flights']} flight(s) ({kept}); "
             f"{ranges}").rstrip("; ")
+
+
+def _cached(flight: dict) -> str:
+    return " (cached)" if (flight.get("cache") or {}).get("status") == "hit" else ""
 
 
 def _better(kpi):

@@ -1,0 +1,52 @@
+"""The flight cache: a completed FlightResult reused when nothing that shapes it
+changed (see ``key.py`` for what the key covers, ``store.py`` for the files).
+
+``Mission.run()`` asks the cache of the current context, if one is open::
+
+    from pytest_flockai.cache import FlightCache, caching
+    with caching(FlightCache(".flights")):
+        r = fa.Mission(...).run()        # flown and stored, or read back
+
+The pytest plugin opens one per test under pytest's cache directory
+(``--flockai-cache``). A result read from the cache compares equal to the one
+flown (KPIs, telemetry, events, probe samples); ``result.cache`` says where it
+came from (``{"status": "hit" | "stored" | "flown" | "bypass" | "replaced", ...}``).
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from contextvars import ContextVar
+
+from ..errors import ConfigError
+from .key import Uncacheable, cacheable, flight_key
+from .store import MODES, CacheWarning, CorruptEntry, FlightCache, Lookup
+
+_ACTIVE: ContextVar[FlightCache | None] = ContextVar("pytest_flockai_flight_cache", default=None)
+
+
+@contextmanager
+def caching(cache: FlightCache | None):
+    """Use ``cache`` for every ``Mission.run()`` inside the block (None: no cache)."""
+    if cache is not None and not isinstance(cache, FlightCache):
+        raise ConfigError(f"caching: cache = {cache!r} is not allowed; expected a FlightCache "
+                          f"or None")
+    token = _ACTIVE.set(cache)
+    try:
+        yield cache
+    finally:
+        _ACTIVE.reset(token)
+
+
+def active() -> FlightCache | None:
+    return _ACTIVE.get()
+
+
+def lookup(mission) -> Lookup | None:
+    """The current cache's answer for ``mission`` (None when no cache is open)."""
+    cache = _ACTIVE.get()
+    return cache.lookup(mission) if cache is not None else None
+
+
+__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MODES", "Uncacheable",
+           "active", "cacheable", "caching", "flight_key", "lookup"]

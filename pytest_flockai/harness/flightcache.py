@@ -1,0 +1,144 @@
+"""The flight cache in pytest: one ``FlightCache`` per process under pytest's
+cache directory (``<cache_dir>/d/flockai-flights``, shared by pytest-xdist
+workers and kept across runs), opened around every test.
+
+``--flockai-cache=off|read|write|readwrite`` (default ``readwrite``) sets the
+mode; flights inside hypothesis tests are not cached unless the test asks with
+``@pytest.mark.flockai_cache("readwrite")`` (the marker sets any test's mode).
+``--flockai-cache-clear`` empties the flight cache before the run. The cache is
+off when pytest's cacheprovider plugin is (``-p no:cacheprovider``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+from ..cache import MODES, FlightCache, caching
+from .options import option
+from .session import SESSION
+
+CACHE_SUBDIR = "flockai-flights"
+MARKER = "flockai_cache"
+
+
+def add_options(parser) -> None:
+    group = parser.getgroup("flockai")
+    group.addoption("--flockai-cache", dest="flockai_cache", metavar="MODE", default=None,
+                    choices=MODES,
+                    help="reuse completed flights from pytest's cache directory when nothing "
+                         "that shapes them changed: off, read, write or readwrite (default: "
+                         "readwrite; hypothesis tests: off unless marked flockai_cache)")
+    parser.addini("flockai_cache", "ini form of --flockai-cache", type="string", default="")
+    group.addoption("--flockai-cache-clear", dest="flockai_cache_clear", action="store_true",
+                    default=False, help="remove every cached flight before the run")
+
+
+def cache_dir(config) -> Path:
+    """``<pytest cache_dir>/d/flockai-flights`` (resolved as pytest resolves cache_dir)."""
+    raw = os.path.expanduser(os.path.expandvars(str(config.getini("cache_dir"))))
+    base = Path(raw)
+    if not base.is_absolute():
+        base = Path(config.rootpath) / base
+    return base / "d" / CACHE_SUBDIR
+
+
+class CachePlugin:
+    """Opens the flight cache around each test; counts what it did for the summary."""
+
+    def __init__(self, config):
+        self.config = config
+        self.worker = hasattr(config, "workerinput")
+        mode, _ = option(config, "cache")
+        if mode is not None and mode not in MODES:
+            raise pytest.UsageError(f"flockai_cache = {mode!r} is not allowed; allowed: "
+                                    f"{', '.join(MODES)}")
+        self.mode = mode or "readwrite"
+        self.off_reason = None
+        if not config.pluginmanager.has_plugin("cacheprovider"):
+            self.off_reason = "pytest's cacheprovider is disabled (-p no:cacheprovider)"
+        self.directory = cache_dir(config) if self.off_reason is None else None
+        self._caches: dict[str, FlightCache] = {}
+        config.addinivalue_line("markers", f"{MARKER}(mode): flight cache mode for this test "
+                                           f"({', '.join(MODES)}; pytest-flockai)")
+        if config.getoption("flockai_cache_clear", False) and not self.worker \
+                and self.directory is not None:
+            FlightCache(self.directory).clear()
+
+    def mode_for(self, item) -> tuple[str, str | None]:
+        """(mode, error) for one test: its flockai_cache marker, else off for a
+        hypothesis test, else the session's mode."""
+        mark = item.get_closest_marker(MARKER)
+        if mark is not None:
+            mode = mark.args[0] if mark.args else mark.kwargs.get("mode")
+            if mode not in MODES:
+                return "off", (f"@pytest.mark.{MARKER}({mode!r}) is not allowed; allowed: "
+                               f"{', '.join(MODES)}")
+            return mode, None
+        if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
+            return "off", None
+        return self.mode, None
+
+    def cache_for(self, item) -> FlightCache | None:
+        if self.off_reason is not None:
+            return None
+        mode, _ = self.mode_for(item)
+        if mode == "off":
+            return None
+        if mode not in self._caches:
+            self._caches[mode] = FlightCache(self.directory, mode)
+        return self._caches[mode]
+
+    @pytest.hookimpl(tryfirst=True)
+    def pytest_runtest_setup(self, item):
+        _, error = self.mode_for(item)
+        if error:
+            pytest.fail(error, pytrace=False)
+
+    @pytest.hookimpl(wrapper=True)
+    def pytest_runtest_protocol(self, item, nextitem):
+        with caching(self.cache_for(item)):
+            return (yield)
+
+    def pytest_terminal_summary(self, terminalreporter, exitstatus, config):
+        if self.worker:
+            return
+        line = summary_line(_flights(config), self.off_reason)
+        if line:
+            terminalreporter.write_line(line)
+
+
+def _flights(config) -> list[dict]:
+    session = config.stash.get(SESSION, None)
+    if session is None:
+        return []
+    return [f for e in session.entries() for f in e.get("flights", ())]
+
+
+def summary_line(flights: list[dict], off_reason: str | None = None) -> str | None:
+    """One line: how many flights came from the cache, were flown and stored, bypassed."""
+    if off_reason is not None:
+        return f"flockai cache: off ({off_reason})" if flights else None
+    unique = {}
+    for f in flights:   # a session fixture's flight is listed by every test that uses it
+        c = f.get("cache") or {}
+        unique[c.get("key") or id(f)] = f
+    flights = list(unique.values())
+    statuses = Counter((f.get("cache") or {}).get("status") for f in flights)
+    statuses.pop(None, None)
+    if not statuses:
+        return None
+    words = {"hit": "from the cache", "stored": "flown and stored", "flown": "flown, not stored",
+             "replaced": "flown, corrupt entry replaced", "bypass": "not cacheable"}
+    parts = [f"{statuses[k]} {w}" for k, w in words.items() if statuses.get(k)]
+    reasons = sorted({(f.get("cache") or {}).get("reason") for f in flights
+                      if (f.get("cache") or {}).get("status") == "bypass"})
+    reasons = [r for r in reasons if r]
+    shown = "; ".join(r if len(r) <= 120 else r[:117] + "..." for r in reasons[:3])
+    more = f"; and {len(reasons) - 3} more (flights[].cache in --flockai-json)" \
+        if len(reasons) > 3 else ""
+    tail = f" ({shown}{more})" if reasons else ""
+    return "flockai cache: " + ", ".join(parts) + tail

@@ -1,0 +1,69 @@
+"""The ``flockai compare`` and ``flockai history`` subcommands (``cli.py`` adds them)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from .. import report as _report
+from . import compare as _compare
+from . import history as _history
+
+
+def add_parsers(sub) -> None:
+    c = sub.add_parser("compare", help="KPI deltas between two runs; exit 1 on a regression")
+    c.add_argument("base", type=Path, help="the base run: a --flockai-json report or baseline")
+    c.add_argument("new", type=Path, help="the new run: a --flockai-json report or baseline")
+    c.add_argument("--threshold", default="5%",
+                   help="largest allowed regression, percent of the base value (default 5%%)")
+    c.add_argument("--all", action="store_true", help="show every KPI, also unchanged ones")
+    c.add_argument("--json", type=Path, default=None, help="also write the deltas as JSON")
+    h = sub.add_parser("history", help="a KPI across the runs kept by --flockai-history")
+    h.add_argument("directory", type=Path)
+    h.add_argument("--kpi", required=True, help="the KPI, e.g. endurance_s")
+    h.add_argument("--test", default=None, help="only tests whose node id contains this")
+    h.add_argument("--plot", type=Path, default=None, help="draw the trend to this PNG")
+
+
+def run(a) -> int | None:
+    """The exit status of a compare/history command, None for other commands."""
+    if a.cmd == "compare":
+        return _compare_cmd(a)
+    if a.cmd == "history":
+        return _history_cmd(a)
+    return None
+
+
+def _compare_cmd(a) -> int:
+    try:
+        threshold = _compare.parse_threshold(a.threshold)
+    except ValueError:
+        print(f"flockai compare: --threshold = {a.threshold!r} is not allowed; expected a "
+              f"percentage >= 0, e.g. 5%", file=sys.stderr)
+        return 2
+    try:
+        cmp = _compare.compare_files(a.base, a.new, threshold)
+    except _report.ReportError as exc:
+        print(f"flockai compare: {exc}", file=sys.stderr)
+        return 2
+    print(_compare.render(cmp, show_all=a.all))
+    if a.json is not None:
+        _report.write_json_atomic(a.json, {"threshold_pct": threshold,
+                                           "deltas": [d.to_dict() for d in cmp.deltas],
+                                           "only_base": cmp.only_base, "only_new": cmp.only_new})
+    return 1 if cmp.regressions else 0
+
+
+def _history_cmd(a) -> int:
+    try:
+        runs = _history.load(a.directory)
+        print(_history.render(runs, a.kpi, a.test))
+        if a.plot is not None:
+            _history.plot(runs, a.kpi, a.plot, a.test)
+            print(f"trend drawn to {a.plot}")
+    except _report.ReportError as exc:
+        print(f"flockai history: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+

@@ -1,0 +1,147 @@
+"""KPIs across commits: ``--flockai-history DIR`` and ``flockai history DIR``.
+
+Each run (on the controller, at the end of the session) writes one file
+``DIR/<UTC time>-<commit>.json`` (atomically; concurrent CI jobs never write
+the same file)::
+
+    {"schema": "pytest-flockai-history/1", "created": "2026-01-01T12:00:00+00:00",
+     "commit": "0123abc..." or null, "dirty": false, "branch": "main" or null,
+     "tests": {"<nodeid>": {"<flight>": {"<kpi>": value}}}}
+
+The commit comes from ``FLOCKAI_COMMIT``, else ``GITHUB_SHA``, else ``git
+rev-parse HEAD`` in the invocation folder (null outside a repository).
+``flockai history DIR --kpi endurance_s`` prints one row per run and one
+column per flight that has the KPI; ``--plot PNG`` draws the trend (needs
+matplotlib).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import re
+import subprocess
+from pathlib import Path
+
+from .. import report as _report
+
+SCHEMA = "pytest-flockai-history/1"
+
+
+def git_info(cwd) -> dict:
+    """{"commit", "dirty", "branch"} of the repository at ``cwd`` (nulls outside one)."""
+    commit = os.environ.get("FLOCKAI_COMMIT") or os.environ.get("GITHUB_SHA")
+    branch = os.environ.get("GITHUB_REF_NAME")
+    dirty = None
+    try:
+        if commit is None:
+            commit = _git(cwd, "rev-parse", "HEAD")
+            dirty = bool(_git(cwd, "status", "--porcelain", "--untracked-files=no"))
+        if branch is None:
+            branch = _git(cwd, "rev-parse", "--abbrev-ref", "HEAD")
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return {"commit": commit or None, "dirty": dirty, "branch": branch or None}
+
+
+def _git(cwd, *args) -> str:
+    out = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, timeout=10)
+    if out.returncode != 0:
+        raise subprocess.SubprocessError(out.stderr.strip())
+    return out.stdout.strip()
+
+
+def record(directory, entries: list[dict], cwd) -> Path:
+    """Write this run's KPIs (per-test entries of the session) into ``directory``."""
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    now = _dt.datetime.now(_dt.timezone.utc)
+    info = git_info(cwd)
+    doc = {"schema": SCHEMA, "created": now.isoformat(timespec="seconds"), **info,
+           "tests": _report.baseline_from_tests(entries)["tests"]}
+    stamp = now.strftime("%Y%m%dT%H%M%S.%fZ")
+    name = f"{stamp}-{(info['commit'] or 'nocommit')[:12]}.json"
+    path = d / re.sub(r"[^A-Za-z0-9_.-]", "_", name)
+    _report.write_json_atomic(path, doc)
+    return path
+
+
+def load(directory) -> list[dict]:
+    """Every run recorded in ``directory``, oldest first (files that are not
+    history records are skipped)."""
+    runs = []
+    d = Path(directory)
+    if not d.is_dir():
+        raise _report.ReportError(f"history directory {str(d)!r} does not exist (write one with "
+                                  f"--flockai-history DIR)")
+    for p in sorted(d.glob("*.json")):
+        try:
+            doc = json.loads(p.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        if isinstance(doc, dict) and doc.get("schema") == SCHEMA and isinstance(
+                doc.get("tests"), dict):
+            runs.append(doc)
+    runs.sort(key=lambda r: str(r.get("created")))
+    return runs
+
+
+def series(runs: list[dict], kpi: str, test: str | None = None) -> dict:
+    """``{"<test> / <flight>": [value or None per run]}`` for the runs given."""
+    names: list = []
+    for r in runs:
+        for nodeid, flights in r["tests"].items():
+            if test is not None and test not in nodeid:
+                continue
+            for flight, kp in flights.items():
+                if kpi in kp and (nodeid, flight) not in names:
+                    names.append((nodeid, flight))
+    out = {}
+    for nodeid, flight in names:
+        out[f"{nodeid} / {flight}"] = [
+            r["tests"].get(nodeid, {}).get(flight, {}).get(kpi) for r in runs]
+    return out
+
+
+def render(runs: list[dict], kpi: str, test: str | None = None) -> str:
+    """One row per run (date, commit), one column per flight with the KPI."""
+    s = series(runs, kpi, test)
+    if not s:
+        return f"no run in the history has the KPI {kpi!r}"
+    headers = ["run", "commit"] + [f"[{i + 1}]" for i in range(len(s))]
+    rows = []
+    for j, r in enumerate(runs):
+        commit = (r.get("commit") or "-")[:10] + ("+" if r.get("dirty") else "")
+        rows.append([str(r.get("created", ""))[:19], commit]
+                    + [_report.format_kpi(kpi, v[j]) for v in s.values()])
+    legend = [f"[{i + 1}] {name}" for i, name in enumerate(s)]
+    return "\n".join([f"{kpi} over {len(runs)} run(s)", _report.table(headers, rows, indent="")]
+                     + legend)
+
+
+def plot(runs: list[dict], kpi: str, path, test: str | None = None) -> Path:
+    """Draw the trend of ``kpi`` into ``path`` (PNG); needs matplotlib."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise _report.ReportError("drawing the history needs matplotlib: pip install "
+                                  "'pytest-flockai[plots]'") from None
+    s = series(runs, kpi, test)
+    labels = [(r.get("commit") or "?")[:7] for r in runs]
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for name, values in s.items():
+        xs = [i for i, v in enumerate(values) if v is not None]
+        ax.plot(xs, [values[i] for i in xs], marker="o", label=name[-60:])
+    ax.set_xticks(range(len(runs)), labels, rotation=45, ha="right")
+    ax.set_ylabel(kpi)
+    ax.set_title(f"{kpi} by commit")
+    if s:
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    p = Path(path)
+    fig.savefig(p, dpi=100)
+    plt.close(fig)
+    return p
