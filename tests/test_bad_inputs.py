@@ -320,7 +320,7 @@ CASES = [
     ("base-not-utf8", lambda c: report.load_baseline(c.file("base.json", b"\xff\xfe{}")), ("cannot be read", "base.json")),
     ("base-list", lambda c: report.load_baseline(c.baseline([1, 2])), ("baseline file", "list")),
     ("base-schema", lambda c: report.load_baseline(c.baseline({"schema": "x/9", "tests": {}})), ("schema", "'x/9'")),
-    ("base-string-value", lambda c: report.load_baseline(c.baseline({"t::a": {"flight": {"energy_total_j": "1"}}})), ("entry", "'t::a'")),
+    ("base-string-value", lambda c: report.load_baseline(c.baseline({"t::a": {"flight": {"energy_total_j": "1"}}})), ("energy_total_j", "'1'")),
     ("base-folder", lambda c: report.load_baseline(c.folder("b.json")), ("baseline file", "b.json")),
     # -- report and artifact paths --------------------------------------------------------------------
     ("report-path-folder", lambda c: report.check_writable(c.folder("r.json"), "--flockai-json"), ("--flockai-json", "r.json")),

@@ -80,10 +80,10 @@ def test_hypothesis_tests_are_not_cached_unless_marked(pytester):
     pytester.makepyfile(test_cached=BODY + HYPOTHESIS)
     out = pytester.path / "r.json"
     pytester.runpytest_inprocess("--flockai-json", str(out)).assert_outcomes(passed=4)
-    pytester.runpytest_inprocess("--flockai-json", str(out)).assert_outcomes(passed=4)
-    st = statuses(out)
-    assert set(st["test_searched"]) == {None}
-    assert set(st["test_searched_and_cached"]) == {"hit"}
+    # hypothesis examples are recorded compactly (no per-flight rows): count the entries
+    # stored: the two plain tests' flights and the marked search's two seeds, not the other's
+    stored = list((pytester.path / ".pytest_cache" / "d" / "flockai-flights").glob("*/*.flight"))
+    assert len(stored) == 4
 
 
 def test_off_without_the_cacheprovider(pytester):

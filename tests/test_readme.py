@@ -42,7 +42,7 @@ def test_every_readme_example_runs(readme_namespace):
 def test_the_readme_hypothesis_example_shrinks_to_the_boundary(readme_namespace):
     """The README's hypothesis test, the whole search as written (issue 16: it took
     314 s and failed on its own range): it fails, and shrinks to the payload where
-    the 20 min hover stops holding (291 g), not to an end of its 0..500 g range."""
+    the 20 min hover stops holding (251 g), not to an end of its 0..500 g range."""
     test = readme_namespace["test_endurance_with_payload"]
     flights = []
     inner = test.hypothesis.inner_test
@@ -52,10 +52,10 @@ def test_the_readme_hypothesis_example_shrinks_to_the_boundary(readme_namespace)
             test()
     finally:
         test.hypothesis.inner_test = inner
-    assert "grams=291" in "".join(getattr(exc.value, "__notes__", []))
+    assert "grams=251" in "".join(getattr(exc.value, "__notes__", []))
     assert len(flights) <= 40                   # bounded: no explain phase
-    ok = fa.Mission(fa.drone("dji-mavic-2-pro", payload_kg=0.290), fa.pilots.Hover(5, 2)).run()
-    assert ok.kpis["endurance_s"] >= 20 * 60    # 290 g holds: 291 g is the boundary
+    ok = fa.Mission(fa.drone("dji-mavic-2-pro", payload_kg=0.250), fa.pilots.Hover(5, 2)).run()
+    assert ok.kpis["endurance_s"] >= 20 * 60    # 250 g holds: 251 g is the boundary
 
 
 def test_the_readme_robustness_search_finds_the_haze(readme_namespace):

@@ -54,7 +54,8 @@ def test_onnx_external_data_comes_from_the_models_folder_not_the_working_directo
 @pytest.mark.parametrize("pred", [None, "three", float("nan"), float("inf"), -2.0, {"count": -1}],
                          ids=["none", "string", "nan", "inf", "negative", "dict-negative"])
 def test_an_invalid_prediction_is_a_failed_inference_with_the_reason(pred):
-    task = fa.Task(PythonModel(lambda f: pred, macs=1000, name="bad"), sensor="gps", period_s=1.0)
+    task = fa.Task(PythonModel(lambda f: pred, macs=1000, name="bad"), sensor="gps", period_s=1.0,
+                   device="raspberry-pi-4")   # the Crazyflie has no computer of its own
     r = fa.Mission(CF, fa.pilots.Hover(1.0, 3.0), tasks=[task], until=4.0).run()
     k = r.kpis
     assert k["bad.inference_failures"] >= 3 and k["bad.inference_count"] == 0
@@ -66,6 +67,7 @@ def test_an_invalid_prediction_is_a_failed_inference_with_the_reason(pred):
 @pytest.mark.parametrize("pred", ["boxes", None, float("nan")], ids=["string", "none", "nan"])
 def test_an_unparsable_detection_output_is_a_failed_inference_not_a_crash(pred):
     task = fa.Task(PythonModel(lambda f: pred, macs=1000, name="det"), sensor="gps", period_s=1.0,
+                   device="raspberry-pi-4",
                    evaluate="detection")
     r = fa.Mission(CF, fa.pilots.Hover(1.0, 2.0), tasks=[task], until=3.0).run()
     assert r.kpis["det.inference_failures"] >= 2 and r.end_reason == "time"
@@ -74,7 +76,8 @@ def test_an_unparsable_detection_output_is_a_failed_inference_not_a_crash(pred):
 
 
 def test_a_valid_count_is_still_a_successful_inference():
-    task = fa.Task(PythonModel(lambda f: 3, macs=1000, name="ok"), sensor="gps", period_s=1.0)
+    task = fa.Task(PythonModel(lambda f: 3, macs=1000, name="ok"), sensor="gps", period_s=1.0,
+                   device="raspberry-pi-4")   # the Crazyflie has no computer of its own
     r = fa.Mission(CF, fa.pilots.Hover(1.0, 3.0), tasks=[task], until=4.0).run()
     assert r.kpis["ok.inference_failures"] == 0 and r.kpis["ok.inference_count"] >= 3
 

@@ -52,7 +52,8 @@ _PKG_DIR = Path(__file__).resolve().parent.parent
 #: Attributes a class sets in its ``bind*`` methods (per-flight state: the MuJoCo
 #: model and data, a sensor's Generator, precomputed rotor terms) are left out too,
 #: found from the source (``_bound_attributes``).
-_DERIVED = {"session", "_proto", "_mac_cache", "mac_report", "_ready", "_objects", "_objects_key"}
+_DERIVED = {"session", "_proto", "_mac_cache", "mac_report", "_ready", "_objects", "_objects_key",
+            "_meshes", "_meshes_n"}
 #: third-party objects held by the package's own classes: runtime handles derived
 #: from keyed data (an ONNX Runtime session, a MuJoCo renderer bound for a flight)
 _SKIP_MODULES = ("onnxruntime", "mujoco")

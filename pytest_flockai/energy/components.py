@@ -58,7 +58,7 @@ class Component:
     def bind(self, drone) -> None:
         """Precompute from the drone before a flight (optional)."""
 
-    def set_air_density(self, rho: float) -> None:
+    def bind_air_density(self, rho: float) -> None:
         """The flight's air density (kg/m^3), set before ``bind`` (optional)."""
 
     def power(self, u: Usage) -> float:  # pragma: no cover - interface
@@ -219,7 +219,7 @@ class HoverPower(Component):
         self._p = 0.0
         self._rho_air = RHO_SEA_LEVEL
 
-    def set_air_density(self, rho):
+    def bind_air_density(self, rho):
         self._rho_air = rho
 
     def bind(self, drone):
@@ -314,7 +314,7 @@ class Motors(Component):
                               f"(the rest is profile power)")
         self._vi = []
 
-    def set_air_density(self, rho):
+    def bind_air_density(self, rho):
         self._rho_air = rho
 
     def bind(self, drone):

@@ -102,9 +102,9 @@ class Group(Component):
         for c in self._children.values():
             c.bind(drone)
 
-    def set_air_density(self, rho):
+    def bind_air_density(self, rho):
         for c in self._children.values():
-            c.set_air_density(rho)
+            c.bind_air_density(rho)
 
     def power(self, u):
         return sum(c.power(u) for c in self._children.values())
@@ -170,7 +170,7 @@ class Meter:
     """
 
     def __init__(self, model: EnergyModel, drone, rho: float = RHO_SEA_LEVEL):
-        model.set_air_density(rho)
+        model.bind_air_density(rho)
         model.bind(drone)
         self.battery = drone.battery.circuit()
         self.model = model
