@@ -60,3 +60,19 @@ def test_bad_cell_count_in_a_new_blueprint_names_the_field(tmp_path):
     bad.write_text(text.replace("cells = 3 ", "cells = 0 "))
     with pytest.raises(ConfigError, match="cells = 0"):
         fa.drone(str(bad))
+
+
+@pytest.mark.parametrize("name", NEW)
+def test_blueprint_holds_a_gusty_5_mps_wind_for_10_s(name):
+    # measured (seed 0): largest horizontal error 0.47 m (Air 2S) to 1.58 m (Matrice 300),
+    # altitude within 0.13 m, pitch under 5.4 deg
+    wind = fa.Wind(mean=(5.0, 0.0, 0.0), gust_std=1.0)
+    r = fa.Mission(fa.drone(name), fa.pilots.Hover(altitude=5.0, duration=10.0), until=25.0,
+                   return_home=False, wind=wind, seed=0).run()
+    assert r.end_reason == "landed" and r.kpis["crashed"] == 0
+    tel = r.telemetry
+    hold = tel[tel.stage == "pilot"]
+    hold = hold[hold.index > hold.index[0] + 3.0]
+    assert np.max(np.abs(hold.z - 5.0)) < 0.3
+    assert np.max(np.hypot(hold.x, hold.y)) < 2.5
+    assert np.max(np.abs(hold.pitch)) < math.radians(10.0)
