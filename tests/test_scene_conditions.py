@@ -7,8 +7,11 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import find, settings
+from hypothesis.errors import NoSuchExample
 
 import pytest_flockai as fa
+from pytest_flockai import strategies as fst
 from pytest_flockai.errors import ConfigError
 from pytest_flockai.world import figures
 from pytest_flockai.world.truth import project
@@ -207,11 +210,11 @@ def test_bad_weather_is_refused_with_what_is_allowed():
 
 
 def test_the_conditions_strategy_draws_weather_and_shrinks_to_its_mildest_form():
-    from hypothesis import find, settings
-    from pytest_flockai import strategies as fst
     strat = fst.conditions(weather=("rain", "snow"), max_readout_s=0.05)
     c = find(strat, lambda c: c.weather == "rain", settings=settings(database=None))
     assert (c.weather, c.severity, c.readout_s, c.exposure_s) == ("rain", 1, 0.0, 0.0)
     c = find(strat, lambda c: c.readout_s > 0.01, settings=settings(database=None))
     assert c.weather is None and c.exposure_s == 0.0 and c.visibility_m == math.inf
-    assert fst.conditions().example().weather is None          # not asked: no weather
+    with pytest.raises(NoSuchExample):                         # not asked: no weather, no skew
+        find(fst.conditions(), lambda c: c.weather is not None or c.readout_s > 0,
+             settings=settings(database=None, max_examples=200))
