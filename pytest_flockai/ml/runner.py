@@ -20,14 +20,11 @@ frame now (the prediction is real) and schedules its simulated timeline:
 - ``onboard``: compute on the drone's device for the modeled latency
   ``overhead_s + MACs / macs_per_s`` (or the measured, scaled host time). The
   result is on board at the end: that is the inference latency. Then, as in
-  the paper's scenario 1 (section 5.2: "only when a potential crowded region
-  is detected ... is the ground station notified ... the camera feed
-  annotated with the crowded region(s) and drone positioning data"), the
-  drone sends the frame, annotated with the count and position and
-  JPEG-encoded with OpenCV (real size), when the predicted count reaches
-  ``crowd_threshold`` (``alert="frame"``); otherwise a ``result_bytes``
-  result message (count, position, time). ``alert="result"`` always sends
-  the small message. Encoding the alert keeps the SoC busy (see below).
+  the paper's scenario 1 (section 5.2), the drone sends the frame, annotated
+  with the count and position and JPEG-encoded with OpenCV (real size), when
+  the predicted count reaches ``crowd_threshold`` (``alert="frame"``);
+  otherwise a ``result_bytes`` result message (count, position, time).
+  ``alert="result"`` always sends the small message.
 - ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame
   (``cv2.imencode``, quality ``jpeg_quality``: real byte size), sends it up
   the link at the current distance to ``ground_station``, the ground
@@ -67,7 +64,6 @@ from .templates import Template
 
 _ZERO_USAGE = (0.0, 0, 0, 0, 0)
 _NO_EVENTS: tuple = ()
-
 
 #: the computer of a TaskRunner bound outside a Mission to a task without a device
 #: (a Mission binds the drone's own computer instead; FlockAI's drone carries a Pi 4)
