@@ -34,9 +34,8 @@ frame now (the prediction is real) and schedules its simulated timeline:
   One request is in flight at a time (a synchronous client, like the
   paper's): while it is, the task is busy.
 
-SoC busy time charged to the drone: the inference (onboard), JPEG encoding
-of frames and alerts (``JPEG_MACS_PER_PIXEL`` MAC-equivalents per pixel on
-the device), and ``update_macs`` of models that learn in flight.
+SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and
+alerts (``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight.
 
 A model raising during inference gives a failed inference (``ok=False``,
 the exception text in ``error``, ``inference_failures``); the flight goes on.
