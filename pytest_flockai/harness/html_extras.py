@@ -14,36 +14,38 @@ def active(config) -> bool:
         getattr(config.option, "htmlpath", None))
 
 
+def _table(cls: str, headers, rows) -> str:
+    """An HTML table of already-escaped cells."""
+    head = "".join(f"<th>{h}</th>" for h in headers)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
+    return f'<table class="{cls}"><tr>{head}</tr>{body}</table>'
+
+
 def table(payload: dict) -> str:
     """The KPI table of each flight, then the budgets and regressions, as HTML."""
     e = _html.escape
     parts = []
     for f in payload.get("flights", ()):
-        rows = "".join(f"<tr><td>{e(k)}</td><td>{e(_report.format_kpi(k, v))}</td></tr>"
-                       for k, v in (f.get("kpis") or {}).items())
         src = " (from the flight cache)" if (f.get("cache") or {}).get("status") == "hit" else ""
-        parts.append(f"<p><b>flight {e(f['name'])}</b>: {e(str(f.get('end_reason')))}{src}</p>"
-                     f'<table class="flockai-kpis"><tr><th>KPI</th><th>value</th></tr>{rows}'
-                     f"</table>")
+        parts.append(f"<p><b>flight {e(f['name'])}</b>: {e(str(f.get('end_reason')))}{src}</p>")
+        parts.append(_table("flockai-kpis", ("KPI", "value"),
+                            ((e(k), e(_report.format_kpi(k, v)))
+                             for k, v in (f.get("kpis") or {}).items())))
     budgets = payload.get("budgets") or []
     if budgets:
-        rows = "".join(
-            f"<tr><td>{e(str(b.get('flight')))}</td><td>{e(b['kpi'])}</td>"
-            f"<td>{e(str(b.get('budget')))}</td><td>{e(str(b.get('actual_text')))}</td>"
-            f"<td>{e(str(b.get('margin_text')))}</td><td>{e(str(b.get('verdict')))}</td></tr>"
-            for b in budgets)
-        parts.append('<table class="flockai-budgets"><tr><th>flight</th><th>KPI</th>'
-                     f"<th>budget</th><th>actual</th><th>margin</th><th>verdict</th></tr>{rows}"
-                     "</table>")
+        parts.append(_table("flockai-budgets",
+                            ("flight", "KPI", "budget", "actual", "margin", "verdict"),
+                            ((e(str(b.get("flight"))), e(b["kpi"]), e(str(b.get("budget"))),
+                              e(str(b.get("actual_text"))), e(str(b.get("margin_text"))),
+                              e(str(b.get("verdict")))) for b in budgets)))
     regs = payload.get("regressions") or []
     if regs:
-        rows = "".join(
-            f"<tr><td>{e(r['flight'])}</td><td>{e(r['kpi'])}</td>"
-            f"<td>{e(_report.format_kpi(r['kpi'], r['baseline']))}</td>"
-            f"<td>{e(_report.format_kpi(r['kpi'], r['actual']))}</td>"
-            f"<td>{r['change_pct']:+.2f}%</td></tr>" for r in regs)
-        parts.append('<table class="flockai-regressions"><tr><th>flight</th><th>KPI</th>'
-                     f"<th>baseline</th><th>actual</th><th>change</th></tr>{rows}</table>")
+        parts.append(_table("flockai-regressions",
+                            ("flight", "KPI", "baseline", "actual", "change"),
+                            ((e(r["flight"]), e(r["kpi"]),
+                              e(_report.format_kpi(r["kpi"], r["baseline"])),
+                              e(_report.format_kpi(r["kpi"], r["actual"])),
+                              f"{r['change_pct']:+.2f}%") for r in regs)))
     return "<div>" + "".join(parts) + "</div>"
 
 

@@ -152,15 +152,7 @@ def person(pose) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     parts["top"].append(_limb(ARM, rot_x(lr) @ rot_y(-lp), (0.0, SHOULDER_Y, SHOULDER_Z)))
     parts["top"].append(_limb(ARM, rot_x(-rr) @ rot_y(-rp), (0.0, -SHOULDER_Y, SHOULDER_Z)))
     R = rot_z(yaw) * scale
-    out = {}
-    for name, meshes in parts.items():
-        vs, fs, k = [], [], 0
-        for v, f in meshes:
-            vs.append(v @ R.T)
-            fs.append(f + k)
-            k += len(v)
-        out[name] = (np.vstack(vs), np.vstack(fs))
-    return out
+    return {name: merge((v @ R.T, f) for v, f in meshes) for name, meshes in parts.items()}
 
 
 def person_samples(pose) -> np.ndarray:
