@@ -58,6 +58,7 @@ from .harness import options as _options
 from .harness import rootdir as _rootdir
 from .harness import ci_reports as _ci_reports
 from .harness import flightcache as _flightcache
+from .harness import tracebacks as _tracebacks
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
 from .harness.recorder import STATE, TestState
@@ -96,6 +97,7 @@ def pytest_configure(config):
     config.pluginmanager.register(session, "flockai-session")
     config.pluginmanager.register(_flightcache.CachePlugin(config), "flockai-cache")
     config.pluginmanager.register(_ci_reports.ReportsPlugin(config), "flockai-reports")
+    config.pluginmanager.register(_tracebacks.RepairPlugin(), "flockai-tracebacks")
 
 
 def pytest_unconfigure(config):
@@ -104,7 +106,7 @@ def pytest_unconfigure(config):
         session.close()
         config.pluginmanager.unregister(session)
         del config.stash[SESSION]
-    for name in ("flockai-cache", "flockai-reports"):
+    for name in ("flockai-cache", "flockai-reports", "flockai-tracebacks"):
         extra = config.pluginmanager.get_plugin(name)
         if extra is not None:
             config.pluginmanager.unregister(extra)
