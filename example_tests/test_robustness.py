@@ -29,13 +29,14 @@ def recall_map(det_model, det_city, tmp_path_factory):
 
 
 def test_detector_envelope_over_altitude_and_speed(recall_map, record_property):
-    """With a 1/30 s shutter, recall >= 0.7 holds from 25 m to 50 m when hovering
-    and at 8 m/s, and breaks at 16 m/s, where the blur smears people away; below
-    20 m the figures seen from the side are outside what the detector learned."""
-    assert altitude_band(recall_map, "recall", 0.7, speed_mps=0.0) == (25.0, 50.0)
-    assert altitude_band(recall_map, "recall", 0.7, speed_mps=8.0) == (25.0, 50.0)
-    lo, hi = altitude_band(recall_map, "recall", 0.7, speed_mps=16.0)
-    assert not (lo <= 25.0 and hi >= 50.0)
+    """With a 1/30 s shutter, recall >= 0.6 holds from 25 m to 50 m when hovering; at
+    8 m/s the blur costs it at every altitude and no altitude keeps 0.6; at 16 m/s it
+    stays under 0.55, where the blur smears people away; below 20 m the figures seen
+    from the side are outside what the detector learned."""
+    assert altitude_band(recall_map, "recall", 0.6, speed_mps=0.0) == (25.0, 50.0)
+    by = recall_map.pivot(index="altitude_m", columns="speed_mps", values="recall")
+    assert (by[8.0] < by[0.0]).all() and by[8.0].max() < 0.6
+    assert by[16.0].max() < 0.55
     low = recall_map[recall_map.altitude_m == 15.0].recall.max()
     assert low < 0.5
     for png in recall_map.attrs["pictures"]:     # the heat map, in the --flockai-html dashboard
@@ -100,10 +101,10 @@ def test_detector_envelope_over_weather_shadows_and_rolling_shutter(fixed_views,
                                                                      tmp_path_factory):
     """The shipped detector (trained on clear, shadowless, global-shutter renders)
     against the flight's other conditions, written as a table: snow at any
-    severity keeps recall >= 0.65; rain breaks it from severity 2 and water on the
-    lens from severity 3; a low sun's shadows break it (each figure gets a dark
-    twin), while its direction alone costs little; a 60 ms rolling-shutter readout
-    at 16 m/s costs at most 0.1."""
+    severity keeps recall >= 0.55 (0.70 in ideal light); rain breaks it from severity 1
+    and water on the lens from severity 3; a low sun's shadows break it (each figure
+    gets a dark twin), while its direction alone costs less; a 60 ms rolling-shutter
+    readout at 16 m/s costs at most 0.1."""
     rows = []
     for weather in ("rain", "snow", "spatter"):
         for sev in range(1, 6):
@@ -114,15 +115,14 @@ def test_detector_envelope_over_weather_shadows_and_rolling_shutter(fixed_views,
     out = os.environ.get("FLOCKAI_ENVELOPE_DIR") or tmp_path_factory.mktemp("weather")
     with open(os.path.join(out, "detector-weather.csv"), "w") as f:
         f.write("weather,severity,recall\n" + "".join(f"{w},{s},{r:.3f}\n" for w, s, r in rows))
-    assert min(recall["snow", s] for s in range(1, 6)) >= 0.65
-    assert recall["rain", 1] >= 0.55 and max(recall["rain", s] for s in range(2, 6)) < 0.4
-    assert min(recall["spatter", s] for s in (1, 2)) >= 0.7
-    assert max(recall["spatter", s] for s in range(3, 6)) < 0.4
+    assert min(recall["snow", s] for s in range(1, 6)) >= 0.55
+    assert max(recall["rain", s] for s in range(1, 6)) < 0.4
+    assert recall["spatter", 1] >= 0.6 and max(recall["spatter", s] for s in range(3, 6)) < 0.3
     low_sun = dict(sun_azimuth_deg=250.0, sun_elevation_deg=25.0)
     lit = _kpis(det_model, fixed_views.under(fa.Conditions(**low_sun), seed=1))["recall"]
     shaded = _kpis(det_model, fixed_views.under(fa.Conditions(**low_sun, shadows=True),
                                                  seed=1))["recall"]
-    assert lit >= 0.6 and shaded < 0.4
+    assert lit >= 0.5 and shaded < 0.2
     ideal = _kpis(det_model, fixed_views.ideal())["recall"]
     skewed = _kpis(det_model, fixed_views.under(fa.Conditions(readout_s=0.06),
                                                 velocity=(16.0, 0.0, 0.0), seed=1))["recall"]

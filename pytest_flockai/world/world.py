@@ -68,7 +68,7 @@ class World:
         self.skin_idx = np.zeros(0, dtype=int)      # index into urban.SKIN per person
         self.trousers_idx = np.zeros(0, dtype=int)  # index into urban.TROUSERS per person
         self.poses = np.zeros((0, 7))               # figures.draw_poses rows per person
-        self.figures = "simple"
+        self.figures = "articulated"
         self.path = None
         self._info: dict = {}
 
@@ -81,7 +81,7 @@ class World:
     def urban(cls, seed: int = 0, size=(200.0, 200.0), people: int = 100, crowds=(), *,
               building_density: float = 0.7, clear_radius: float = 15.0,
               max_building_height: float | None = None, vehicles: int = 0,
-              figures: str = "simple") -> "World":
+              figures: str = "articulated") -> "World":
         """A procedural city of ``size = (east-west, north-south)`` metres centred on home.
 
         people: scattered people (uniform over the area, outside buildings);
@@ -140,7 +140,7 @@ class World:
 
     @classmethod
     def scene(cls, people=(), vehicles=(), buildings=(), *, size=(100.0, 100.0),
-              figures: str = "simple", poses=None) -> "World":
+              figures: str = "articulated", poses=None) -> "World":
         """A test range: figures, cars and buildings exactly where you put them, on
         the urban world's ground and streets. people: (x, y) feet positions;
         vehicles: (x, y, yaw) rows; buildings: (cx, cy, half_x, half_y, height);
