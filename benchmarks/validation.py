@@ -47,7 +47,7 @@ def fly_until_empty(blueprint: str, speed_kmh: float | None, payload_kg: float):
     if speed_kmh is None:
         pilot = fa.pilots.Hover(altitude=10.0)
     else:
-        pilot = fa.pilots.Waypoints([(200000.0, 0.0, 10.0)], speed=speed_kmh / 3.6)
+        pilot = fa.pilots.Waypoints([(90000.0, 0.0, 10.0)], speed=speed_kmh / 3.6)
     r = fa.Mission(d, pilot, until="battery_depleted").run()
     return r.kpis["flight_time_s"] / 60.0, r
 
