@@ -77,6 +77,12 @@ TOP_TILT_DEG = 35.0
 #: Cd x A seen from above per m^2 of diagonal^2: Mavic 2 Pro estimate (body and arms
 #: ~0.035 m^2 from above, Cd ~0.9) = 0.030 m^2 over 0.354^2 m^2
 TOP_CDA_PER_DIAG2 = 0.030 / 0.354 ** 2
+#: share of the fore rotors' near-wake induced velocity the aft rotors ingest once the wake is
+#: flat (energy/components.py Motors: weighted by the wake skew squared and by how far each rotor
+#: is aft). Geometry, not a fit: in the "x" layout each aft rotor sits directly behind a fore
+#: rotor, one to two diameters downstream, so a flattened wake covers its whole disc; the
+#: near-wake velocity (v_i, not the far wake's 2 v_i: the wake has not contracted yet)
+WAKE_INTERFERENCE = 1.0
 BODY_MASS_SHARE = 0.6              # estimate: 60 % of the mass in the body box, 40 % at the rotors
 
 
@@ -204,7 +210,7 @@ def derive(ds: Section, pack_v: float) -> dict:
     rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
              "time_constant_s": TAU_REF_S * D / TAU_REF_D}
     energy = {"figure_of_merit": fm, "induced_power_factor": KAPPA, "motor_efficiency": eta,
-              "esc_efficiency": ESC_EFFICIENCY, "wake_interference": 0.0}
+              "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE}
     derived = {"ct": ct, "cp": cp, "figure_of_merit": fm, "hover_rad_s": om_h,
                "reynolds_075": 0.75 * om_h * 0.5 * D * CHORD_RATIO * 0.5 * D / NU_SEA_LEVEL,
                "motor_efficiency": eta, "motor_kv_rpm_v": kv * 60.0 / (2.0 * math.pi),
