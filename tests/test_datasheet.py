@@ -115,3 +115,16 @@ def test_unknown_datasheet_key_suggests_the_close_one(tmp_path):
     p = _mini(tmp_path, **{"prop_blades = 2 ": "motor_kvv = 900.0\nprop_blades = 2 "})
     with pytest.raises(ConfigError, match="unknown key 'motor_kvv'.*motor_kv"):
         fa.drone(str(p))
+
+
+def test_motors_sized_for_the_maximum_takeoff_mass_lose_less_at_hover(tmp_path):
+    # the M300's published 9 kg maximum take-off mass: larger motors, more motor constant,
+    # less copper loss at the 6.3 kg hover
+    text = (BLUEPRINTS / "dji-matrice-300-rtk.toml").read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("max_takeoff_mass_kg"))
+    p = tmp_path / "m300.toml"
+    p.write_text(text.replace(line + "\n", ""))
+    plain, sized = fa.drone(str(p)), fa.drone("dji-matrice-300-rtk")
+    assert sized.datasheet["motor_efficiency"] > plain.datasheet["motor_efficiency"] + 0.02
+    # the hover point itself (propeller, speed) does not depend on it
+    assert sized.datasheet["hover_rad_s"] == pytest.approx(plain.datasheet["hover_rad_s"])

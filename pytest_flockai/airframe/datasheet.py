@@ -60,7 +60,8 @@ CD_RE_EXP = -0.5
 #: store-en.tmotor.com): 42 mOhm, 30.8 g -> Km = (60 / (2 pi 2400)) / sqrt(0.042) N m / sqrt(W)
 KM_REF = (60.0 / (2.0 * math.pi * 2400.0)) / math.sqrt(0.042)
 KM_REF_MASS_KG = 0.0308
-#: estimate: the motors of a multirotor weigh about 10 % of its take-off mass (all motors)
+#: estimate: the motors of a multirotor weigh about 10 % of the take-off mass they are sized
+#: for (all motors; the maximum take-off mass where the maker publishes one)
 MOTOR_MASS_SHARE = 0.10
 #: estimate: no-load (iron and bearing) loss at full speed, 3 % of the maximum shaft
 #: power: idle currents of 0.3-1 A against 10-30 A maximum in outrunner datasheets
@@ -92,6 +93,10 @@ class Datasheet(Section):
     TABLE = "datasheet"
     FIELDS = {
         "mass_kg": Field("pos", doc="take-off mass", unit="kg", bounds=(0.005, 50.0, "5 g to 50 kg")),
+        "max_takeoff_mass_kg": Field("optpos", None, unit="kg",
+                                     bounds=(0.005, 100.0, "5 g to 100 kg"),
+                                     doc="maximum take-off mass, payload included; the motors "
+                                         "are sized for it (default: mass_kg)"),
         "diagonal_m": Field("pos", doc="rotor axis to rotor axis across the frame", unit="m",
                             bounds=(0.02, 4.0, "diagonal in metres, not millimetres")),
         "rotor_count": Field("rotors", 4),
@@ -147,11 +152,14 @@ def motor_efficiency(torque_nm: float, omega: float, *, kv_rad: float, rm: float
 def _motor(ds: Section, mass: float, n: int, q_hover: float, om_hover: float, om_max: float,
            p_max: float, pack_v: float):
     """(eta at hover, Kv in rad/s/V, Rm, I0) from the datasheet or the defaults."""
+    # a motor sized for the maximum take-off mass: its full speed and power at that thrust
+    scale = max(mass, ds.max_takeoff_mass_kg or mass) / mass
+    om_max, p_max = om_max * math.sqrt(scale), p_max * scale ** 1.5
     kv = ds.motor_kv * 2.0 * math.pi / 60.0 if ds.motor_kv else om_max / (0.85 * pack_v)
     if ds.motor_rm_ohm is not None:
         rm = ds.motor_rm_ohm
     else:
-        km = KM_REF * (MOTOR_MASS_SHARE * mass / n / KM_REF_MASS_KG) ** (5.0 / 6.0)
+        km = KM_REF * (MOTOR_MASS_SHARE * scale * mass / n / KM_REF_MASS_KG) ** (5.0 / 6.0)
         rm = (1.0 / kv) ** 2 / km ** 2            # Km = Kt / sqrt(Rm), Kt = 1 / Kv (SI)
     if ds.motor_i0_a is not None:
         i0 = ds.motor_i0_a
