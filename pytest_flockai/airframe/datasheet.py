@@ -169,7 +169,7 @@ def _motor(ds: Section, mass: float, n: int, q_hover: float, om_hover: float, om
     return motor_efficiency(q_hover, om_hover, kv_rad=kv, rm=rm, i0=i0), kv, rm, i0
 
 
-def _max_speed(ds, kf, km_coef, kv, rm, i0, pack_v, om_hover):
+def _max_speed(ds, km_coef, kv, rm, i0, pack_v, om_hover):
     """Full-throttle rotor speed: from the motor equation at the pack voltage when Kv is
     given, else from the design thrust-to-weight."""
     if not ds.motor_kv:
@@ -188,7 +188,7 @@ def _body(ds: Section, mass: float, n: int):
     L, W, H = ds.body_size_m
     arm = 0.5 * ds.diagonal_m
     mb, mr = BODY_MASS_SHARE * mass, (1.0 - BODY_MASS_SHARE) * mass / n
-    lever = arm / math.sqrt(2.0) if n == 4 else arm * math.sqrt(0.5)
+    lever = arm / math.sqrt(2.0)      # rotors evenly around: mean of r^2 sin^2 is r^2 / 2
     inertia = [mb / 12.0 * (W * W + H * H) + n * mr * lever ** 2,
                mb / 12.0 * (L * L + H * H) + n * mr * lever ** 2,
                mb / 12.0 * (L * L + W * W) + n * mr * arm ** 2]
@@ -214,7 +214,7 @@ def derive(ds: Section, pack_v: float) -> dict:
     q_h = kq * om_h ** 2
     om_design = om_h * math.sqrt(THRUST_TO_WEIGHT)
     eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, kq * om_design ** 3, pack_v)
-    om_max = _max_speed(ds, kf, kq, kv, rm, i0, pack_v, om_h)
+    om_max = _max_speed(ds, kq, kv, rm, i0, pack_v, om_h)
     rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
              "time_constant_s": TAU_REF_S * D / TAU_REF_D}
     energy = {"figure_of_merit": fm, "induced_power_factor": KAPPA, "motor_efficiency": eta,
