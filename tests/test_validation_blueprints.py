@@ -22,21 +22,23 @@ def test_new_blueprints_are_listed_and_span_sub_250_g_to_over_3_kg():
     assert min(masses) < 0.250 and max(masses) > 3.0
 
 
-@pytest.mark.parametrize("name", NEW)
-def test_blueprint_follows_the_global_rules(name):
+@pytest.mark.parametrize("name", NEW + ["dji-mavic-2-pro-datasheet"])
+def test_blueprint_is_datasheet_level(name):
+    """Issue 15, session 4: the validation blueprints give datasheet values only; the rotor
+    coefficients and efficiencies come from airframe/datasheet.py, the same for every drone."""
     d = fa.drone(name)
-    D = d.rotor.diameter_m
-    # propeller: UIUC static CT = 0.11, CP = 0.045 (the rule in the header), to 0.5 %
-    assert d.rotor.thrust_coeff == pytest.approx(0.11 * RHO * D ** 4 / (4 * math.pi ** 2), rel=5e-3)
-    assert d.rotor.torque_coeff == pytest.approx(0.045 * RHO * D ** 5 / (8 * math.pi ** 3), rel=5e-3)
-    # thrust-to-weight 2.5 at the rule's maximum rotor speed
-    assert d.thrust_to_weight_at(RHO) == pytest.approx(2.5, rel=0.01)
-    # the same unfitted energy defaults for every new blueprint
     text = (BLUEPRINTS / f"{name}.toml").read_text()
-    for line in ("figure_of_merit = 0.65", "motor_efficiency = 0.80", "esc_efficiency = 0.95",
-                 "wake_interference = 0.55"):
-        assert line in text
-    assert "fitted:" not in text
+    assert "[datasheet]" in text and "fitted:" not in text
+    for key in ("thrust_coeff", "torque_coeff", "figure_of_merit", "motor_efficiency",
+                "wake_interference", "drag_area_m2", "inertia_kg_m2"):
+        assert f"\n{key} =" not in text, key
+    ds = d.datasheet
+    D = d.rotor.diameter_m
+    assert d.rotor.thrust_coeff == pytest.approx(ds["ct"] * RHO * D ** 4 / (4 * math.pi ** 2))
+    assert d.energy.component("motors").figure_of_merit == pytest.approx(ds["figure_of_merit"])
+    assert d.energy.component("motors").motor_efficiency == pytest.approx(ds["motor_efficiency"])
+    # no Kv on the datasheet: the design thrust-to-weight 2.5 sets the top rotor speed
+    assert d.thrust_to_weight_at(RHO) == pytest.approx(2.5, rel=0.01)
 
 
 @pytest.mark.parametrize("name", NEW)

@@ -21,11 +21,12 @@ from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
 from ..physics import G, RHO_SEA_LEVEL  # G re-exported: airframe.drone.G
 from ..sensors import Sensor
+from .datasheet import expand as _expand_datasheet
 from .params import Airframe, Battery, Camera, EnergyParams, Radio, Rotor, Sim
 
 MIN_THRUST_TO_WEIGHT = 1.3
 
-_TOP_KEYS = {"name", "description", "airframe", "rotor", "battery", "energy", "radio",
+_TOP_KEYS = {"name", "description", "datasheet", "airframe", "rotor", "battery", "energy", "radio",
              "compute", "sensors", "camera", "sim"}
 
 # keyword overrides accepted by drone(): alias -> (section attribute, field)
@@ -65,11 +66,14 @@ class Drone:
         if unknown:
             raise ConfigError(f"{where}: unknown key {unknown[0]!r}{close_matches(unknown[0], _TOP_KEYS)}; "
                               f"allowed top-level keys: {', '.join(sorted(_TOP_KEYS))}")
+        data, derived = _expand_datasheet(data, where)
         for req in ("name", "airframe", "rotor", "battery", "energy"):
             if req not in data:
                 raise ConfigError(f"{where}: missing table or key {req!r}")
         object.__setattr__(self, "_ready", False)
         self.source = source
+        #: figures derived from a [datasheet] table (C_T, C_P, FM, motor values), or None
+        self.datasheet = derived
         self.name = _check_str("name", data["name"], where)
         self.description = str(data.get("description", ""))
         self.airframe = Airframe(data["airframe"], where=f"{where} [airframe]")

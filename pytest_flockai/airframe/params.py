@@ -68,6 +68,11 @@ class Field:
             if isinstance(value, bool) or not isinstance(value, int) or value not in (4, 6, 8):
                 raise ConfigError(f"{where}: {name} = {value!r} is not allowed; allowed: 4, 6, 8")
             return value
+        if k == "blades":
+            if isinstance(value, bool) or not isinstance(value, int) or not 2 <= value <= 6:
+                raise ConfigError(f"{where}: {name} = {value!r} is not allowed; allowed: a whole "
+                                  f"number of propeller blades from 2 to 6")
+            return value
         if k == "pixels":
             if isinstance(value, bool) or not isinstance(value, int) or value <= 0 or value > 4096:
                 raise ConfigError(f"{where}: {name} = {value!r} is not allowed; "

@@ -1,0 +1,256 @@
+"""Datasheet-level blueprints: every parameter a datasheet does not give, derived.
+
+A blueprint with a ``[datasheet]`` table gives what a maker publishes: mass,
+diagonal, rotor count, body size, top speed, propeller diameter and pitch, and,
+where known, the motor's Kv, winding resistance and no-load current (the
+battery stays in ``[battery]``: cells, capacity, chemistry). ``expand()`` turns
+it into the ``[airframe]``, ``[rotor]`` and ``[energy]`` tables the simulator
+flies, with one set of global constants (below, each with its source) and no
+value fitted to any drone. A field written in those tables wins over the
+derived one ("fields a user knows better").
+
+- Propeller: blade-element momentum theory of a hovering rotor with ideal
+  twist (Leishman, Principles of Helicopter Aerodynamics, 2nd ed. 2006, eq.
+  3.61): C_T = (sigma a / 2)(theta_75 / 3 - lambda / 2), lambda = sqrt(C_T / 2),
+  theta_75 = atan(pitch / (0.75 pi D)) + the section's zero-lift angle.
+  Profile power sigma C_d / 8 with a section drag that falls with the blade's
+  Reynolds number at 0.75 R in hover, C_d ~ Re^-1/2 (laminar skin friction,
+  Blasius; the regime of small propellers, Lissaman, Annu. Rev. Fluid Mech. 15,
+  1983). The figure of merit follows: FM = C_T^1.5 / sqrt(2) / C_P.
+- Motor: the DC motor model (Kv, winding resistance Rm, no-load current I0),
+  eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover.
+  Without Rm: the motor constant Km = Kt / sqrt(Rm) of a reference motor,
+  scaled with motor mass as Km ~ m^(5/6) (geometric similarity: Kt ~ N L^2,
+  Rm ~ N^2 / L, so Km^2 ~ L^5 whatever the winding N). Without I0: an iron
+  loss growing with speed as omega^1.5 (Steinmetz: hysteresis ~ f, eddy ~ f^2).
+- Body: drag areas from the top speed, inertia from a box and rotor masses.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..errors import ConfigError
+from ..physics import G, RHO_SEA_LEVEL
+from .params import Field, Section
+
+INCH = 0.0254                      # m (exact, by definition)
+#: m^2/s, kinematic viscosity of the ICAO standard atmosphere at sea level
+#: (mu = 1.7894e-5 Pa s over rho = 1.225 kg/m^3)
+NU_SEA_LEVEL = 1.46e-5
+#: 1/rad, section lift-curve slope, Leishman (2006) ch. 3 worked examples (2 pi less ~10 %)
+LIFT_SLOPE = 5.73
+#: blade chord over tip radius at 0.75 R: Brandt and Selig (AIAA 2011-1255) measured
+#: 0.1-0.2 for 9-11 in propellers; 0.15 taken
+CHORD_RATIO = 0.15
+#: deg, pitch added to the geometric pitch for a cambered section's zero-lift angle
+#: (Clark-Y-like sections: -3 to -4 deg, Abbott and von Doenhoff, Theory of Wing Sections,
+#: 1959); 3.7 makes this model give the UIUC static C_T = 0.11 of the APC 9x4.7 (below)
+ZERO_LIFT_DEG = 3.7
+#: induced power factor kappa, Leishman (2006): ~1.15
+KAPPA = 1.15
+#: section drag anchor: UIUC Propeller Data Site, APC 9x4.7 static test, C_T = 0.11,
+#: C_P = 0.045 at ~5000 rpm (Re at 0.75 R about 6e4): C_P / 24.35 - kappa C_T'^1.5 / sqrt 2
+#: (helicopter normalisation, C_T' = C_T / 7.75) leaves profile power sigma C_d / 8 with
+#: sigma = 2 x 0.15 / pi: C_d = 0.040
+CD_REF, RE_REF = 0.040, 6.0e4
+#: C_d ~ Re^CD_RE_EXP, laminar skin friction (Blasius: C_f = 1.328 Re^-1/2)
+CD_RE_EXP = -0.5
+#: reference motor for the motor constant: T-Motor F40 III 2400 Kv (T-Motor specifications,
+#: store-en.tmotor.com): 42 mOhm, 30.8 g -> Km = (60 / (2 pi 2400)) / sqrt(0.042) N m / sqrt(W)
+KM_REF = (60.0 / (2.0 * math.pi * 2400.0)) / math.sqrt(0.042)
+KM_REF_MASS_KG = 0.0308
+#: estimate: the motors of a multirotor weigh about 10 % of the take-off mass they are sized
+#: for (all motors; the maximum take-off mass where the maker publishes one)
+MOTOR_MASS_SHARE = 0.10
+#: estimate: no-load (iron and bearing) loss at full speed, 3 % of the maximum shaft
+#: power: idle currents of 0.3-1 A against 10-30 A maximum in outrunner datasheets
+IRON_LOSS_SHARE = 0.03
+#: estimate: design thrust-to-weight at full throttle when no Kv is given (the Mavic's
+#: 5 m/s ascent and 72 km/h at 35 deg tilt need 1.22; 2-3 is the usual design range)
+THRUST_TO_WEIGHT = 2.5
+ESC_EFFICIENCY = 0.95              # estimate: typical ESC efficiency at cruise load
+#: s, motor and propeller time constant: 30 ms at 0.221 m (bench tests of 8-10 in
+#: propellers on 2204-2306 motors, 20-50 ms), scaled with diameter
+TAU_REF_S, TAU_REF_D = 0.030, 0.221
+#: deg, attitude limit at top speed (the drag rule): DJI S-mode tilt
+TOP_TILT_DEG = 35.0
+#: Cd x A seen from above per m^2 of diagonal^2: Mavic 2 Pro estimate (body and arms
+#: ~0.035 m^2 from above, Cd ~0.9) = 0.030 m^2 over 0.354^2 m^2
+TOP_CDA_PER_DIAG2 = 0.030 / 0.354 ** 2
+#: share of the fore rotors' near-wake induced velocity the aft rotors ingest once the wake is
+#: flat (energy/components.py Motors: weighted by the wake skew squared and by how far each rotor
+#: is aft). Geometry, not a fit: in the "x" layout each aft rotor sits directly behind a fore
+#: rotor, one to two diameters downstream, so a flattened wake covers its whole disc; the
+#: near-wake velocity (v_i, not the far wake's 2 v_i: the wake has not contracted yet)
+WAKE_INTERFERENCE = 1.0
+BODY_MASS_SHARE = 0.6              # estimate: 60 % of the mass in the body box, 40 % at the rotors
+
+
+class Datasheet(Section):
+    """The ``[datasheet]`` table: what a maker publishes."""
+
+    TABLE = "datasheet"
+    FIELDS = {
+        "mass_kg": Field("pos", doc="take-off mass", unit="kg", bounds=(0.005, 50.0, "5 g to 50 kg")),
+        "max_takeoff_mass_kg": Field("optpos", None, unit="kg",
+                                     bounds=(0.005, 100.0, "5 g to 100 kg"),
+                                     doc="maximum take-off mass, payload included; the motors "
+                                         "are sized for it (default: mass_kg)"),
+        "diagonal_m": Field("pos", doc="rotor axis to rotor axis across the frame", unit="m",
+                            bounds=(0.02, 4.0, "diagonal in metres, not millimetres")),
+        "rotor_count": Field("rotors", 4),
+        "body_size_m": Field("vec3pos", doc="body box L W H", unit="m",
+                             bounds=(0.005, 5.0, "body box edges in metres, not millimetres")),
+        "top_speed_m_s": Field("pos", doc="maximum level speed", unit="m/s",
+                               bounds=(1.0, 60.0, "1 to 60 m/s (216 km/h)")),
+        "prop_diameter_in": Field("pos", unit="in", bounds=(0.8, 63.0, "propellers from 20 mm to 63 in")),
+        "prop_pitch_in": Field("pos", unit="in", bounds=(0.2, 40.0, "a twisted propeller's geometric pitch")),
+        "prop_blades": Field("blades", 2),
+        "motor_kv": Field("optpos", None, unit="rpm/V", bounds=(10.0, 100000.0, "rpm per volt"),
+                          doc="speed constant; default: the design thrust-to-weight at the pack voltage"),
+        "motor_rm_ohm": Field("optpos", None, unit="ohm", bounds=(0.001, 50.0, "winding resistance"),
+                              doc="winding resistance; default: the motor-constant scaling"),
+        "motor_i0_a": Field("optpos", None, unit="A", bounds=(0.001, 20.0, "no-load current"),
+                            doc="no-load current at the hover speed; default: the iron-loss estimate"),
+    }
+
+
+def propeller(diameter_m: float, pitch_m: float, blades: int, reynolds: float | None = None):
+    """Static (C_T, C_P, FM) in propeller form (T = C_T rho n^2 D^4, P = C_P rho n^3 D^5) of
+    a propeller at blade Reynolds number ``reynolds`` (at 0.75 R; None: the anchor's)."""
+    sigma = blades * CHORD_RATIO / math.pi
+    theta = math.atan(pitch_m / (0.75 * math.pi * diameter_m)) + math.radians(ZERO_LIFT_DEG)
+    ct = 0.01
+    for _ in range(60):            # fixed point of C_T = (sigma a / 2)(theta/3 - sqrt(C_T/2)/2)
+        ct = max(1e-6, 0.5 * sigma * LIFT_SLOPE * (theta / 3.0 - 0.5 * math.sqrt(0.5 * ct)))
+    cd = CD_REF * ((reynolds or RE_REF) / RE_REF) ** CD_RE_EXP
+    ideal = ct ** 1.5 / math.sqrt(2.0)
+    cp = KAPPA * ideal + sigma * cd / 8.0
+    # helicopter (rho A (Omega R)^k) to propeller (rho n^k D^(k+2)) normalisation
+    return ct * math.pi ** 3 / 4.0, cp * math.pi ** 4 / 4.0, ideal / cp
+
+
+def hover_propeller(diameter_m: float, pitch_m: float, blades: int, thrust_n: float):
+    """(C_T, C_P, FM, omega) at the Reynolds number of hover with ``thrust_n`` per rotor."""
+    re = RE_REF
+    for _ in range(20):            # omega depends on C_T, Re on omega: converge
+        ct, cp, fm = propeller(diameter_m, pitch_m, blades, re)
+        n = math.sqrt(thrust_n / (ct * RHO_SEA_LEVEL * diameter_m ** 4))
+        omega = 2.0 * math.pi * n
+        re = 0.75 * omega * 0.5 * diameter_m * CHORD_RATIO * 0.5 * diameter_m / NU_SEA_LEVEL
+    return ct, cp, fm, omega
+
+
+def motor_efficiency(torque_nm: float, omega: float, *, kv_rad: float, rm: float, i0: float) -> float:
+    """Efficiency of a DC motor (SI speed constant ``kv_rad`` in rad/s/V) giving torque at omega."""
+    current = torque_nm * kv_rad + i0
+    volts = omega / kv_rad + current * rm
+    return torque_nm * omega / (volts * current)
+
+
+def _motor(ds: Section, mass: float, n: int, q_hover: float, om_hover: float, om_max: float,
+           p_max: float, pack_v: float):
+    """(eta at hover, Kv in rad/s/V, Rm, I0) from the datasheet or the defaults."""
+    # a motor sized for the maximum take-off mass: its full speed and power at that thrust
+    scale = max(mass, ds.max_takeoff_mass_kg or mass) / mass
+    om_max, p_max = om_max * math.sqrt(scale), p_max * scale ** 1.5
+    kv = ds.motor_kv * 2.0 * math.pi / 60.0 if ds.motor_kv else om_max / (0.85 * pack_v)
+    if ds.motor_rm_ohm is not None:
+        rm = ds.motor_rm_ohm
+    else:
+        km = KM_REF * (MOTOR_MASS_SHARE * scale * mass / n / KM_REF_MASS_KG) ** (5.0 / 6.0)
+        rm = (1.0 / kv) ** 2 / km ** 2            # Km = Kt / sqrt(Rm), Kt = 1 / Kv (SI)
+    if ds.motor_i0_a is not None:
+        i0 = ds.motor_i0_a
+    else:
+        p_iron = IRON_LOSS_SHARE * p_max * (om_hover / om_max) ** 1.5
+        i0 = p_iron * kv / om_hover               # the iron loss as current at the back EMF
+    return motor_efficiency(q_hover, om_hover, kv_rad=kv, rm=rm, i0=i0), kv, rm, i0
+
+
+def _max_speed(ds, km_coef, kv, rm, i0, pack_v, om_hover):
+    """Full-throttle rotor speed: from the motor equation at the pack voltage when Kv is
+    given, else from the design thrust-to-weight."""
+    if not ds.motor_kv:
+        return om_hover * math.sqrt(THRUST_TO_WEIGHT)
+    lo, hi = 0.0, pack_v * kv
+    for _ in range(60):   # V = omega / Kv + (km omega^2 Kv + I0) Rm, bisection
+        mid = 0.5 * (lo + hi)
+        if mid / kv + (km_coef * mid * mid * kv + i0) * rm < pack_v:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def _body(ds: Section, mass: float, n: int):
+    L, W, H = ds.body_size_m
+    arm = 0.5 * ds.diagonal_m
+    mb, mr = BODY_MASS_SHARE * mass, (1.0 - BODY_MASS_SHARE) * mass / n
+    lever = arm / math.sqrt(2.0)      # rotors evenly around: mean of r^2 sin^2 is r^2 / 2
+    inertia = [mb / 12.0 * (W * W + H * H) + n * mr * lever ** 2,
+               mb / 12.0 * (L * L + H * H) + n * mr * lever ** 2,
+               mb / 12.0 * (L * L + W * W) + n * mr * arm ** 2]
+    t = math.radians(TOP_TILT_DEG)
+    seen = 2.0 * mass * G * math.tan(t) / (RHO_SEA_LEVEL * ds.top_speed_m_s ** 2)
+    az = TOP_CDA_PER_DIAG2 * ds.diagonal_m ** 2
+    ax2 = (seen ** 2 - (az * math.sin(t)) ** 2)
+    ax = math.sqrt(ax2) / math.cos(t) if ax2 > 0 else 0.2 * seen
+    return {"mass_kg": mass, "arm_length_m": arm, "layout": "x", "rotor_count": n,
+            "inertia_kg_m2": inertia, "body_size_m": list(ds.body_size_m),
+            "drag_area_m2": [ax, 1.2 * ax if L > 1.3 * W else ax, az], "max_tilt_deg": TOP_TILT_DEG}
+
+
+def derive(ds: Section, pack_v: float) -> dict:
+    """The ``airframe``, ``rotor`` and ``energy`` tables derived from a datasheet, plus the
+    ``derived`` figures (C_T, C_P, FM, Reynolds number, motor values) for inspection."""
+    mass, n = ds.mass_kg, ds.rotor_count
+    D, pitch = ds.prop_diameter_in * INCH, ds.prop_pitch_in * INCH
+    thrust = mass * G / n
+    ct, cp, fm, om_h = hover_propeller(D, pitch, ds.prop_blades, thrust)
+    kf = ct * RHO_SEA_LEVEL * D ** 4 / (4.0 * math.pi ** 2)
+    kq = cp * RHO_SEA_LEVEL * D ** 5 / (8.0 * math.pi ** 3)
+    q_h = kq * om_h ** 2
+    om_design = om_h * math.sqrt(THRUST_TO_WEIGHT)
+    eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, kq * om_design ** 3, pack_v)
+    om_max = _max_speed(ds, kq, kv, rm, i0, pack_v, om_h)
+    rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
+             "time_constant_s": TAU_REF_S * D / TAU_REF_D}
+    energy = {"figure_of_merit": fm, "induced_power_factor": KAPPA, "motor_efficiency": eta,
+              "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE}
+    derived = {"ct": ct, "cp": cp, "figure_of_merit": fm, "hover_rad_s": om_h,
+               "reynolds_075": 0.75 * om_h * 0.5 * D * CHORD_RATIO * 0.5 * D / NU_SEA_LEVEL,
+               "motor_efficiency": eta, "motor_kv_rpm_v": kv * 60.0 / (2.0 * math.pi),
+               "motor_rm_ohm": rm, "motor_i0_a": i0}
+    return {"airframe": _body(ds, mass, n), "rotor": rotor, "energy": energy, "derived": derived}
+
+
+def expand(data: dict, where: str) -> tuple[dict, dict | None]:
+    """A blueprint dict with its ``[datasheet]`` expanded into the simulator's tables (the
+    blueprint's own values win); returns (blueprint dict, derived figures or None)."""
+    if "datasheet" not in data:
+        return data, None
+    table = data["datasheet"]
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} [datasheet]: expected a table, got {table!r}")
+    ds = Datasheet(table, where=f"{where} [datasheet]")
+    pack_v = _pack_voltage(data.get("battery"), where)
+    out = derive(ds, pack_v)
+    merged = {k: v for k, v in data.items() if k != "datasheet"}
+    for sec in ("airframe", "rotor", "energy"):
+        own = data.get(sec, {})
+        if not isinstance(own, dict):
+            raise ConfigError(f"{where} [{sec}]: expected a table, got {own!r}")
+        merged[sec] = {**out[sec], **own}
+    return merged, out["derived"]
+
+
+def _pack_voltage(battery, where: str) -> float:
+    if not isinstance(battery, dict) or "voltage_v" not in battery:
+        raise ConfigError(f"{where} [battery]: a datasheet blueprint needs voltage_v "
+                          f"(the pack's nominal voltage) for the motor model")
+    v = battery["voltage_v"]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+        raise ConfigError(f"{where} [battery]: voltage_v = {v!r} is out of range; allowed: > 0 V")
+    return float(v)

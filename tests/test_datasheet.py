@@ -1,0 +1,130 @@
+"""Datasheet-level blueprints (issue 15, session 4): airframe/datasheet.py derives the rotor
+coefficients, figure of merit, motor efficiency and body from a maker's figures. The endurance
+table against published figures is a benchmark (benchmarks/validation.py), not a test."""
+
+import math
+from pathlib import Path
+
+import pytest
+
+import pytest_flockai as fa
+from pytest_flockai import ConfigError
+from pytest_flockai.airframe import datasheet as dsm
+
+IN = 0.0254
+RHO = 1.225
+BLUEPRINTS = Path(fa.__file__).parent / "airframe" / "blueprints"
+
+
+def test_propeller_model_reproduces_its_uiuc_anchor():
+    # UIUC Propeller Data Site, APC 9x4.7 static: C_T 0.11, C_P 0.045 (FM 0.65)
+    ct, cp, fm = dsm.propeller(9 * IN, 4.7 * IN, 2)
+    assert ct == pytest.approx(0.11, rel=0.02)
+    assert cp == pytest.approx(0.045, rel=0.02)
+    assert fm == pytest.approx(0.65, rel=0.02)
+
+
+def test_thrust_coefficient_rises_with_pitch_to_diameter_ratio_and_blades():
+    cts = [dsm.propeller(10 * IN, p * IN, 2)[0] for p in (3.0, 4.5, 6.0, 8.0)]
+    assert cts == sorted(cts) and cts[-1] > 1.5 * cts[0]
+    # power rises with pitch too (more thrust, and induced power grows as C_T^1.5)
+    cps = [dsm.propeller(10 * IN, p * IN, 2)[1] for p in (3.0, 8.0)]
+    assert cps[1] > cps[0]
+    assert dsm.propeller(10 * IN, 4.5 * IN, 3)[0] > dsm.propeller(10 * IN, 4.5 * IN, 2)[0]
+
+
+def test_figure_of_merit_rises_with_reynolds_number():
+    fms = [dsm.propeller(8 * IN, 4 * IN, 2, re)[2] for re in (1e4, 3e4, 1e5, 3e5)]
+    assert fms == sorted(fms)
+    assert fms[0] < 0.5 < 0.7 < fms[-1]
+
+
+def test_small_propellers_hover_at_lower_reynolds_number_and_figure_of_merit():
+    small = dsm.hover_propeller(6 * IN, 3 * IN, 2, 0.249 * 9.81 / 4)
+    large = dsm.hover_propeller(21 * IN, 10 * IN, 2, 6.3 * 9.81 / 4)
+    assert small[2] < large[2]
+    # hover speed of the large rotor: thrust = C_T rho n^2 D^4
+    ct, _, _, omega = large
+    n = omega / (2 * math.pi)
+    assert ct * RHO * n ** 2 * (21 * IN) ** 4 == pytest.approx(6.3 * 9.81 / 4, rel=1e-6)
+
+
+def test_motor_efficiency_from_kv_rm_i0():
+    kv = 900 * 2 * math.pi / 60
+    base = dsm.motor_efficiency(0.05, 600.0, kv_rad=kv, rm=0.2, i0=0.3)
+    assert 0.5 < base < 1.0
+    assert dsm.motor_efficiency(0.05, 600.0, kv_rad=kv, rm=0.4, i0=0.3) < base
+    assert dsm.motor_efficiency(0.05, 600.0, kv_rad=kv, rm=0.2, i0=0.6) < base
+    # by hand: I = Q Kv + I0, V = omega / Kv + I Rm, eta = Q omega / (V I)
+    i = 0.05 * kv + 0.3
+    assert base == pytest.approx(0.05 * 600 / ((600 / kv + i * 0.2) * i))
+
+
+def _mini(tmp_path, **edits):
+    text = (BLUEPRINTS / "dji-mini-3-pro.toml").read_text()
+    for old, new in edits.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    p = tmp_path / "mini.toml"
+    p.write_text(text)
+    return p
+
+
+def test_datasheet_motor_values_and_user_fields_override_the_defaults(tmp_path):
+    default = fa.drone("dji-mini-3-pro")
+    worse = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": "motor_rm_ohm = 4.0\nprop_blades = 2 "})))
+    assert worse.datasheet["motor_rm_ohm"] == 4.0
+    assert worse.energy.component("motors").motor_efficiency < default.energy.component("motors").motor_efficiency
+    # a field the user knows better wins over the derived one
+    own = fa.drone(str(_mini(tmp_path, **{"\n[energy]\n": "\n[energy]\nmotor_efficiency = 0.9\n",
+                                          "\n[battery]\n": "\n[rotor]\nthrust_coeff = 2.0e-6\n\n[battery]\n"})))
+    assert own.energy.component("motors").motor_efficiency == 0.9
+    assert own.rotor.thrust_coeff == 2.0e-6
+
+
+def test_a_given_kv_sets_the_top_rotor_speed(tmp_path):
+    d = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": "motor_kv = 1800.0\nprop_blades = 2 "})))
+    ds = d.datasheet
+    kv = 1800.0 * 2 * math.pi / 60
+    w = d.rotor.max_speed_rad_s
+    # the motor equation at the pack's nominal voltage: V = omega / Kv + (km omega^2 Kv + I0) Rm
+    v = w / kv + (d.rotor.torque_coeff * w * w * kv + ds["motor_i0_a"]) * ds["motor_rm_ohm"]
+    assert v == pytest.approx(7.38, rel=1e-3)
+    assert w < 7.38 * kv
+    with pytest.raises(ConfigError, match="thrust-to-weight"):      # a Kv far too low
+        fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": "motor_kv = 300.0\nprop_blades = 2 "})))
+
+
+@pytest.mark.parametrize("old, new, field, allowed", [
+    ("prop_blades = 2 ", "motor_kv = -900.0\nprop_blades = 2 ", "motor_kv", "allowed: > 0"),
+    ("prop_pitch_in = 3.0 ", "prop_pitch_in = 0.0 ", "prop_pitch_in", "allowed: > 0"),
+    ("prop_blades = 2 ", "prop_blades = 1 ", "prop_blades", "allowed: a whole number"),
+    ("cells = 2 ", "cells = 0 ", "cells", "allowed: a whole number of cells"),
+    ('chemistry = "li-ion"', 'chemistry = "nimh"', "chemistry", "allowed"),
+    ("prop_diameter_in = 6.0 ", "prop_diameter_in = 152.4 ", "prop_diameter_in", "allowed: 0.8 to 63"),
+])
+def test_bad_datasheet_values_name_the_file_the_field_and_what_is_allowed(tmp_path, old, new, field, allowed):
+    p = _mini(tmp_path, **{old: new})
+    with pytest.raises(ConfigError) as exc:
+        fa.drone(str(p))
+    msg = str(exc.value)
+    assert str(p) in msg and field in msg and allowed in msg
+
+
+def test_unknown_datasheet_key_suggests_the_close_one(tmp_path):
+    p = _mini(tmp_path, **{"prop_blades = 2 ": "motor_kvv = 900.0\nprop_blades = 2 "})
+    with pytest.raises(ConfigError, match="unknown key 'motor_kvv'.*motor_kv"):
+        fa.drone(str(p))
+
+
+def test_motors_sized_for_the_maximum_takeoff_mass_lose_less_at_hover(tmp_path):
+    # the M300's published 9 kg maximum take-off mass: larger motors, more motor constant,
+    # less copper loss at the 6.3 kg hover
+    text = (BLUEPRINTS / "dji-matrice-300-rtk.toml").read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("max_takeoff_mass_kg"))
+    p = tmp_path / "m300.toml"
+    p.write_text(text.replace(line + "\n", ""))
+    plain, sized = fa.drone(str(p)), fa.drone("dji-matrice-300-rtk")
+    assert sized.datasheet["motor_efficiency"] > plain.datasheet["motor_efficiency"] + 0.02
+    # the hover point itself (propeller, speed) does not depend on it
+    assert sized.datasheet["hover_rad_s"] == pytest.approx(plain.datasheet["hover_rad_s"])
