@@ -1,0 +1,135 @@
+"""Fleets (issue 14): several drones in one MuJoCo model on one clock."""
+
+import math
+
+import numpy as np
+import pytest
+
+import pytest_flockai as fa
+from pytest_flockai.errors import ConfigError
+
+MAVIC = "dji-mavic-2-pro"
+
+
+def crossing(alt_b: float, speed: float = 6.0) -> fa.Fleet:
+    """Two drones whose legs cross at the origin at the same moment: A flies west to
+    east along y = 0 at 20 m, B south to north along x = 0 at ``alt_b``. B climbs
+    (alt_b - 20) m more at 2 m/s, so its pad is that much flight time closer."""
+    a = fa.pilots.Waypoints([(-40, 0, 20), (40, 0, 20)], speed=speed)
+    y0 = -40 + (alt_b - 20) / 2.0 * speed
+    b = fa.pilots.Waypoints([(0, y0, alt_b), (0, 40, alt_b)], speed=speed)
+    return fa.Fleet([fa.FleetDrone("a", fa.drone(MAVIC), a, pad=(-40, 0), seed=1),
+                     fa.FleetDrone("b", fa.drone(MAVIC), b, pad=(0, y0), seed=2)],
+                    max_time_s=300.0)
+
+
+def test_crossing_paths_at_one_altitude_collide():
+    r = crossing(20.0).run()
+    assert r.kpis["a.crashed"] == 1.0 and r.kpis["b.crashed"] == 1.0
+    assert r.kpis["fleet.crashes"] == 2.0
+    crashes = [e for e in r.events if e["kind"] == "crash"]
+    assert {e["drone"] for e in crashes} == {"a", "b"}
+    assert all(e["against"] == "drone" for e in crashes)
+    assert abs(crashes[0]["t"] - crashes[1]["t"]) < 1e-9          # one contact, one moment
+    # they met near the crossing point, in the air
+    row = r.telemetry[r.telemetry["drone"] == "a"].iloc[-1]
+    assert math.hypot(row["x"], row["y"]) < 2.0 and row["z"] > 15.0
+
+
+def test_crossing_paths_separated_in_altitude_do_not_collide():
+    r = crossing(26.0).run()
+    assert r.kpis["a.crashed"] == 0.0 and r.kpis["b.crashed"] == 0.0
+    assert r.drones["a"].end_reason == r.drones["b"].end_reason == "landed"
+    assert 5.0 < r.kpis["fleet.min_separation_m"] < 7.0           # 6 m apart when they cross
+
+
+def small_fleet(seed0: int = 0) -> fa.Fleet:
+    area = ((0, 0), (60, 60))
+    parts = fa.fleet.survey(area, 2, altitude=12, spacing=20, speed=8)
+    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(MAVIC), p, pad, seed=seed0 + i)
+                     for i, (p, pad) in enumerate(parts)], area=area, swath_m=20)
+
+
+def test_kpis_per_drone_and_fleet_wide_and_a_drone_column():
+    r = small_fleet().run()
+    assert isinstance(r, fa.FleetResult) and r.end_reason == "landed"
+    for name in ("drone-1", "drone-2"):
+        assert r.kpis[f"{name}.flight_time_s"] == r.drones[name].kpis["flight_time_s"] > 0
+        tel = r.telemetry[r.telemetry["drone"] == name]
+        # each lands back on its own pad
+        assert tel["x"].iloc[-1] == pytest.approx(r.scenario["fleet"][int(name[-1]) - 1]["pad"][0],
+                                                  abs=0.5)
+        assert tel["y"].iloc[-1] == pytest.approx(r.scenario["fleet"][int(name[-1]) - 1]["pad"][1],
+                                                  abs=0.5)
+    assert set(r.telemetry["drone"]) == {"drone-1", "drone-2"}
+    assert r.kpis["fleet.makespan_s"] == pytest.approx(
+        max(r.drones[n].sim_time_s for n in r.drones))
+    assert r.kpis["fleet.coverage_fraction"] > 0.95
+    assert r.kpis["fleet.crashes"] == 0.0
+    assert r.kpis["fleet.min_separation_m"] >= 15.0                # strips 20+ m apart
+    assert r.kpis["fleet.energy_total_j"] == pytest.approx(
+        sum(r.drones[n].kpis["energy_total_j"] for n in r.drones))
+
+
+def test_same_seeds_same_fleet_kpis():
+    a, b = small_fleet().run(), small_fleet().run()
+    assert a.kpis == b.kpis
+    assert np.array_equal(a.telemetry[["x", "y", "z"]].to_numpy(), b.telemetry[["x", "y", "z"]].to_numpy())
+
+
+def test_a_fleet_of_one_flies_like_the_same_single_mission():
+    """The drones of a fleet run the single flight's components: one drone at the
+    origin gives the single Mission's KPIs."""
+    pilot = fa.pilots.Waypoints([(0, 0, 10), (30, 0, 10)], speed=5)
+    single = fa.Mission(fa.drone(MAVIC), pilot, seed=3).run()
+    fleet = fa.Fleet([fa.FleetDrone("solo", fa.drone(MAVIC), pilot, pad=(0, 0), seed=3)]).run()
+    for k in ("flight_time_s", "distance_m", "energy_total_j", "tracking_error_max_m"):
+        assert fleet.kpis[f"solo.{k}"] == pytest.approx(single.kpis[k], rel=1e-9), k
+
+
+def test_strips_split_the_legs_of_one_zigzag():
+    one = fa.pilots.ZigZag(((0, 0), (100, 150)), spacing=25)
+    parts = fa.fleet.strips(((0, 0), (100, 150)), 3, 25)
+    rows = sorted({p[1] for p in one.points})
+    got = sorted({p[1] for sub in parts
+                  for p in fa.pilots.ZigZag(sub, spacing=25).points})
+    assert got == rows                                            # the same legs, shared out
+    assert [sub[0][1] for sub in parts] == [0.0, 75.0, 125.0]           # 7 legs: 3, 2, 2
+
+
+def test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time():
+    area = ((0, 0), (300, 375))                                   # 16 legs of 300 m, 25 m apart
+
+    def fly(n):
+        parts = fa.fleet.survey(area, n, altitude=30, spacing=25, speed=8)
+        return fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad, seed=i)
+                         for i, (p, pad) in enumerate(parts)], area=area, swath_m=25).run()
+    one, four = fly(1), fly(4)
+    assert one.kpis["fleet.coverage_fraction"] > 0.99 and four.kpis["fleet.coverage_fraction"] > 0.99
+    ratio = four.kpis["fleet.coverage_time_s"] / one.kpis["fleet.coverage_time_s"]
+    print(f"coverage time: 1 drone {one.kpis['fleet.coverage_time_s']:.0f} s, 4 drones "
+          f"{four.kpis['fleet.coverage_time_s']:.0f} s, ratio {ratio:.3f}; makespan ratio "
+          f"{four.kpis['fleet.makespan_s'] / one.kpis['fleet.makespan_s']:.3f}")
+    assert 0.25 * 0.85 <= ratio <= 0.25 * 1.15
+    assert four.kpis["fleet.crashes"] == 0.0
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda d, p: fa.Fleet([]), r"drones = \[\] is empty; allowed: 1 to"),
+    (lambda d, p: fa.Fleet([fa.FleetDrone("x", d, p, pad=(0, 0)),
+                            fa.FleetDrone("x", d, p, pad=(10, 0))]),
+     r"drones\[1\].name = 'x' is also drones\[0\].name; allowed: a unique name"),
+    (lambda d, p: fa.Fleet([fa.FleetDrone("x", d, p, pad=(0, 0)),
+                            fa.FleetDrone("y", d, p, pad=(0.5, 0))]),
+     r"drones\[1\].pad = \(0.5, 0.0\).*two drones at one pad; allowed: pads at least 2 m apart"),
+    (lambda d, p: fa.Fleet(["x"]), r"drones\[0\] = 'x' is not a fa.FleetDrone"),
+    (lambda d, p: fa.FleetDrone("a.b", d, p), r"name = 'a.b' is not allowed"),
+    (lambda d, p: fa.FleetDrone("a", "mavic", p), r"drone = 'mavic' is not a Drone"),
+    (lambda d, p: fa.FleetDrone("a", d, p, pad=(0, 0, 0)), r"pad"),
+    (lambda d, p: fa.Fleet([fa.FleetDrone("a", d, p)], area=((0, 0), (1, 1))),
+     r"area = .* and swath_m = None: give both"),
+    (lambda d, p: fa.fleet.survey(((0, 0), (100, 50)), 3, spacing=25), r"n <= 1"),
+])
+def test_bad_fleets_raise_config_errors(make, match):
+    with pytest.raises(ConfigError, match=match):
+        make(fa.drone(MAVIC), fa.pilots.Hover(5, 1))
