@@ -133,3 +133,32 @@ def test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time():
 def test_bad_fleets_raise_config_errors(make, match):
     with pytest.raises(ConfigError, match=match):
         make(fa.drone(MAVIC), fa.pilots.Hover(5, 1))
+
+
+def test_budgets_on_fleet_kpis_in_pytest(pytester):
+    pytester.makepyfile(test_fleet_budgets='''
+import pytest
+import pytest_flockai as fa
+
+
+def fleet():
+    a = fa.pilots.Hover(altitude=2.0, duration=2.0)
+    b = fa.pilots.Hover(altitude=3.0, duration=2.0)
+    return fa.Fleet([fa.FleetDrone("drone-1", fa.drone("crazyflie-2-1"), a, pad=(0, 0)),
+                     fa.FleetDrone("drone-2", fa.drone("crazyflie-2-1"), b, pad=(4, 0))])
+
+
+@pytest.mark.kpi({"fleet.min_separation_m": ">= 3 m", "drone-2.flight_time_s": ">= 2 s",
+                  "fleet.crashes": "== 0"})
+def test_kept():
+    fleet().run()
+
+
+@pytest.mark.kpi({"fleet.makespan_s": "<= 1 s", "drone-1.crashed": "== 0"})
+def test_broken():
+    fleet().run()
+''')
+    res = pytester.runpytest_inprocess("-p", "no:cacheprovider")
+    res.assert_outcomes(passed=1, failed=1)
+    res.stdout.fnmatch_lines(["*1 of 2 KPI budget(s) broken in test_fleet_budgets.py::test_broken*",
+                              "*fleet.makespan_s*<= 1 s*BROKEN*"])
