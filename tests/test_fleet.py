@@ -162,3 +162,14 @@ def test_broken():
     res.assert_outcomes(passed=1, failed=1)
     res.stdout.fnmatch_lines(["*1 of 2 KPI budget(s) broken in test_fleet_budgets.py::test_broken*",
                               "*fleet.makespan_s*<= 1 s*BROKEN*"])
+
+
+@pytest.mark.parametrize("ext", ["csv", "jsonl"])
+def test_a_fleet_result_saves_and_loads_with_its_drone_column(tmp_path, ext):
+    a, b = fa.pilots.Hover(2.0, 1.0), fa.pilots.Hover(3.0, 1.0)
+    r = fa.Fleet([fa.FleetDrone("d1", fa.drone("crazyflie-2-1"), a),
+                  fa.FleetDrone("d2", fa.drone("crazyflie-2-1"), b, pad=(4, 0))]).run()
+    back = fa.FlightResult.load(r.save(tmp_path / f"fleet.{ext}"))
+    assert back.kpis == r.kpis
+    assert list(back.telemetry["drone"]) == list(r.telemetry["drone"])
+    assert np.array_equal(back.telemetry["z"].to_numpy(), r.telemetry["z"].to_numpy())
