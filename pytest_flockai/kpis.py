@@ -83,6 +83,11 @@ _ROWS = [
     ("fleet.min_separation_m", "m", "higher", "smallest distance between two airborne drones"),
     ("fleet.crashes", "count", "lower", "drones whose flight ended in a crash"),
     ("fleet.energy_total_j", "J", "lower", "sum of the drones' energy_total_j"),
+    ("offload.latency_p95_s", "s", "lower", "fleet offload: 95th percentile capture-to-result latency"),
+    ("link.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the channel"),
+    ("ground.queue_delay_mean_s", "s", "lower", "fleet offload: mean wait for the ground device"),
+    ("ground.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the ground device"),
+    ("ground.utilization", "fraction", None, "fleet offload: ground device busy time / makespan"),
 ]
 
 #: ``<family>.<qualifier>`` KPIs (per class, altitude band, box size): a fraction, higher better

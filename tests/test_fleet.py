@@ -173,3 +173,49 @@ def test_a_fleet_result_saves_and_loads_with_its_drone_column(tmp_path, ext):
     assert back.kpis == r.kpis
     assert list(back.telemetry["drone"]) == list(r.telemetry["drone"])
     assert np.array_equal(back.telemetry["z"].to_numpy(), r.telemetry["z"].to_numpy())
+
+
+def offload_fleet(n: int, shared: bool, macs: float = 8.7e9) -> fa.FleetResult:
+    """``n`` Mavics hovering 10 m up on a line, 60-70+ m from the ground station,
+    each sending a 150 kB frame every 0.5 s over 802.11n."""
+    off = fa.fleet.Offload(period_s=0.5, frame_bytes=150_000, shared_link=shared, macs=macs,
+                           ground_station=(0, -60, 1))
+    return fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), fa.pilots.Hover(10, 10),
+                                   pad=(10 * i, 0), seed=i) for i in range(n)], offload=off).run()
+
+
+def test_offload_latency_grows_with_the_fleet_on_a_shared_link_and_not_on_own_links():
+    sizes = (1, 2, 4, 8)
+    shared = {n: offload_fleet(n, True).kpis for n in sizes}
+    own = {n: offload_fleet(n, False).kpis for n in (1, 8)}
+    print("offload latency p95 (s), shared link: " + ", ".join(
+        f"{n} drones {shared[n]['offload.latency_p95_s']:.3f}" for n in sizes)
+        + f"; own links: 1 drone {own[1]['offload.latency_p95_s']:.3f}, "
+          f"8 drones {own[8]['offload.latency_p95_s']:.3f}")
+    p95 = [shared[n]["offload.latency_p95_s"] for n in sizes]
+    assert all(a < b for a, b in zip(p95, p95[1:]))
+    assert p95[-1] > 4 * p95[0]
+    assert shared[8]["link.queue_delay_p95_s"] > 0.1 and shared[1]["link.queue_delay_p95_s"] == 0
+    assert own[8]["offload.latency_p95_s"] < 1.6 * own[1]["offload.latency_p95_s"]
+    assert own[8]["link.queue_delay_p95_s"] == 0.0
+    for k in (shared[8], own[8]):
+        assert k["d0.offload.frames"] == k["d7.offload.frames"] > 15       # every frame answered
+
+
+def test_a_slow_ground_device_queues_the_fleet():
+    """0.2 s per inference on the ground GPU (1e12 MACs at 5 TMAC/s), frames every 0.5 s:
+    two drones fit, four saturate it."""
+    two, four = offload_fleet(2, False, 1e12).kpis, offload_fleet(4, False, 1e12).kpis
+    assert two["ground.queue_delay_mean_s"] < 0.2 < four["ground.queue_delay_mean_s"]
+    busy = sum(four[f"d{i}.offload.frames"] for i in range(4)) * (0.002 + 0.2)
+    assert four["ground.utilization"] == pytest.approx(min(1.0, busy / four["fleet.makespan_s"]))
+    assert four["ground.utilization"] > 1.8 * two["ground.utilization"]
+
+
+def test_bad_offload():
+    with pytest.raises(ConfigError, match=r"Offload: frame_bytes = 0 is not allowed"):
+        fa.fleet.Offload(frame_bytes=0)
+    with pytest.raises(ConfigError, match=r"link = 'wifi-6' is not a known link"):
+        fa.fleet.Offload(link="wifi-6")
+    with pytest.raises(ConfigError, match=r"Fleet: offload = 3 is not allowed"):
+        fa.Fleet([fa.FleetDrone("a", fa.drone(MAVIC), fa.pilots.Hover(5, 1))], offload=3)

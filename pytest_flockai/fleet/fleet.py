@@ -22,6 +22,7 @@ from ..mission.plan import resolve
 from ..recording import publish
 from ..world import World
 from . import assemble, loop, result
+from .offload import Offload, OffloadStep
 
 #: m: two pads closer than this are "one pad" (a drone's footprint is < 1 m)
 PAD_CLEARANCE_M = 2.0
@@ -68,13 +69,15 @@ class Fleet:
     """Several drones flown together: ``Fleet(drones, world=None, until="landed",
     area=None, swath_m=None, ...).run() -> FleetResult``.
 
+    ``offload``: remote inference of every drone on one ground station over a
+    shared (or per-drone) channel (``fa.fleet.Offload``).
     ``area`` = ((x0, y0), (x1, y1)) and ``swath_m`` (the ground width one pass
     covers) give ``fleet.coverage_fraction``; ``until`` and ``max_time_s`` are
     the Mission's, for every drone."""
 
     def __init__(self, drones, world=None, *, until="landed", max_time_s: float = 4 * 3600.0,
                  telemetry_hz: float = 10.0, area=None, swath_m: float | None = None,
-                 name: str | None = None):
+                 name: str | None = None, offload: Offload | None = None):
         try:
             drones = list(drones)
         except TypeError:
@@ -92,7 +95,10 @@ class Fleet:
         _check_unique(drones)
         if world is not None and not isinstance(world, World):
             raise ConfigError(f"Fleet: world = {world!r} is not allowed; expected None or a fa.World")
-        self.drones, self.world, self.name = drones, world, name
+        if offload is not None and not isinstance(offload, Offload):
+            raise ConfigError(f"Fleet: offload = {offload!r} is not allowed; expected None or "
+                              f"fa.fleet.Offload(...)")
+        self.drones, self.world, self.name, self.offload = drones, world, name, offload
         self.area = _check_area(area)
         self.swath_m = None if swath_m is None else _check.positive("swath_m", swath_m, where="Fleet")
         if (self.area is None) != (self.swath_m is None):
@@ -117,7 +123,8 @@ class Fleet:
         return {"name": self.name, "fleet": [fd.to_dict() for fd in self.drones],
                 "world": self.world.to_dict() if self.world is not None else {"name": "empty"},
                 "area": [list(c) for c in self.area] if self.area else None,
-                "swath_m": self.swath_m}
+                "swath_m": self.swath_m,
+                "offload": self.offload.to_dict() if self.offload is not None else None}
 
     def __repr__(self):
         return f"Fleet({[fd.name for fd in self.drones]!r})"
@@ -129,13 +136,15 @@ class Fleet:
         model, data, runs = assemble.build(plans, self.missions, names,
                                            [fd.pad for fd in self.drones], self.world,
                                            lambda m: m.probes)
+        off = OffloadStep(self.offload, runs) if self.offload is not None else None
         try:
-            stats = loop.fly(model, data, runs, plans[0].substeps)
+            stats = loop.fly(model, data, runs, plans[0].substeps, off)
         except SimulationError as exc:
             exc.result = result.build(self, runs, {"min_separation_m": math.nan},
                                       _time.perf_counter() - wall0)
             publish(exc.result, self)
             raise
+        stats["offload"] = off
         res = result.build(self, runs, stats, _time.perf_counter() - wall0)
         publish(res, self)
         return res

@@ -7,7 +7,8 @@ check each drone's contacts. A drone touching another drone has crashed
 (both have); a drone touching anything else faster than ``CRASH_SPEED`` or
 flipped over has crashed. A drone whose flight ended (landed, crashed, battery,
 time) is finished at that time and its motors stay off; the loop ends when
-every drone has ended. The separation of every pair of airborne drones is
+every drone has ended. A fleet's remote-inference offload (``offload.py``)
+steps on the same clock, after the drones. The separation of every pair of airborne drones is
 tracked at ``SEPARATION_HZ``.
 """
 
@@ -42,7 +43,7 @@ class _Member:
         self.t_end = 0.0
 
 
-def fly(model, data, runs, nsub: int) -> dict:
+def fly(model, data, runs, nsub: int, offload=None) -> dict:
     """Fly every run of the fleet; returns ``{"min_separation_m": m, "t_end": [s, ...]}``."""
     members = [_Member(r) for r in runs]
     body_of = {r.data.body: i for i, r in enumerate(runs)}
@@ -64,6 +65,8 @@ def fly(model, data, runs, nsub: int) -> dict:
                 live += 1
         if live == 0:
             break
+        if offload is not None and t >= offload.next_due:
+            offload.step(t, members)
         if t >= t_sep:
             t_sep += sep_period
             min_sep = min(min_sep, _separation(members, sqrt))

@@ -76,6 +76,9 @@ def fleet_kpis(fleet, drones: dict, stats: dict, ends, tel) -> dict:
            "fleet.coverage_time_s": coverage_time(drones.values())}
     if fleet.area is not None:
         out["fleet.coverage_fraction"] = coverage(fleet.area, fleet.swath_m, tel)
+    off = stats.get("offload")
+    if off is not None:
+        out.update(off.kpis(list(drones), out["fleet.makespan_s"]))
     return out
 
 
