@@ -140,7 +140,7 @@ class Fleet:
         try:
             stats = loop.fly(model, data, runs, plans[0].substeps, off)
         except SimulationError as exc:
-            exc.result = result.build(self, runs, {"min_separation_m": math.nan},
+            exc.result = result.build(self, runs, {"min_separation_m": math.inf},
                                       _time.perf_counter() - wall0)
             publish(exc.result, self)
             raise

@@ -5,7 +5,7 @@ telemetry with a ``drone`` column and one event log with a ``drone`` field.
 Fleet KPIs:
 - ``fleet.makespan_s``: simulated time until the last drone's flight ended;
 - ``fleet.min_separation_m``: the smallest distance between two airborne drones
-  (NaN when never two were in the air at once);
+  (infinite when never two were in the air at once: a single drone);
 - ``fleet.coverage_fraction``: the share of the fleet's ``area`` that some drone
   passed over, within ``swath_m / 2`` (a square footprint) while flying its
   pilot's plan, from the telemetry (only with ``Fleet(area=..., swath_m=...)``);
@@ -66,10 +66,10 @@ def build(fleet, runs, stats: dict, wall_s: float) -> FleetResult:
 
 
 def fleet_kpis(fleet, drones: dict, stats: dict, ends, tel) -> dict:
-    sep = stats.get("min_separation_m", math.nan)
+    sep = stats.get("min_separation_m", math.inf)
     out = {"fleet.drones": float(len(drones)),
            "fleet.makespan_s": float(max(ends)),
-           "fleet.min_separation_m": float(sep) if math.isfinite(sep) else math.nan,
+           "fleet.min_separation_m": float(sep),
            "fleet.crashes": float(sum(1 for r in drones.values() if r.end_reason == "crashed")),
            "fleet.energy_total_j": float(sum(r.kpis.get("energy_total_j", 0.0)
                                              for r in drones.values())),
