@@ -129,6 +129,10 @@ def test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time():
     (lambda d, p: fa.Fleet([fa.FleetDrone("a", d, p)], area=((0, 0), (1, 1))),
      r"area = .* and swath_m = None: give both"),
     (lambda d, p: fa.fleet.survey(((0, 0), (100, 50)), 3, spacing=25), r"n <= 1"),
+    (lambda d, p: fa.Fleet([fa.FleetDrone("a", d, p), fa.FleetDrone("b", fa.drone("crazyflie-2-1"),
+                                                                     p, pad=(5, 0))]),
+     r"the drones' \[sim\] rates differ .*allowed: one physics_hz and control_hz"),
+    (lambda d, p: fa.FleetDrone("a", d, p, tasks=[object()]), r"tasks are not supported in a fleet"),
 ])
 def test_bad_fleets_raise_config_errors(make, match):
     with pytest.raises(ConfigError, match=match):
