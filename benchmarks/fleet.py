@@ -3,9 +3,11 @@
 Flies ``fa.fleet.survey`` strips of one area with 1, 2, 4 (and 8) Mavic 2 Pro
 drones, each drone surveying for about ``--minutes`` of simulated time, and
 prints each fleet's real-time factor (simulated s of the fleet's clock per wall
-s) and the wall cost per drone per simulated second, beside a single Mission
-flying the same strip (the loop's cost without the fleet). Median of --repeat
-runs. The target of issue 14: 4 drones, 10-minute survey, >= 100x real time.
+s), the same from the process's CPU time (``time.process_time``: what one
+core spends on it, less sensitive to other jobs on a shared machine) and the
+CPU cost per drone per simulated minute, beside a single Mission flying the
+same strip (the loop's cost without the fleet). Median of --repeat runs; the
+load average is printed with the table. The target of issue 14: 4 drones, 10-minute survey, >= 100x real time.
 
     python benchmarks/fleet.py [--repeat 3] [--minutes 10] [--sizes 1 2 4 8]
 """
@@ -13,6 +15,7 @@ runs. The target of issue 14: 4 drones, 10-minute survey, >= 100x real time.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 
@@ -51,28 +54,31 @@ def main(argv=None):
     fleet(2, 0.5).run()                                    # warm-up (imports, caches)
     print(f"fleet benchmark: {BLUEPRINT}, survey strips ~{a.minutes:g} min each, no cameras, "
           f"median of {a.repeat}")
-    print(f"{'drones':>6s} {'sim s':>8s} {'wall s':>8s} {'RTF':>8s} {'ms wall / drone / sim min':>26s}"
-          f" {'coverage':>9s}")
-    t_single = []
-    for _ in range(a.repeat):
-        t0 = time.perf_counter()
-        r = single(a.minutes).run()
-        t_single.append((r.sim_time_s, time.perf_counter() - t0))
-    sim, wall = statistics.median(s for s, _ in t_single), statistics.median(w for _, w in t_single)
-    print(f"{'Mission':>6s} {sim:8.0f} {wall:8.2f} {sim / wall:8.0f} {1e3 * wall / (sim / 60):26.1f}"
-          f" {'':>9s}")
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
+    print(f"{'drones':>7s} {'sim s':>6s} {'wall s':>7s} {'RTF wall':>9s} {'RTF CPU':>8s} "
+          f"{'CPU ms / drone / sim min':>25s} {'coverage':>9s}")
+    _row("Mission", [_timed(lambda: single(a.minutes).run(), lambda r: r.sim_time_s)
+                     for _ in range(a.repeat)], 1)
     for n in a.sizes:
-        runs = []
-        for _ in range(a.repeat):
-            t0 = time.perf_counter()
-            r = fleet(n, a.minutes).run()
-            runs.append((r.kpis["fleet.makespan_s"], time.perf_counter() - t0,
-                         r.kpis["fleet.coverage_fraction"], r.kpis["fleet.crashes"]))
-        sim = statistics.median(x[0] for x in runs)
-        wall = statistics.median(x[1] for x in runs)
-        per = 1e3 * wall / n / (sim / 60)
-        print(f"{n:6d} {sim:8.0f} {wall:8.2f} {sim / wall:8.0f} {per:26.1f} "
-              f"{runs[0][2]:9.3f}" + ("  CRASHES" if runs[0][3] else ""))
+        _row(str(n), [_timed(lambda: fleet(n, a.minutes).run(),
+                             lambda r: r.kpis["fleet.makespan_s"], "fleet.coverage_fraction")
+                      for _ in range(a.repeat)], n)
+
+
+def _timed(fly, sim_of, cov=None):
+    w0, c0 = time.perf_counter(), time.process_time()
+    r = fly()
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    return sim_of(r), wall, cpu, (r.kpis[cov] if cov else None)
+
+
+def _row(label, runs, n):
+    sim = statistics.median(x[0] for x in runs)
+    wall = statistics.median(x[1] for x in runs)
+    cpu = statistics.median(x[2] for x in runs)
+    cov = runs[0][3]
+    print(f"{label:>7s} {sim:6.0f} {wall:7.2f} {sim / wall:9.0f} {sim / cpu:8.0f} "
+          f"{1e3 * cpu / n / (sim / 60):25.1f} {'' if cov is None else f'{cov:.3f}':>9s}")
 
 
 if __name__ == "__main__":
