@@ -47,6 +47,8 @@ from .energy import EnergyModel
 from .errors import ConfigError, FlockAIError, SimulationError
 from .clock import Clocked
 from .mission import Mission
+from . import fleet
+from .fleet import Fleet, FleetDrone, FleetResult
 from .recording import recording
 from .ml import Task
 from .result import FlightResult
@@ -55,7 +57,7 @@ from .world import Atmosphere, Wind, World
 
 __version__ = "0.1.0"
 
-__all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "FlightResult", "FlockAIError", "Mission",
+__all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet", "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
-           "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
+           "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
 del _control

@@ -74,6 +74,20 @@ _ROWS = [
     ("recall", "fraction", "higher", "objects matched by a detection at the score threshold"),
     ("objects_missed", "fraction", "lower", "objects in view never detected"),
     ("accuracy", "fraction", "higher", "frames whose predicted classes are exactly right"),
+    # fleet (fa.Fleet); each drone's own KPIs are '<drone name>.<kpi>'
+    ("fleet.drones", "count", None, "drones in the fleet"),
+    ("fleet.makespan_s", "s", "lower", "time until the last drone's flight ended"),
+    ("fleet.coverage_time_s", "s", "lower", "first drone starting its plan to the last ending it"),
+    ("fleet.coverage_fraction", "fraction", "higher", "share of the fleet's area flown over "
+     "within swath_m / 2 during the pilots' plans"),
+    ("fleet.min_separation_m", "m", "higher", "smallest distance between two airborne drones"),
+    ("fleet.crashes", "count", "lower", "drones whose flight ended in a crash"),
+    ("fleet.energy_total_j", "J", "lower", "sum of the drones' energy_total_j"),
+    ("offload.latency_p95_s", "s", "lower", "fleet offload: 95th percentile capture-to-result latency"),
+    ("link.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the channel"),
+    ("ground.queue_delay_mean_s", "s", "lower", "fleet offload: mean wait for the ground device"),
+    ("ground.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the ground device"),
+    ("ground.utilization", "fraction", None, "fleet offload: ground device busy time / makespan"),
 ]
 
 #: ``<family>.<qualifier>`` KPIs (per class, altitude band, box size): a fraction, higher better

@@ -29,6 +29,8 @@ from .phases import PHASES, STAGES
 FORMAT = "pytest-flockai-flight/1"
 #: s: a temporary file of a save left untouched this long was left by a killed process
 STALE_TEMP_S = 300.0
+#: text columns of the telemetry (a fleet's ``drone``: the drone's name)
+_TEXT = ("drone",)
 _CATEGORIES = {"phase": PHASES, "stage": STAGES}
 
 
@@ -151,7 +153,9 @@ class FlightResult:
             if c in tel.columns:
                 tel[c] = pd.Categorical(tel[c], categories=list(cats))
         for c in tel.columns:
-            if c not in _CATEGORIES:
+            if c in _TEXT:
+                tel[c] = tel[c].astype(str)
+            elif c not in _CATEGORIES:
                 tel[c] = tel[c].astype(float)
         samples = {name: pd.DataFrame(d["columns"], index=pd.Index(d["t"], name="t"), dtype=float)
                    for name, d in header.get("probe_samples", {}).items()}

@@ -19,7 +19,7 @@ LAYERS = [
     {"energy", "sensors"},
     {"comm", "airframe"},
     {"control", "ml", "probes"},
-    {"mission", "cache"},
+    {"mission", "cache", "fleet"},
     {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
      "plugin", "__init__"},
 ]

@@ -34,26 +34,42 @@ from ..physics import G, RHO_SEA_LEVEL
 def build_spec(drone, world=None, *, physics_dt: float, rho: float = RHO_SEA_LEVEL) -> mujoco.MjSpec:
     """The drone (and world) in air of density ``rho``: body drag and the rotors'
     maximum thrust (T = kf rho / rho_0 omega^2, kf given at sea level) scale with it."""
+    spec = world_spec(drone.name, world, physics_dt=physics_dt, rho=rho)
+    add_drone(spec, drone, rho=rho)
+    return spec
+
+
+def world_spec(name: str, world=None, *, physics_dt: float, rho: float = RHO_SEA_LEVEL) -> mujoco.MjSpec:
+    """The physics options and the world (or the empty ground), no drone yet."""
     spec = mujoco.MjSpec()
-    spec.modelname = drone.name
+    spec.modelname = name
     spec.option.timestep = physics_dt
     spec.option.gravity = [0.0, 0.0, -G]
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_EULER
     spec.option.density = rho
     spec.option.viscosity = 0.0
     (world if world is not None else _EMPTY).add_to_spec(spec)
+    return spec
+
+
+def add_drone(spec: mujoco.MjSpec, drone, *, rho: float = RHO_SEA_LEVEL, prefix: str = "",
+              pos=(0.0, 0.0)) -> None:
+    """Add ``drone`` to ``spec`` standing at ``pos`` (x, y) on the ground: its body,
+    joint, geoms, sites and actuators named with ``prefix`` (a fleet puts several
+    drones in one model; a single flight uses no prefix)."""
+    p = prefix
     af = drone.airframe
     L, W, H = af.body_size_m
-    body = spec.worldbody.add_body(name="drone", pos=[0.0, 0.0, 0.5 * H + 1e-3])
-    body.add_freejoint(name="drone")
+    body = spec.worldbody.add_body(name=f"{p}drone", pos=[float(pos[0]), float(pos[1]), 0.5 * H + 1e-3])
+    body.add_freejoint(name=f"{p}drone")
     body.explicitinertial = True
     body.mass = drone.mass_kg
     body.inertia = list(af.inertia_kg_m2)
     body.ipos = [0.0, 0.0, 0.0]
-    body.add_geom(name="hull", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.5 * L, 0.5 * W, 0.5 * H],
+    body.add_geom(name=f"{p}hull", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.5 * L, 0.5 * W, 0.5 * H],
                   rgba=[0.25, 0.25, 0.28, 1], friction=[1.0, 0.005, 0.0001])
     ax, ay, az = (AERO_SCALE * r for r in drag_ellipsoid(af.drag_area_m2))
-    aero = body.add_geom(name="aero", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=[ax, ay, az],
+    aero = body.add_geom(name=f"{p}aero", type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, size=[ax, ay, az],
                          contype=0, conaffinity=0, group=3, mass=0.0, rgba=[0, 0, 0, 0])
     aero.fluid_ellipsoid = 1
     aero.fluid_coefs = [0.5 / AERO_SCALE ** 2, 0.0, 0.0, 0.0, 0.0]
@@ -61,12 +77,12 @@ def build_spec(drone, world=None, *, physics_dt: float, rho: float = RHO_SEA_LEV
     r_prop = 0.5 * drone.rotor.diameter_m
     fmax = drone.rotor.max_thrust_n * rho / RHO_SEA_LEVEL
     for i, (x, y, spin) in enumerate(drone.rotor_layout()):
-        body.add_geom(name=f"arm{i}", type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0, 0, 0, x, y, 0],
+        body.add_geom(name=f"{p}arm{i}", type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0, 0, 0, x, y, 0],
                       size=[0.1 * H, 0, 0], contype=0, conaffinity=0, rgba=[0.2, 0.2, 0.2, 1])
-        body.add_geom(name=f"prop{i}", type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[x, y, 0.5 * H],
+        body.add_geom(name=f"{p}prop{i}", type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[x, y, 0.5 * H],
                       size=[r_prop, 0.002, 0], contype=0, conaffinity=0, rgba=[0.7, 0.7, 0.75, 0.5])
-        body.add_site(name=f"rotor{i}", pos=[x, y, 0.5 * H])
-        act = spec.add_actuator(name=f"rotor{i}", target=f"rotor{i}",
+        body.add_site(name=f"{p}rotor{i}", pos=[x, y, 0.5 * H])
+        act = spec.add_actuator(name=f"{p}rotor{i}", target=f"{p}rotor{i}",
                                 trntype=mujoco.mjtTrn.mjTRN_SITE)
         act.gear = [0.0, 0.0, 1.0, 0.0, 0.0, -spin * k]
         act.dyntype = mujoco.mjtDyn.mjDYN_FILTEREXACT
@@ -76,7 +92,6 @@ def build_spec(drone, world=None, *, physics_dt: float, rho: float = RHO_SEA_LEV
         act.biastype = mujoco.mjtBias.mjBIAS_NONE
         act.ctrllimited = 1
         act.ctrlrange = [0.0, fmax]
-    return spec
 
 
 AERO_SCALE = 0.1

@@ -36,8 +36,8 @@ class StageMachine(Clocked):
         self.return_home = return_home
         home = state.home
         state.stage = TAKEOFF
-        state.sp[:] = [0.0, 0.0, home[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-        self.path = Path([Leg(home, (0.0, 0.0, float(pilot.altitude)), climb_speed, accel)])
+        state.sp[:] = [home[0], home[1], home[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        self.path = Path([Leg(home, (home[0], home[1], float(pilot.altitude)), climb_speed, accel)])
         self.t_stage = 0.0
         self._pupdate = pilot.update
         events.add(0.0, "stage", stage="takeoff")

@@ -1,0 +1,185 @@
+"""A fleet: several drones in one mission, one world, one MuJoCo model and one
+simulated clock.
+
+``Fleet([FleetDrone(...), ...], world=...).run() -> FleetResult``. Each
+``FleetDrone`` has its own blueprint, pilot, tasks, seed, name and pad (where
+it stands, takes off and lands). Every drone is validated as a single
+``Mission`` would be (same ``ConfigError`` messages), and the fleet as a whole:
+not empty, unique names, one drone per pad.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+
+from .. import _check
+from ..airframe.drone import Drone
+from ..control.pilots import Pilot
+from ..errors import ConfigError, SimulationError
+from ..mission import Mission
+from ..mission.plan import resolve
+from ..recording import publish
+from ..world import World
+from . import assemble, loop, result
+from .offload import Offload, OffloadStep
+
+#: m: two pads closer than this are "one pad" (a drone's footprint is < 1 m)
+PAD_CLEARANCE_M = 2.0
+#: at most this many drones in one fleet (the loop's cost grows with N)
+MAX_DRONES = 64
+
+
+class FleetDrone:
+    """One drone of a fleet: ``name`` prefixes its KPIs (``drone-2.flight_time_s``)
+    and names its rows in the telemetry's ``drone`` column; ``pad`` = (x, y) is
+    where it stands on the ground, takes off and lands."""
+
+    def __init__(self, name: str, drone: Drone, pilot: Pilot, pad=(0.0, 0.0), *, tasks=(),
+                 seed: int = 0, probes=None):
+        # tasks: reserved; cameras and ML tasks on fleet drones are not built yet
+        if not isinstance(name, str) or not name.strip() or any(c in name for c in "./ "):
+            raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; expected a non-empty "
+                              f"str without '.', '/' or spaces (it prefixes the drone's KPIs)")
+        if not isinstance(drone, Drone):
+            raise ConfigError(f"FleetDrone {name!r}: drone = {drone!r} is not a Drone; use "
+                              f"fa.drone(name)")
+        if not isinstance(pilot, Pilot):
+            raise ConfigError(f"FleetDrone {name!r}: pilot = {pilot!r} is not a Pilot")
+        if drone.extra_sensors:
+            raise ConfigError(f"FleetDrone {name!r}: drone.add_sensor(...) sensors "
+                              f"({', '.join(s.name for s in drone.extra_sensors)}) are not "
+                              f"supported in a fleet yet; allowed: the blueprint's own sensors")
+        if tasks:
+            raise ConfigError(f"FleetDrone {name!r}: tasks = {tasks!r}: ML tasks are not "
+                              f"supported in a fleet yet; allowed: no tasks")
+        self.name, self.drone, self.pilot = name, drone, pilot
+        self.pad = _check.vector("pad", pad, 2, where=f"FleetDrone {name!r}")
+        self.tasks, self.seed, self.probes = tuple(tasks or ()), seed, probes
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "drone": self.drone.name, "pilot": self.pilot.to_dict(),
+                "pad": list(self.pad), "seed": self.seed}
+
+    def __repr__(self):
+        return f"FleetDrone({self.name!r}, {self.drone.name!r}, pad={self.pad})"
+
+
+class Fleet:
+    """Several drones flown together: ``Fleet(drones, world=None, until="landed",
+    area=None, swath_m=None, ...).run() -> FleetResult``.
+
+    ``offload``: remote inference of every drone on one ground station over a
+    shared (or per-drone) channel (``fa.fleet.Offload``).
+    ``area`` = ((x0, y0), (x1, y1)) and ``swath_m`` (the ground width one pass
+    covers) give ``fleet.coverage_fraction``; ``until`` and ``max_time_s`` are
+    the Mission's, for every drone."""
+
+    def __init__(self, drones, world=None, *, until="landed", max_time_s: float = 4 * 3600.0,
+                 telemetry_hz: float = 10.0, area=None, swath_m: float | None = None,
+                 name: str | None = None, offload: Offload | None = None):
+        try:
+            drones = list(drones)
+        except TypeError:
+            raise ConfigError(f"Fleet: drones = {drones!r} is not a list of fa.FleetDrone") from None
+        if not drones:
+            raise ConfigError("Fleet: drones = [] is empty; allowed: 1 to "
+                              f"{MAX_DRONES} fa.FleetDrone(...)")
+        if len(drones) > MAX_DRONES:
+            raise ConfigError(f"Fleet: {len(drones)} drones is too many; allowed: at most "
+                              f"{MAX_DRONES}")
+        for i, fd in enumerate(drones):
+            if not isinstance(fd, FleetDrone):
+                raise ConfigError(f"Fleet: drones[{i}] = {fd!r} is not a fa.FleetDrone(name, "
+                                  f"drone, pilot, pad=...)")
+        _check_unique(drones)
+        if world is not None and not isinstance(world, World):
+            raise ConfigError(f"Fleet: world = {world!r} is not allowed; expected None or a fa.World")
+        if offload is not None and not isinstance(offload, Offload):
+            raise ConfigError(f"Fleet: offload = {offload!r} is not allowed; expected None or "
+                              f"fa.fleet.Offload(...)")
+        self.drones, self.world, self.name, self.offload = drones, world, name, offload
+        self.area = _check_area(area)
+        self.swath_m = None if swath_m is None else _check.positive("swath_m", swath_m, where="Fleet")
+        if (self.area is None) != (self.swath_m is None):
+            raise ConfigError(f"Fleet: area = {area!r} and swath_m = {swath_m!r}: give both (for "
+                              f"fleet.coverage_fraction) or neither")
+        self.missions = [Mission(fd.drone, fd.pilot, world, tasks=fd.tasks, probes=fd.probes,
+                                 seed=fd.seed, until=until, max_time_s=max_time_s,
+                                 telemetry_hz=telemetry_hz, name=fd.name) for fd in drones]
+        self.seed = tuple(fd.seed for fd in drones)
+        self._plans()
+
+    def _plans(self) -> list:
+        plans = [resolve(m) for m in self.missions]
+        dts = {(p.physics_dt, p.substeps) for p in plans}
+        if len(dts) > 1:
+            raise ConfigError(f"Fleet: the drones' [sim] rates differ ({sorted(dts)} as (physics "
+                              f"dt, substeps)); allowed: one physics_hz and control_hz for the "
+                              f"whole fleet (one simulated clock)")
+        return plans
+
+    def scenario(self) -> dict:
+        return {"name": self.name, "fleet": [fd.to_dict() for fd in self.drones],
+                "world": self.world.to_dict() if self.world is not None else {"name": "empty"},
+                "area": [list(c) for c in self.area] if self.area else None,
+                "swath_m": self.swath_m,
+                "offload": self.offload.to_dict() if self.offload is not None else None}
+
+    def __repr__(self):
+        return f"Fleet({[fd.name for fd in self.drones]!r})"
+
+    def run(self) -> "result.FleetResult":
+        wall0 = _time.perf_counter()
+        plans = self._plans()
+        names = [fd.name for fd in self.drones]
+        model, data, runs = assemble.build(plans, self.missions, names,
+                                           [fd.pad for fd in self.drones], self.world,
+                                           lambda m: m.probes)
+        off = OffloadStep(self.offload, runs) if self.offload is not None else None
+        try:
+            stats = loop.fly(model, data, runs, plans[0].substeps, off)
+        except SimulationError as exc:
+            exc.result = result.build(self, runs, {"min_separation_m": math.inf},
+                                      _time.perf_counter() - wall0)
+            publish(exc.result, self)
+            raise
+        stats["offload"] = off
+        res = result.build(self, runs, stats, _time.perf_counter() - wall0)
+        publish(res, self)
+        return res
+
+
+def _check_unique(drones) -> None:
+    seen: dict = {}
+    for i, fd in enumerate(drones):
+        if fd.name in seen:
+            raise ConfigError(f"Fleet: drones[{i}].name = {fd.name!r} is also drones"
+                              f"[{seen[fd.name]}].name; allowed: a unique name per drone")
+        seen[fd.name] = i
+    for i, a in enumerate(drones):
+        for j in range(i):
+            b = drones[j]
+            gap = math.dist(a.pad, b.pad)
+            if gap < PAD_CLEARANCE_M:
+                raise ConfigError(
+                    f"Fleet: drones[{i}].pad = {tuple(a.pad)} ({a.name!r}) is {gap:.2f} m from "
+                    f"drones[{j}].pad = {tuple(b.pad)} ({b.name!r}); two drones at one pad; "
+                    f"allowed: pads at least {PAD_CLEARANCE_M:g} m apart")
+
+
+def _check_area(area):
+    if area is None:
+        return None
+    try:
+        (x0, y0), (x1, y1) = area
+    except (TypeError, ValueError):
+        raise ConfigError(f"Fleet: area = {area!r} is not ((x0, y0), (x1, y1))") from None
+    x0, y0, x1, y1 = (_check.number(n, v, where="Fleet") for n, v in
+                      (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)))
+    if abs(x1 - x0) < 1e-6 or abs(y1 - y0) < 1e-6:
+        raise ConfigError(f"Fleet: area = {area!r} is degenerate; both sides must be longer than 0")
+    return ((min(x0, x1), min(y0, y1)), (max(x0, x1), max(y0, y1)))
+
+
+__all__ = ["Fleet", "FleetDrone", "MAX_DRONES", "PAD_CLEARANCE_M"]
