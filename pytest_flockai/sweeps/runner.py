@@ -147,6 +147,7 @@ def frame(rows: list[dict], axis_names: list, parsed: list) -> pd.DataFrame:
     for name in axis_names + ["end_reason", "error", "sim_time_s"]:
         if name not in df:
             df[name] = None
+    df["error"] = pd.Series([r.get("error") for r in rows], index=df.index, dtype=object)
     if parsed:
         ok = pd.Series(True, index=df.index)
         for b in parsed:
