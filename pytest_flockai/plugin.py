@@ -175,6 +175,6 @@ def pytest_runtest_makereport(item, call):
     st = item.stash.get(STATE, None)
     report = yield
     if st is not None and (st.flights or st.markers.budgets or st.markers.error
-                           or st.hypothesis):
+                           or st.hypothesis or st.sweep is not None):
         report.flockai = st.payload()
     return report

@@ -85,6 +85,16 @@ def test_a_failing_variant_is_a_row_with_its_error():
     assert list(df["ok"]) == [True, False]
 
 
+def test_a_base_mission_that_cannot_go_to_other_processes_is_a_config_error():
+    class Local(FailAbovePayload):       # defined in a function: pickle cannot find it
+        pass
+    with pytest.raises(fa.ConfigError) as exc:
+        fa.sweep(_base(components=[Local(1.0)]), payload_kg=[0.0, 0.001], workers=2)
+    assert "cannot be pickled" in str(exc.value) and "workers=1" in str(exc.value)
+    df = fa.sweep(_base(components=[Local(1.0)]), payload_kg=[0.0], until=[0.5], workers=1)
+    assert df["error"].isna().all()
+
+
 def test_sweep_flights_are_not_recorded_one_by_one():
     seen = []
     with fa.recording(lambda r, m: seen.append(r)):

@@ -58,3 +58,21 @@ def test_x():
     res = pytester.runpytest_inprocess("-p", "no:randomly", "-p", "no:cacheprovider")
     res.assert_outcomes(errors=1)
     assert "unknown axis 'paylod_kg'" in res.stdout.str()
+
+
+def test_a_sweep_without_budgets_is_still_in_the_json_report(pytester):
+    pytester.makepyfile(test_nob='''
+import pytest
+import pytest_flockai as fa
+
+@pytest.mark.flockai(drone="crazyflie-2-1", pilot=fa.pilots.Hover(altitude=1.0, duration=1.0))
+@pytest.mark.flockai_sweep(mission_seed=[0, 1], until=[0.5], workers=1)
+def test_x(flockai_sweep):
+    assert list(flockai_sweep["mission_seed"]) == [0, 1]
+''')
+    res = pytester.runpytest_inprocess("-p", "no:randomly", "-p", "no:cacheprovider",
+                                       "--flockai-json", "r.json")
+    res.assert_outcomes(passed=1)
+    (entry,) = json.loads((pytester.path / "r.json").read_text())["tests"]
+    assert entry["sweep"]["variants"] == 2 and entry["sweep"]["broken"] == 0
+    assert "ok" not in entry["sweep"]["rows"][0]

@@ -110,8 +110,22 @@ def fly(base, plan: list[dict], workers: int) -> list[dict]:
             return [fly_one(base, v) for v in plan]
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
-                             initargs=(pickle.dumps(base),)) as pool:
+                             initargs=(_blob(base),)) as pool:
         return list(pool.map(_fly_in_worker, plan, chunksize=1))
+
+
+def _blob(base) -> bytes:
+    """The base mission pickled for the workers (its live subscribers stay here)."""
+    subscribers, base.subscribers = base.subscribers, []
+    try:
+        return pickle.dumps(base)
+    except (pickle.PicklingError, TypeError, AttributeError) as exc:
+        raise ConfigError(f"sweep: workers > 1 send the base mission to other processes, but "
+                          f"it cannot be pickled ({type(exc).__name__}: {exc}); define your "
+                          f"components, probes and pilots at module level, or use "
+                          f"workers=1") from None
+    finally:
+        base.subscribers = subscribers
 
 
 def _drop(result, mission) -> None:
