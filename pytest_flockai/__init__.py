@@ -53,11 +53,13 @@ from .recording import recording
 from .ml import Task
 from .result import FlightResult
 from .sensors import Conditions
+from .sweeps import sweep
 from .world import Atmosphere, Wind, World
 
 __version__ = "0.1.0"
 
 __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet", "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
-           "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "__version__"]
+           "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "sweep",
+           "__version__"]
 del _control

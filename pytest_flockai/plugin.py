@@ -58,9 +58,11 @@ from .harness import options as _options
 from .harness import rootdir as _rootdir
 from .harness import ci_reports as _ci_reports
 from .harness import flightcache as _flightcache
+from .harness import sweeps as _sweeps
 from .harness import tracebacks as _tracebacks
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
+from .harness.sweeps import flockai_sweep  # noqa: F401
 from .harness.recorder import STATE, TestState
 from .harness.session import SESSION, FlockSession
 from .recording import recording
@@ -92,6 +94,9 @@ def pytest_configure(config):
     config.addinivalue_line(
         "markers", "flockai(drone=, pilot=, world=, tasks=, probes=, seed=, until=, wind=, "
         "name=, max_regression=): quick settings for the pytest-flockai fixtures")
+    config.addinivalue_line(
+        "markers", "flockai_sweep(**axes, samples=None, method='grid', seed=0, workers=None): "
+        "fly a sweep of the mission fixture; kpi budgets are checked on every variant")
     session = FlockSession(config)   # raises UsageError before anything flies
     config.stash[SESSION] = session
     config.pluginmanager.register(session, "flockai-session")
@@ -123,6 +128,7 @@ def pytest_collection_modifyitems(session, config, items):
     for item in items:
         _state(item)
         _markers.warn_ignored(item)
+        _sweeps.request_fixture(item)
 
 
 @pytest.hookimpl(wrapper=True)
@@ -156,6 +162,7 @@ def pytest_runtest_call(item):
             pass
         raise
     message = _verdicts.check(item, st, session)
+    _sweeps.write_envelope(item, st, session.artifacts)
     st.finish(session.artifacts)
     _verdicts.warn(item, st, session)
     if message:
@@ -168,6 +175,6 @@ def pytest_runtest_makereport(item, call):
     st = item.stash.get(STATE, None)
     report = yield
     if st is not None and (st.flights or st.markers.budgets or st.markers.error
-                           or st.hypothesis):
+                           or st.hypothesis or st.sweep is not None):
         report.flockai = st.payload()
     return report

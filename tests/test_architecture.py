@@ -21,9 +21,9 @@ LAYERS = [
     {"control", "ml", "probes"},
     {"mission", "cache", "fleet"},
     {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
-     "plugin", "__init__"},
+     "plugin", "__init__", "sweeps"},
 ]
-PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__"}
+PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
 #: function-level imports that are fine: optional extras and GL backends loaded on demand
 OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
             "mujoco.egl", "mujoco.osmesa", "mujoco.glfw"}

@@ -22,6 +22,7 @@ import pytest
 from .. import report as _report
 from ..errors import ConfigError
 from ..result import FlightResult
+from ..sweeps import envelope as _envelope
 from .markers import Markers
 
 STATE = pytest.StashKey["TestState"]()
@@ -56,6 +57,8 @@ class TestState:
     example: int = 0                                    # hypothesis examples run so far
     hypothesis: dict | None = None                      # their compact summary
     warnings: list = field(default_factory=list)       # e.g. artifacts that could not be written
+    sweep: object = None                                # the DataFrame of @pytest.mark.flockai_sweep
+    sweep_files: list = field(default_factory=list)     # its envelope CSV and picture
 
     __test__ = False  # not a pytest test class
 
@@ -65,6 +68,7 @@ class TestState:
         self.flights, self.verdicts, self.regressions, self.problems = [], [], [], []
         self.baseline_missing, self.baseline_unmatched, self.warnings = [], [], []
         self.finished, self.example, self.hypothesis = False, 0, None
+        self.sweep, self.sweep_files = None, []
 
     def record(self, mission, result) -> None:
         explicit = getattr(mission, "name", None) or (result.scenario or {}).get("name")
@@ -169,6 +173,8 @@ class TestState:
             out["baseline_unmatched"] = self.baseline_unmatched
         if self.hypothesis is not None:
             out["hypothesis"] = self.hypothesis
+        if self.sweep is not None:
+            out["sweep"] = _envelope.summary(self.sweep, self.sweep_files)
         return _report.jsonable(out)
 
 

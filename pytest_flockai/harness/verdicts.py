@@ -11,6 +11,7 @@ from .. import budgets as _budgets
 from .. import kpis as _kpis
 from .. import report as _report
 from ..errors import ConfigError, close_matches
+from . import sweeps as _sweeps
 
 
 def check(item, st, session, body_failed: bool = False) -> str | None:
@@ -20,14 +21,19 @@ def check(item, st, session, body_failed: bool = False) -> str | None:
     timeout is not reported as "flew no mission")."""
     st.verdicts, st.regressions, st.problems = [], [], []
     st.baseline_missing, st.baseline_unmatched = [], []
-    if st.markers.budgets and (st.flights or not body_failed):
+    sweep_message = None
+    if st.sweep is not None:
+        sweep_message = _sweeps.check(item, st)
+    elif st.markers.budgets and (st.flights or not body_failed):
         _budget_verdicts(item, st)
     st.compact_examples(failed=body_failed or any(not v.passed for v in st.verdicts))
     if session.baseline is not None and st.flights:
         _baseline(item, st, session)
     parts = list(st.problems)
     broken = [v for v in st.verdicts if not v.passed]
-    if broken:
+    if sweep_message:
+        parts.append(sweep_message)
+    elif broken:
         parts.append(f"pytest-flockai: {len(broken)} of {len(st.verdicts)} KPI budget(s) broken "
                      f"in {item.nodeid}:\n" + _budgets.table(st.verdicts))
     if st.regressions:

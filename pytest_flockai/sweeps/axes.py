@@ -1,0 +1,109 @@
+"""The axes of a sweep: named changes to a base mission, checked where they enter.
+
+An axis name is one of
+
+- ``mission_seed``: the mission's seed (an integer >= 0; the keyword ``seed``
+  of ``fa.sweep`` is the seed of the random / Latin-hypercube sampling);
+- ``wind_mps``: the mean wind's horizontal speed (m/s), ``wind_dir_deg``: the
+  direction the air moves towards, degrees from +x towards +y (the base
+  mission's vertical wind and gust settings are kept);
+- ``until``: the mission's end (a number of simulated seconds, or ``"landed"``,
+  ``"battery_depleted"``, ``"battery_reserve"``);
+- any override ``fa.drone()`` accepts: ``payload_kg``, ``battery_mah``,
+  ``battery_v``, ``physics_hz``, ``control_hz``, a field of a blueprint section
+  (``mass_kg``, ``usable_fraction``) or ``section__field``
+  (``battery__reserve_fraction``).
+
+``apply(mission, values)`` returns a changed copy of the mission (the base is
+never touched); ``check_value(name, value)`` applies one value alone to the
+base, so a value no mission could take fails before anything flies.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from numbers import Integral, Real
+
+from ..airframe.drone import _resolve_override
+from ..errors import ConfigError, close_matches
+from ..mission.plan import check_until, resolve
+from ..world.wind import Wind
+
+MISSION_AXES = ("mission_seed", "wind_mps", "wind_dir_deg", "until")
+#: axes whose values are whole numbers (a random range draws integers)
+INTEGER_AXES = {"mission_seed"}
+
+
+def allowed_text() -> str:
+    return (f"{', '.join(MISSION_AXES)}, or a fa.drone() override (payload_kg, battery_mah, "
+            f"battery_v, physics_hz, control_hz, a section field such as mass_kg, or "
+            f"section__field)")
+
+
+def check_name(name: str) -> None:
+    """ConfigError for an axis name that is neither a mission axis nor a drone override."""
+    if name in MISSION_AXES:
+        return
+    try:
+        _resolve_override(name)
+    except ConfigError:
+        known = list(MISSION_AXES) + ["payload_kg", "battery_mah", "battery_v", "physics_hz",
+                                      "control_hz"]
+        raise ConfigError(f"sweep: unknown axis {name!r}{close_matches(name, known)}; allowed: "
+                          f"{allowed_text()}") from None
+
+
+def apply(base, values: dict):
+    """A copy of ``base`` (a Mission) with the axis values applied."""
+    m = copy.deepcopy(base)
+    m.subscribers = []                  # live subscribers stay with the base mission
+    for name, value in values.items():
+        if name == "mission_seed":
+            if isinstance(value, bool) or not isinstance(value, Integral) or value < 0:
+                raise ConfigError(f"mission_seed = {value!r} is not allowed; expected an "
+                                  f"integer >= 0")
+            m.seed = int(value)
+        elif name == "until":
+            m.until = check_until(value)
+        elif name in ("wind_mps", "wind_dir_deg"):
+            _number(name, value)
+        else:
+            section, field = _resolve_override(name)
+            target = m.drone if section is None else getattr(m.drone, section)
+            if target is None:
+                raise ConfigError(f"{name} = {value!r}: this blueprint has no [{section}] table")
+            setattr(target, field, value)
+    if "wind_mps" in values or "wind_dir_deg" in values:
+        m.wind = _wind(m.wind, values.get("wind_mps"), values.get("wind_dir_deg"))
+    m.drone.check(f"sweep variant {values}")
+    resolve(m)
+    return m
+
+
+def _number(name, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value):
+        raise ConfigError(f"{name} = {value!r} is not allowed; expected a finite number")
+    return float(value)
+
+
+def _wind(base: Wind | None, speed, direction) -> Wind:
+    mean = base.mean if base is not None else (0.0, 0.0, 0.0)
+    if speed is None:
+        speed = math.hypot(mean[0], mean[1])
+    elif speed < 0:
+        raise ConfigError(f"wind_mps = {speed!r} is not allowed; expected a speed >= 0 m/s")
+    if direction is None:
+        direction = math.degrees(math.atan2(mean[1], mean[0]))
+    a = math.radians(direction)
+    kw = ({} if base is None else {"gust_std": base.gust_std, "gust_tau_s": base.gust_tau_s})
+    return Wind((speed * math.cos(a), speed * math.sin(a), mean[2]), **kw)
+
+
+def check_value(base, name: str, value) -> None:
+    """Apply one value of one axis alone to the base: a ConfigError names the axis,
+    the value and what the mission allows."""
+    try:
+        apply(base, {name: value})
+    except ConfigError as exc:
+        raise ConfigError(f"sweep: axis {name} = {value!r} is not allowed: {exc}") from None

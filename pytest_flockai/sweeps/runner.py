@@ -1,0 +1,177 @@
+"""Fly a sweep's variants and gather them into one DataFrame.
+
+The per-flight core (``Mission.run``) flies every variant, in this process
+(``workers=1``) or across processes (a ``ProcessPoolExecutor`` with the
+``spawn`` start method, safe under pytest, threads and macOS). The base
+mission travels to each worker once (pickled, in the pool's initializer),
+the variants as small dicts; results come back in the variants' order, so
+the same seed gives the same DataFrame whatever the worker count. A
+variant that ends in a ``SimulationError`` (or a combination the mission
+rejects) is a row with its ``error``, not a lost sweep.
+
+Flights of a sweep are not handed to the recording sink of the caller (the
+pytest plugin records the sweep as a whole).
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import pickle
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import pandas as pd
+
+from .. import budgets as _budgets
+from ..errors import ConfigError, FlockAIError
+from ..mission import Mission
+from ..recording import recording
+from . import axes as _axes
+from . import design
+
+BACKENDS = ("process",)
+#: batched backends described in the issue, not built in this version (see README)
+NOT_BUILT = ("mjx",)
+_BASE: list = []        # the base mission inside a worker process
+
+
+def default_workers() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:       # macOS, Windows
+        return max(1, os.cpu_count() or 1)
+
+
+def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, workers=None,
+          backend="process", **axes) -> pd.DataFrame:
+    """Fly ``base_mission`` once per variant of ``axes``; one DataFrame row per variant.
+
+    Columns: the axes, ``end_reason``, ``error`` (None, or the failure of that
+    variant), ``sim_time_s`` and every KPI of the flight; with ``budgets``
+    (``{kpi: "<op> <number> [unit]"}``, as ``@pytest.mark.kpi``) one boolean
+    column ``ok_<kpi>`` per budget and ``ok`` (every budget holds and the
+    variant flew without error). ``df.attrs`` holds the sweep's settings and its
+    wall time.
+    """
+    if not isinstance(base_mission, Mission):
+        raise ConfigError(f"sweep: base_mission = {base_mission!r} is not a fa.Mission")
+    _check_backend(backend, base_mission)
+    for name in axes:
+        _axes.check_name(name)
+    plan, to_check = design.variants(axes, method, samples, seed)
+    for name, values in to_check.items():
+        for v in {repr(v): v for v in values}.values():
+            _axes.check_value(base_mission, name, v)
+    if budgets is not None and not isinstance(budgets, dict):
+        raise ConfigError(f"sweep: budgets = {budgets!r} is not allowed; expected a dict "
+                          f"{{kpi: '<op> <number> [unit]'}}")
+    parsed = _budgets.parse_many(budgets or {})
+    workers = _check_workers(workers)
+    wall0 = time.perf_counter()
+    rows = fly(base_mission, plan, workers)
+    wall = time.perf_counter() - wall0
+    df = frame(rows, list(axes), parsed)
+    df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
+                     "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
+                     "wall_s": wall, "backend": backend})
+    return df
+
+
+def _check_backend(backend, base) -> None:
+    if backend in BACKENDS:
+        return
+    if backend in NOT_BUILT:
+        if base.tasks:
+            raise ConfigError(f"sweep: backend = {backend!r} cannot fly tasks = "
+                              f"{[getattr(t, 'name', t) for t in base.tasks]!r} (camera and ML "
+                              f"tasks stay per flight); allowed with tasks: backend='process'")
+        raise ConfigError(f"sweep: backend = {backend!r} (MJX/JAX batches) is not built in this "
+                          f"version; allowed: {', '.join(map(repr, BACKENDS))}")
+    raise ConfigError(f"sweep: backend = {backend!r} is not allowed; allowed: "
+                      f"{', '.join(map(repr, BACKENDS))}")
+
+
+def _check_workers(workers) -> int:
+    if workers is None:
+        return default_workers()
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ConfigError(f"sweep: workers = {workers!r} is not allowed; expected None (every "
+                          f"available core) or an integer >= 1")
+    return workers
+
+
+def fly(base, plan: list[dict], workers: int) -> list[dict]:
+    """One row dict per variant, in the plan's order."""
+    workers = min(workers, len(plan))
+    if workers <= 1:
+        with recording(_drop):
+            return [fly_one(base, v) for v in plan]
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
+                             initargs=(_blob(base),)) as pool:
+        return list(pool.map(_fly_in_worker, plan, chunksize=1))
+
+
+def _blob(base) -> bytes:
+    """The base mission pickled for the workers (its live subscribers stay here)."""
+    subscribers, base.subscribers = base.subscribers, []
+    try:
+        return pickle.dumps(base)
+    except (pickle.PicklingError, TypeError, AttributeError) as exc:
+        raise ConfigError(f"sweep: workers > 1 send the base mission to other processes, but "
+                          f"it cannot be pickled ({type(exc).__name__}: {exc}); define your "
+                          f"components, probes and pilots at module level, or use "
+                          f"workers=1") from None
+    finally:
+        base.subscribers = subscribers
+
+
+def _drop(result, mission) -> None:
+    """The sink of a sweep's own flights: they are summed up in the DataFrame."""
+
+
+def _init(blob: bytes) -> None:
+    _BASE[:] = [pickle.loads(blob)]
+
+
+def _fly_in_worker(values: dict) -> dict:
+    return fly_one(_BASE[0], values)
+
+
+def fly_one(base, values: dict) -> dict:
+    row = dict(values)
+    try:
+        result = _axes.apply(base, values).run()
+        error = None
+    except FlockAIError as exc:
+        result = getattr(exc, "result", None)
+        error = f"{type(exc).__name__}: {exc}"
+    row["end_reason"] = getattr(result, "end_reason", None) or ("error" if error else None)
+    row["error"] = error
+    row["sim_time_s"] = result.sim_time_s if result is not None else math.nan
+    if result is not None:
+        row.update({k: float(v) for k, v in result.kpis.items()})
+    return row
+
+
+def frame(rows: list[dict], axis_names: list, parsed: list) -> pd.DataFrame:
+    df = pd.DataFrame(rows)
+    for name in axis_names + ["end_reason", "error", "sim_time_s"]:
+        if name not in df:
+            df[name] = None
+    df["error"] = pd.Series([r.get("error") for r in rows], index=df.index, dtype=object)
+    if parsed:
+        ok = pd.Series(True, index=df.index)
+        for b in parsed:
+            col = df[b.kpi] if b.kpi in df else pd.Series(math.nan, index=df.index)
+            passed = [b.evaluate(None if _missing(v) else v)[0] for v in col]
+            df[f"ok_{b.kpi}"] = passed
+            ok &= pd.Series(passed, index=df.index)
+        df["ok"] = ok & df["error"].isna()
+    return df
+
+
+def _missing(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v))
