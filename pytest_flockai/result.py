@@ -17,6 +17,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import time
 from pathlib import Path
 
@@ -25,6 +26,12 @@ import pandas as pd
 from ._io import atomic_write
 from .errors import ConfigError
 from .phases import PHASES, STAGES
+
+# The default C parser of pandas before 3.1 (2.1 and 3.0 measured) is off by an ulp on some
+# values, so those read with float_precision="round_trip"; 3.1 parses exactly by default and
+# deprecates the argument (Pandas4Warning).
+_PANDAS = tuple(int(x) for x in re.match(r"(\d+)\.(\d+)", pd.__version__).groups())
+_CSV_FLOATS = {"float_precision": "round_trip"} if _PANDAS < (3, 1) else {}
 
 FORMAT = "pytest-flockai-flight/1"
 #: s: a temporary file of a save left untouched this long was left by a killed process
@@ -266,9 +273,8 @@ def _read(p: Path, ext: str):
         header = json.load(fh)
     info = _check_header(header, p, f"sidecar {str(side)!r}")
     digest = _file_sha256(p)
-    # round_trip: the default C parser of some pandas releases (2.1, 3.0) is off by an ulp
     tel = (pd.read_parquet(p) if ext == ".parquet"
-           else pd.read_csv(p, index_col="t", float_precision="round_trip"))
+           else pd.read_csv(p, index_col="t", **_CSV_FLOATS))
     _check_rows(p, len(tel), info, digest)
     return header, tel
 
