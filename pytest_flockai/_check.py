@@ -70,3 +70,18 @@ def choice(field: str, value, allowed, *, where: str = ""):
                           f"allowed: {', '.join(map(repr, allowed))}"
                           f"{close_matches(str(value), [str(a) for a in allowed])}")
     return value
+
+
+def area(value, *, where: str) -> tuple:
+    """A box ((x0, y0), (x1, y1)) of finite numbers with both sides longer than 0,
+    returned as floats (x0, y0, x1, y1) in the order given."""
+    try:
+        (x0, y0), (x1, y1) = value
+    except (TypeError, ValueError):
+        raise ConfigError(f"{_where(where)}area = {value!r} is not ((x0, y0), (x1, y1))") from None
+    x0, y0, x1, y1 = (number(n, v, where=where) for n, v in
+                      (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)))
+    if abs(x1 - x0) < 1e-6 or abs(y1 - y0) < 1e-6:
+        raise ConfigError(f"{_where(where)}area = {value!r} is degenerate; both sides must be "
+                          f"longer than 0")
+    return x0, y0, x1, y1

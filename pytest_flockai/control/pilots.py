@@ -157,14 +157,7 @@ class ZigZag(Waypoints):
 
     def __init__(self, area, altitude: float = 30.0, spacing: float = 15.0, speed: float = 8.0,
                  *, yaw: float = 0.0):
-        try:
-            (x0, y0), (x1, y1) = area
-        except (TypeError, ValueError):
-            raise ConfigError(f"ZigZag: area = {area!r} is not ((x0, y0), (x1, y1))") from None
-        x0, y0, x1, y1 = (_check.number(n, v, where="ZigZag") for n, v in
-                          (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)))
-        if abs(x1 - x0) < 1e-6 or abs(y1 - y0) < 1e-6:
-            raise ConfigError(f"ZigZag: area = {area!r} is degenerate; both sides must be longer than 0")
+        x0, y0, x1, y1 = _check.area(area, where="ZigZag")
         for n, v in (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)):
             _extent(n, v, "ZigZag")
         self.area = ((x0, y0), (x1, y1))

@@ -26,12 +26,9 @@ def strips(area, n: int, spacing: float) -> list:
         raise ConfigError(f"survey: n = {n!r} is not allowed; expected an integer from 1 to "
                           f"{MAX_DRONES}")
     spacing = _check.positive("spacing", spacing, where="survey")
-    try:
-        (x0, y0), (x1, y1) = area
-    except (TypeError, ValueError):
-        raise ConfigError(f"survey: area = {area!r} is not ((x0, y0), (x1, y1))") from None
-    x0, x1 = sorted((float(x0), float(x1)))
-    y0, y1 = sorted((float(y0), float(y1)))
+    x0, y0, x1, y1 = _check.area(area, where="survey")
+    x0, x1 = sorted((x0, x1))
+    y0, y1 = sorted((y0, y1))
     rows = [y0 + k * spacing for k in range(int(math.ceil((y1 - y0) / spacing - 1e-9)))] + [y1]
     legs = len(rows)                                  # the legs one ZigZag drone flies
     if legs < 2 * n:

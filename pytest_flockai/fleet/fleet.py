@@ -171,14 +171,7 @@ def _check_unique(drones) -> None:
 def _check_area(area):
     if area is None:
         return None
-    try:
-        (x0, y0), (x1, y1) = area
-    except (TypeError, ValueError):
-        raise ConfigError(f"Fleet: area = {area!r} is not ((x0, y0), (x1, y1))") from None
-    x0, y0, x1, y1 = (_check.number(n, v, where="Fleet") for n, v in
-                      (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)))
-    if abs(x1 - x0) < 1e-6 or abs(y1 - y0) < 1e-6:
-        raise ConfigError(f"Fleet: area = {area!r} is degenerate; both sides must be longer than 0")
+    x0, y0, x1, y1 = _check.area(area, where="Fleet")
     return ((min(x0, x1), min(y0, y1)), (max(x0, x1), max(y0, y1)))
 
 

@@ -20,7 +20,7 @@ import mujoco
 
 from ..control.stages import DONE, TAKEOFF
 from ..errors import SimulationError
-from ..mission.loop import CRASH_SPEED
+from ..mission.loop import CRASH_SPEED, schedule
 
 SEPARATION_HZ = 50.0
 
@@ -34,9 +34,7 @@ class _Member:
     def __init__(self, run):
         self.run, self.s, self.view = run, run.vehicle, run.data
         self.comps = comps = run.components
-        self.ticking = [c.step for c in comps if c.every_tick]
-        self.clocked = [c for c in comps if not c.every_tick]
-        self.ordered = [(c, c.step) for c in comps]
+        self.ticking, self.clocked, self.ordered = schedule(comps)
         self.next_any = min([c.next_due for c in self.clocked], default=math.inf)
         self.qpos, self.qvel = run.data.qpos, run.data.qvel
         self.active = True

@@ -26,11 +26,7 @@ def fly(run) -> None:
     comps, nsub, step = run.components, run.plan.substeps, mujoco.mj_step
     qpos, qvel, sqrt = d.qpos, d.qvel, math.sqrt
     half_tick = 0.5 * nsub * model.opt.timestep      # a tick advances time by nsub steps
-    # every-tick components run alone in the ticks where no clocked one is due
-    # (one comparison); otherwise every component is looked at, in order
-    ticking = [c.step for c in comps if c.every_tick]
-    clocked = [c for c in comps if not c.every_tick]
-    ordered = [(c, c.step) for c in comps]
+    ticking, clocked, ordered = schedule(comps)
     next_any = min([c.next_due for c in clocked], default=math.inf)
     while True:
         t = d.time
@@ -70,6 +66,15 @@ def fly(run) -> None:
         c.finish(t)
 
 
+def schedule(comps) -> tuple[list, list, list]:
+    """(ticking, clocked, ordered) of ``comps``: every-tick components run alone in the
+    ticks where no clocked one is due (one comparison); otherwise every component is
+    looked at, in order (``ordered``: (component, its step) pairs)."""
+    ticking = [c.step for c in comps if c.every_tick]
+    clocked = [c for c in comps if not c.every_tick]
+    return ticking, clocked, [(c, c.step) for c in comps]
+
+
 def _impact(d, s) -> bool:
     """Flipped over, or touched anything faster than CRASH_SPEED (not while
     still sitting on the pad at take-off)."""
@@ -87,4 +92,4 @@ def _warnings(d) -> str:
     return ", ".join(hits) or "no MuJoCo warning recorded"
 
 
-__all__ = ["CRASH_SPEED", "STAGES", "fly"]
+__all__ = ["CRASH_SPEED", "STAGES", "fly", "schedule"]
