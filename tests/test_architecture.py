@@ -24,9 +24,10 @@ LAYERS = [
      "plugin", "__init__", "sweeps"},
 ]
 PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
-#: function-level imports that are fine: optional extras and GL backends loaded on demand
+#: function-level imports that are fine: optional extras, GL backends loaded on demand, and
+#: scipy.stats (a dependency, but ~1 s to import: only the Latin-hypercube design needs it)
 OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
-            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw"}
+            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats"}
 #: the import-time MuJoCo/GL guard of the package itself (see its docstring)
 ALLOWED_LOCAL = {("__init__.py", "mujoco")}
 
