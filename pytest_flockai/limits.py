@@ -32,7 +32,7 @@ MAX_WORLD_SIDE_M = 2_000.0
 #: people in a world (scattered plus crowds, or listed). Every articulated figure adds
 #: ~120 mesh vertices and ~200 faces to the flight's MuJoCo model, and MuJoCo keeps a
 #: bounding-volume hierarchy of every face: at 10,000 people and 2,000 cars a flight
-#: peaked at 1.8 GiB (benchmarks/limits.py), at 3,000 and 1,000 at 0.86 GiB
+#: peaked at 1.8 GiB (benchmarks/limits.py), at 3,000 and 1,000 at 0.74 GiB
 MAX_PEOPLE = 3_000
 #: vehicles in a world (~ 0.07 MiB of compiled model each, articulated cars)
 MAX_VEHICLES = 1_000
