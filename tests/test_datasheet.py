@@ -128,3 +128,29 @@ def test_motors_sized_for_the_maximum_takeoff_mass_lose_less_at_hover(tmp_path):
     assert sized.datasheet["motor_efficiency"] > plain.datasheet["motor_efficiency"] + 0.02
     # the hover point itself (propeller, speed) does not depend on it
     assert sized.datasheet["hover_rad_s"] == pytest.approx(plain.datasheet["hover_rad_s"])
+
+
+def test_motor_size_laws_follow_their_published_motor_set():
+    from pytest_flockai.airframe import motor_law as law
+    # each reference motor's datasheet Rm and I0 from its mass and Kv, within a factor of two;
+    # the log scatter of the motor constant about the law is small (0.11 on this set)
+    errs = []
+    for name, kv, i0, rm, grams in law.REFERENCE_MOTORS:
+        kv_si = kv * 2 * math.pi / 60
+        pred = law.winding_resistance(grams / 1000, kv_si)
+        assert 0.5 < pred / rm < 2.0, name
+        errs.append(math.log(pred / rm) / 2)      # Rm ~ 1/Km^2: half the log error is Km's
+        p0 = law.iron_loss_w(grams / 1000, kv_si * law.I0_TEST_V)
+        assert 0.3 < p0 / (i0 * law.I0_TEST_V) < 3.0, name
+    assert (sum(e * e for e in errs) / len(errs)) ** 0.5 < 0.15
+    # larger motors of a line are relatively better than geometric similarity's m^(5/6)
+    assert 5 / 6 < law.KM_EXP < 1.0
+    # a motor outside the set: T-Motor F40 III 2400 Kv, 30.8 g, 42 mOhm (T-Motor specifications,
+    # as quoted by cameracopter.es/index.php/es/articles-es/39-reviews-es/292-tmotorf40iii-es)
+    assert law.winding_resistance(0.0308, 2400 * 2 * math.pi / 60) == pytest.approx(0.042, rel=0.3)
+
+
+def test_iron_loss_rises_with_speed_as_steinmetz():
+    from pytest_flockai.airframe import motor_law as law
+    assert law.iron_loss_w(0.1, 800.0) / law.iron_loss_w(0.1, 200.0) == pytest.approx(4 ** 1.5)
+    assert law.iron_loss_w(0.2, 500.0) > law.iron_loss_w(0.1, 500.0)

@@ -18,11 +18,11 @@ derived one ("fields a user knows better").
   Blasius; the regime of small propellers, Lissaman, Annu. Rev. Fluid Mech. 15,
   1983). The figure of merit follows: FM = C_T^1.5 / sqrt(2) / C_P.
 - Motor: the DC motor model (Kv, winding resistance Rm, no-load current I0),
-  eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover.
-  Without Rm: the motor constant Km = Kt / sqrt(Rm) of a reference motor,
-  scaled with motor mass as Km ~ m^(5/6) (geometric similarity: Kt ~ N L^2,
-  Rm ~ N^2 / L, so Km^2 ~ L^5 whatever the winding N). Without I0: an iron
-  loss growing with speed as omega^1.5 (Steinmetz: hysteresis ~ f, eddy ~ f^2).
+  eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover (the energy
+  model recomputes it at every operating point, energy/components.py Motors). Without Rm or
+  I0: the size laws of ``motor_law.py``, fitted over a published line of 20 multirotor
+  motors of 18-360 g (Km = Kt / sqrt(Rm) ~ m^0.92, no-load loss ~ m^1.25 omega^1.5), for
+  motors weighing MOTOR_MASS_SHARE of the take-off mass they are sized for.
 - Body: drag areas from the top speed, inertia from a box and rotor masses.
 """
 
@@ -32,6 +32,7 @@ import math
 
 from ..errors import ConfigError
 from ..physics import G, RHO_SEA_LEVEL
+from . import motor_law as _law
 from .params import Field, Section
 
 INCH = 0.0254                      # m (exact, by definition)
@@ -56,16 +57,9 @@ KAPPA = 1.15
 CD_REF, RE_REF = 0.040, 6.0e4
 #: C_d ~ Re^CD_RE_EXP, laminar skin friction (Blasius: C_f = 1.328 Re^-1/2)
 CD_RE_EXP = -0.5
-#: reference motor for the motor constant: T-Motor F40 III 2400 Kv (T-Motor specifications,
-#: store-en.tmotor.com): 42 mOhm, 30.8 g -> Km = (60 / (2 pi 2400)) / sqrt(0.042) N m / sqrt(W)
-KM_REF = (60.0 / (2.0 * math.pi * 2400.0)) / math.sqrt(0.042)
-KM_REF_MASS_KG = 0.0308
 #: estimate: the motors of a multirotor weigh about 10 % of the take-off mass they are sized
 #: for (all motors; the maximum take-off mass where the maker publishes one)
 MOTOR_MASS_SHARE = 0.10
-#: estimate: no-load (iron and bearing) loss at full speed, 3 % of the maximum shaft
-#: power: idle currents of 0.3-1 A against 10-30 A maximum in outrunner datasheets
-IRON_LOSS_SHARE = 0.03
 #: estimate: design thrust-to-weight at full throttle when no Kv is given (the Mavic's
 #: 5 m/s ascent and 72 km/h at 35 deg tilt need 1.22; 2-3 is the usual design range)
 THRUST_TO_WEIGHT = 2.5
@@ -156,16 +150,12 @@ def _motor(ds: Section, mass: float, n: int, q_hover: float, om_hover: float, om
     scale = max(mass, ds.max_takeoff_mass_kg or mass) / mass
     om_max, p_max = om_max * math.sqrt(scale), p_max * scale ** 1.5
     kv = ds.motor_kv * 2.0 * math.pi / 60.0 if ds.motor_kv else om_max / (0.85 * pack_v)
-    if ds.motor_rm_ohm is not None:
-        rm = ds.motor_rm_ohm
-    else:
-        km = KM_REF * (MOTOR_MASS_SHARE * scale * mass / n / KM_REF_MASS_KG) ** (5.0 / 6.0)
-        rm = (1.0 / kv) ** 2 / km ** 2            # Km = Kt / sqrt(Rm), Kt = 1 / Kv (SI)
+    m_motor = MOTOR_MASS_SHARE * scale * mass / n
+    rm = ds.motor_rm_ohm if ds.motor_rm_ohm is not None else _law.winding_resistance(m_motor, kv)
     if ds.motor_i0_a is not None:
         i0 = ds.motor_i0_a
-    else:
-        p_iron = IRON_LOSS_SHARE * p_max * (om_hover / om_max) ** 1.5
-        i0 = p_iron * kv / om_hover               # the iron loss as current at the back EMF
+    else:                                         # the iron loss as current at the back EMF
+        i0 = _law.iron_loss_w(m_motor, om_hover) * kv / om_hover
     return motor_efficiency(q_hover, om_hover, kv_rad=kv, rm=rm, i0=i0), kv, rm, i0
 
 
