@@ -19,7 +19,7 @@ derived one ("fields a user knows better").
   1983). The figure of merit follows: FM = C_T^1.5 / sqrt(2) / C_P.
 - Motor: the DC motor model (Kv, winding resistance Rm, no-load current I0),
   eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover (the energy
-  model recomputes it at every operating point, energy/components.py Motors). Without Rm or
+  model recomputes it at every operating point, energy/rotors.py Motors). Without Rm or
   I0: the size laws of ``motor_law.py``, fitted over a published line of 20 multirotor
   motors of 18-360 g (Km = Kt / sqrt(Rm) ~ m^0.92, no-load loss ~ m^1.25 omega^1.5), for
   motors weighing MOTOR_MASS_SHARE of the take-off mass they are sized for.
@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 
+from ..energy.rotors import MOTOR_FIELDS
 from ..errors import ConfigError
 from ..physics import G, RHO_SEA_LEVEL
 from . import motor_law as _law
@@ -73,7 +74,7 @@ TOP_TILT_DEG = 35.0
 #: ~0.035 m^2 from above, Cd ~0.9) = 0.030 m^2 over 0.354^2 m^2
 TOP_CDA_PER_DIAG2 = 0.030 / 0.354 ** 2
 #: share of the fore rotors' near-wake induced velocity the aft rotors ingest once the wake is
-#: flat (energy/components.py Motors: weighted by the wake skew squared and by how far each rotor
+#: flat (energy/rotors.py Motors: weighted by the wake skew squared and by how far each rotor
 #: is aft). Geometry, not a fit: in the "x" layout each aft rotor sits directly behind a fore
 #: rotor, one to two diameters downstream, so a flattened wake covers its whole disc; the
 #: near-wake velocity (v_i, not the far wake's 2 v_i: the wake has not contracted yet)
@@ -208,7 +209,9 @@ def derive(ds: Section, pack_v: float) -> dict:
     rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
              "time_constant_s": TAU_REF_S * D / TAU_REF_D}
     energy = {"figure_of_merit": fm, "induced_power_factor": KAPPA, "motor_efficiency": eta,
-              "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE}
+              "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE,
+              "motor_kv_rpm_v": kv * 30.0 / math.pi, "motor_rm_ohm": rm, "motor_i0_a": i0,
+              "motor_i0_rad_s": om_h}
     derived = {"ct": ct, "cp": cp, "figure_of_merit": fm, "hover_rad_s": om_h,
                "reynolds_075": 0.75 * om_h * 0.5 * D * CHORD_RATIO * 0.5 * D / NU_SEA_LEVEL,
                "motor_efficiency": eta, "motor_kv_rpm_v": kv * 60.0 / (2.0 * math.pi),
@@ -233,6 +236,10 @@ def expand(data: dict, where: str) -> tuple[dict, dict | None]:
         if not isinstance(own, dict):
             raise ConfigError(f"{where} [{sec}]: expected a table, got {own!r}")
         merged[sec] = {**out[sec], **own}
+    own_energy = data.get("energy", {})
+    if "motor_efficiency" in own_energy and not any(k in own_energy for k in MOTOR_FIELDS):
+        for k in MOTOR_FIELDS:         # the user's constant efficiency wins over the motor model
+            del merged["energy"][k]
     return merged, out["derived"]
 
 
