@@ -154,3 +154,42 @@ def test_iron_loss_rises_with_speed_as_steinmetz():
     from pytest_flockai.airframe import motor_law as law
     assert law.iron_loss_w(0.1, 800.0) / law.iron_loss_w(0.1, 200.0) == pytest.approx(4 ** 1.5)
     assert law.iron_loss_w(0.2, 500.0) > law.iron_loss_w(0.1, 500.0)
+
+
+def test_overrides_of_a_datasheet_blueprint_are_derived_again(tmp_path):
+    base = fa.drone("dji-air-2s")
+    heavy = fa.drone("dji-air-2s", mass_kg=0.7)
+    assert heavy.airframe.mass_kg == 0.7 and heavy.payload_kg == 0.0
+    # the hover point, the propeller's Reynolds number and the motors sized for 0.7 kg follow
+    d0, d1 = base.datasheet, heavy.datasheet
+    assert d1["hover_rad_s"] == pytest.approx(d0["hover_rad_s"] * math.sqrt(0.7 / 0.595), rel=0.03)
+    assert d1["reynolds_075"] > d0["reynolds_075"]
+    assert heavy.energy.component("motors").motor_rm_ohm != base.energy.component("motors").motor_rm_ohm
+    assert heavy.rotor.max_speed_rad_s > base.rotor.max_speed_rad_s
+    # same as writing the value into the blueprint's [datasheet] table
+    text = (BLUEPRINTS / "dji-air-2s.toml").read_text()
+    assert "mass_kg = 0.595 " in text
+    p = tmp_path / "air-700g.toml"
+    p.write_text(text.replace("mass_kg = 0.595 ", "mass_kg = 0.7 "))
+    assert d1 == fa.drone(str(p)).datasheet
+    # the pack voltage sets the motor model (Kv from the design speed at that voltage)
+    assert fa.drone("dji-air-2s", battery_v=12.0).datasheet["motor_kv_rpm_v"] < d0["motor_kv_rpm_v"]
+    assert fa.drone("dji-air-2s", motor_kv=1100.0).datasheet["motor_kv_rpm_v"] == 1100.0
+    assert fa.drone("dji-air-2s", datasheet__prop_pitch_in=4.5).datasheet["ct"] > d0["ct"]
+    # a payload is the same drone carrying more: nothing derived again
+    loaded = fa.drone("dji-air-2s", payload_kg=0.1)
+    assert loaded.datasheet == d0 and loaded.mass_kg == pytest.approx(0.695)
+
+
+def test_datasheet_overrides_refused_where_they_cannot_be_derived():
+    with pytest.raises(ConfigError, match=r"prop_diameter_in=9\.0 is a \[datasheet\] field, and this "
+                                          r"blueprint has no \[datasheet\] table"):
+        fa.drone("dji-mavic-2-pro", prop_diameter_in=9.0)
+    with pytest.raises(ConfigError, match="datasheet__mass_kg"):
+        fa.drone("dji-mavic-2-pro", datasheet__mass_kg=1.0)
+    with pytest.raises(ConfigError, match="unknown override 'datasheet__mas_kg'.*mass_kg"):
+        fa.drone("dji-air-2s", datasheet__mas_kg=1.0)
+    with pytest.raises(ConfigError, match=r"\[datasheet\]: mass_kg = -1\.0 .*allowed: > 0"):
+        fa.drone("dji-air-2s", mass_kg=-1.0)
+    # a fitted blueprint's mass_kg stays its airframe field
+    assert fa.drone("dji-mavic-2-pro", mass_kg=1.0).airframe.mass_kg == 1.0
