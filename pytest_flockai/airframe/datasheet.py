@@ -105,9 +105,9 @@ class Datasheet(Section):
         "motor_kv": Field("optpos", None, unit="rpm/V", bounds=(10.0, 100000.0, "rpm per volt"),
                           doc="speed constant; default: the design thrust-to-weight at the pack voltage"),
         "motor_rm_ohm": Field("optpos", None, unit="ohm", bounds=(0.001, 50.0, "winding resistance"),
-                              doc="winding resistance; default: the motor-constant scaling"),
+                              doc="winding resistance; default: the size law of motor_law.py"),
         "motor_i0_a": Field("optpos", None, unit="A", bounds=(0.001, 20.0, "no-load current"),
-                            doc="no-load current at the hover speed; default: the iron-loss estimate"),
+                            doc="no-load current at the hover speed; default: the size law of motor_law.py"),
     }
 
 
@@ -145,11 +145,11 @@ def motor_efficiency(torque_nm: float, omega: float, *, kv_rad: float, rm: float
 
 
 def _motor(ds: Section, mass: float, n: int, q_hover: float, om_hover: float, om_max: float,
-           p_max: float, pack_v: float):
+           pack_v: float):
     """(eta at hover, Kv in rad/s/V, Rm, I0) from the datasheet or the defaults."""
-    # a motor sized for the maximum take-off mass: its full speed and power at that thrust
+    # a motor sized for the maximum take-off mass: its full speed at that thrust
     scale = max(mass, ds.max_takeoff_mass_kg or mass) / mass
-    om_max, p_max = om_max * math.sqrt(scale), p_max * scale ** 1.5
+    om_max = om_max * math.sqrt(scale)
     kv = ds.motor_kv * 2.0 * math.pi / 60.0 if ds.motor_kv else om_max / (0.85 * pack_v)
     m_motor = MOTOR_MASS_SHARE * scale * mass / n
     rm = ds.motor_rm_ohm if ds.motor_rm_ohm is not None else _law.winding_resistance(m_motor, kv)
@@ -204,7 +204,7 @@ def derive(ds: Section, pack_v: float) -> dict:
     kq = cp * RHO_SEA_LEVEL * D ** 5 / (8.0 * math.pi ** 3)
     q_h = kq * om_h ** 2
     om_design = om_h * math.sqrt(THRUST_TO_WEIGHT)
-    eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, kq * om_design ** 3, pack_v)
+    eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, pack_v)
     om_max = _max_speed(ds, kq, kv, rm, i0, pack_v, om_h)
     rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
              "time_constant_s": TAU_REF_S * D / TAU_REF_D}

@@ -288,7 +288,8 @@ def _datasheet_overrides(data: dict, overrides: dict):
         field = key[len("datasheet__"):] if key.startswith("datasheet__") else key
         if field in Datasheet.FIELDS and (field == key or key.startswith("datasheet__")):
             data["datasheet"][field] = value
-        elif key in ("battery_v", "voltage_v", "battery__voltage_v") and isinstance(data.get("battery"), dict):
+        elif key in ("battery_v", "voltage_v", "battery__voltage_v") and isinstance(
+                data.get("battery"), dict):
             data["battery"]["voltage_v"] = value
         elif key.startswith("datasheet__"):
             raise ConfigError(f"drone(): unknown override {key!r}{close_matches(field, Datasheet.FIELDS)}; "
