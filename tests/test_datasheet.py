@@ -193,3 +193,17 @@ def test_datasheet_overrides_refused_where_they_cannot_be_derived():
         fa.drone("dji-air-2s", mass_kg=-1.0)
     # a fitted blueprint's mass_kg stays its airframe field
     assert fa.drone("dji-mavic-2-pro", mass_kg=1.0).airframe.mass_kg == 1.0
+
+
+def test_a_datasheet_no_load_current_is_taken_at_its_test_voltage(tmp_path):
+    # a maker's I0 is measured without load at a test voltage (10 V by default): at hover the
+    # no-load current follows the iron-loss law, I0 ~ omega^0.5 (loss ~ omega^1.5 / EMF ~ omega)
+    extra = "motor_kv = 1400.0\nmotor_rm_ohm = 0.3\nmotor_i0_a = 0.5\nprop_blades = 2 "
+    d = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": extra})))
+    kv = 1400.0 * 2 * math.pi / 60
+    at_hover = 0.5 * math.sqrt(d.datasheet["hover_rad_s"] / (kv * 10.0))
+    assert d.datasheet["motor_i0_a"] == pytest.approx(at_hover)
+    m = d.energy.component("motors")
+    assert (m.motor_i0_a, m.motor_i0_rad_s) == (pytest.approx(at_hover), d.datasheet["hover_rad_s"])
+    d7 = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": "motor_i0_v = 7.4\n" + extra})))
+    assert d7.datasheet["motor_i0_a"] == pytest.approx(at_hover * math.sqrt(10.0 / 7.4))

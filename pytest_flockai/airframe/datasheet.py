@@ -107,7 +107,11 @@ class Datasheet(Section):
         "motor_rm_ohm": Field("optpos", None, unit="ohm", bounds=(0.001, 50.0, "winding resistance"),
                               doc="winding resistance; default: the size law of motor_law.py"),
         "motor_i0_a": Field("optpos", None, unit="A", bounds=(0.001, 20.0, "no-load current"),
-                            doc="no-load current at the hover speed; default: the size law of motor_law.py"),
+                            doc="no-load current at motor_i0_v; default: the size law of motor_law.py"),
+        "motor_i0_v": Field("pos", _law.I0_TEST_V, unit="V",
+                            bounds=(0.5, 100.0, "the test voltage of a no-load current"),
+                            doc="the voltage motor_i0_a is given at (default 10 V, the usual test "
+                                "voltage of motor datasheets)"),
     }
 
 
@@ -154,7 +158,9 @@ def _motor(ds: Section, mass: float, n: int, q_hover: float, om_hover: float, om
     m_motor = MOTOR_MASS_SHARE * scale * mass / n
     rm = ds.motor_rm_ohm if ds.motor_rm_ohm is not None else _law.winding_resistance(m_motor, kv)
     if ds.motor_i0_a is not None:
-        i0 = ds.motor_i0_a
+        # measured at the no-load speed Kv x motor_i0_v; at hover by the iron-loss law
+        # (loss ~ omega^1.5 over back EMF ~ omega)
+        i0 = ds.motor_i0_a * (om_hover / (kv * ds.motor_i0_v)) ** (_law.IRON_SPEED_EXP - 1.0)
     else:                                         # the iron loss as current at the back EMF
         i0 = _law.iron_loss_w(m_motor, om_hover) * kv / om_hover
     return motor_efficiency(q_hover, om_hover, kv_rad=kv, rm=rm, i0=i0), kv, rm, i0
