@@ -333,7 +333,8 @@ class Motors(Component):
     def power_parts(self, u):
         vx, vy, vax = u.v_rel_body
         vpar2 = vx * vx + vy * vy
-        vpar = math.sqrt(vpar2)
+        sqrt = math.sqrt
+        vpar = sqrt(vpar2)
         kappa = self.induced_power_factor
         inv2rhoA, c0, R, inv_kf = self._inv2rhoA, self._c0, self._R, self._inv_kf
         vi_state = self._vi
@@ -347,36 +348,38 @@ class Motors(Component):
             vh2 = T * inv2rhoA
             v = vi_state[i]
             if v <= 0.0:
-                v = math.sqrt(vh2)
-            for _ in range(2):  # Newton on f(v) = v sqrt(V_par^2 + (V_ax+v)^2) - vh^2, warm-started
-                s = vax + v
-                root = math.sqrt(vpar2 + s * s)
-                f = v * root - vh2
-                df = root + v * s / root if root > 1e-9 else 1.0
-                v -= f / df
-                if v < 0.0:
-                    v = 0.0
+                v = sqrt(vh2)
+            # Newton on f(v) = v sqrt(V_par^2 + (V_ax+v)^2) - vh^2, warm-started: two steps
+            s = vax + v
+            root = sqrt(vpar2 + s * s)
+            v -= (v * root - vh2) / (root + v * s / root if root > 1e-9 else 1.0)
+            if v < 0.0:
+                v = 0.0
+            s = vax + v
+            root = sqrt(vpar2 + s * s)
+            v -= (v * root - vh2) / (root + v * s / root if root > 1e-9 else 1.0)
+            if v < 0.0:
+                v = 0.0
             vi_state[i] = v
             if vax < 0.0:
-                v = _descent_inflow(v, vax, vpar2, math.sqrt(vh2))
+                v = _descent_inflow(v, vax, vpar2, sqrt(vh2))
             induced += kappa * T * v
             axial += T * vax
-            omega_r = math.sqrt(T * inv_kf) * R
-            mu = vpar / omega_r
-            profile += c0 * T * math.sqrt(T) * (1.0 + 4.65 * mu * mu)
+            mu = vpar / (sqrt(T * inv_kf) * R)
+            profile += c0 * T * sqrt(T) * (1.0 + 4.65 * mu * mu)
             wake_vi += v
         if self.wake_interference > 0.0 and vpar > 0.1 and wake_vi > 0.0:
             # aft rotors ingest the fore rotors' wake, skewed back by V_par
             n = self._n
             hx, hy = vx / vpar, vy / vpar
             vi_mean = wake_vi / n
-            skew = vpar / math.sqrt(vpar2 + (vax + vi_mean) ** 2)
+            skew = vpar / sqrt(vpar2 + (vax + vi_mean) ** 2)
             skew *= skew    # the skewed wake reaches the aft rotors only as it flattens
             ws = [max(0.0, -(dx * hx + dy * hy)) for dx, dy in self._dirs]
             tot = sum(ws)
             if tot > 0.0:
                 scale = self.wake_interference * vi_mean * skew * (0.5 * n) / tot
-                induced += sum(w * thrust[i] for i, w in enumerate(ws)) * scale
+                induced += sum([w * thrust[i] for i, w in enumerate(ws)]) * scale
         inv_eta = self._inv_eta
         mech_axial = axial
         total = induced + profile + mech_axial

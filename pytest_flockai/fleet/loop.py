@@ -110,15 +110,15 @@ def _end(m, t) -> None:
 def _separation(live, sqrt) -> float:
     """The smallest distance between two drones in the air now (inf if < 2)."""
     pts = [m.s.q for m in live if m.s.airborne and m.s.stage != TAKEOFF]
-    best = math.inf
-    for i in range(len(pts)):
-        a = pts[i]
+    best = math.inf                    # squared: sqrt is monotonic, one sqrt at the end
+    for i in range(len(pts) - 1):
+        ax, ay, az = pts[i][:3]
         for b in pts[i + 1:]:
-            dx, dy, dz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
-            d = sqrt(dx * dx + dy * dy + dz * dz)
+            dx, dy, dz = ax - b[0], ay - b[1], az - b[2]
+            d = dx * dx + dy * dy + dz * dz
             if d < best:
                 best = d
-    return best
+    return sqrt(best)
 
 
 def _contacts(model, data, members, body_of) -> None:
