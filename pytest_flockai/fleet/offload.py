@@ -128,12 +128,18 @@ class OffloadStep:
             out[f"{name}.offload.latency_p95_s"] = _pct(lat, 95)
         every = [x for lat in self.latency for x in lat]
         out["offload.latency_p95_s"] = _pct(every, 95)
-        out["link.queue_delay_p95_s"] = _pct(self.link_wait, 95)
-        out["ground.queue_delay_mean_s"] = float(np.mean(self.ground_wait)) if self.ground_wait \
-            else math.nan
-        out["ground.queue_delay_p95_s"] = _pct(self.ground_wait, 95)
-        out["ground.utilization"] = min(1.0, self.busy_s / makespan_s) if makespan_s > 0 else 0.0
+        out.update(ground_kpis(self, makespan_s))
         return out
+
+
+def ground_kpis(g, makespan_s: float) -> dict:
+    """The shared ground station's KPIs from ``g``'s ``link_wait``, ``ground_wait`` and
+    ``busy_s`` (an ``OffloadStep`` or the remote tasks' ``ml.events.SharedGround``)."""
+    return {"link.queue_delay_p95_s": _pct(g.link_wait, 95),
+            "ground.queue_delay_mean_s": float(np.mean(g.ground_wait)) if g.ground_wait
+            else math.nan,
+            "ground.queue_delay_p95_s": _pct(g.ground_wait, 95),
+            "ground.utilization": min(1.0, g.busy_s / makespan_s) if makespan_s > 0 else 0.0}
 
 
 def _pct(xs, q) -> float:
