@@ -7,6 +7,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai.errors import ConfigError
+from pytest_flockai.ml.events import SharedGround
 
 MAVIC = "dji-mavic-2-pro"
 
@@ -296,3 +297,18 @@ def test_remote_task_latency_grows_with_the_fleet_on_a_shared_link():
     assert own4["link.queue_delay_p95_s"] == 0.0
     assert own4["fleet.inference_latency_p95_s"] < 1.2 * p1
     assert 0 < shared[4]["ground.utilization"] < 0.1
+
+
+def test_camera_fleets_are_deterministic():
+    a, b = camera_fleet(2, link="sik-915").kpis, camera_fleet(2, link="sik-915").kpis
+    assert a == b and a["drone-2.cnn.inference_count"] > 0
+
+
+def test_shared_ground_is_one_fifo_channel_and_one_fifo_device():
+    g = SharedGround(shared_link=True)
+    assert g.uplink(0, 1.0, 0.3) == 1.0 and g.uplink(1, 1.0, 0.3) == pytest.approx(1.3)
+    assert g.uplink(1, 5.0, 0.3) == 5.0                       # the channel was free again
+    assert g.compute(1.3, 0.1) == 1.3 and g.compute(1.35, 0.1) == pytest.approx(1.4)
+    assert g.link_wait == pytest.approx([0.0, 0.3, 0.0]) and g.busy_s == pytest.approx(0.2)
+    own = SharedGround(shared_link=False)                     # a channel per drone
+    assert own.uplink(0, 1.0, 0.3) == 1.0 and own.uplink(1, 1.0, 0.3) == 1.0
