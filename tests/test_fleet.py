@@ -312,3 +312,18 @@ def test_shared_ground_is_one_fifo_channel_and_one_fifo_device():
     assert g.link_wait == pytest.approx([0.0, 0.3, 0.0]) and g.busy_s == pytest.approx(0.2)
     own = SharedGround(shared_link=False)                     # a channel per drone
     assert own.uplink(0, 1.0, 0.3) == 1.0 and own.uplink(1, 1.0, 0.3) == 1.0
+
+
+def test_a_fleet_of_one_with_a_remote_camera_task_flies_like_the_single_mission():
+    """The same scheduler, camera and runner as a single flight: one drone alone on the
+    ground station gives the single Mission's KPIs, task KPIs included, exactly."""
+    world = fa.World.urban(seed=3, size=(160.0, 160.0), people=40, max_building_height=10.0)
+    mavic = fa.drone(MAVIC, width=64, height=48)
+    pilot = fa.pilots.Waypoints([(0, 0, 15), (20, 0, 15)], speed=5)
+    single = fa.Mission(mavic, pilot, world, tasks=[_task("remote", link="sik-915")], seed=3).run()
+    fleet = fa.Fleet([fa.FleetDrone("solo", mavic, pilot, pad=(0, 0), seed=3,
+                                    tasks=[_task("remote", link="sik-915")])], world=world).run()
+    assert single.kpis["cnn.inference_count"] > 20
+    for k, v in single.kpis.items():
+        w = fleet.kpis[f"solo.{k}"]
+        assert v == w or (math.isnan(v) and math.isnan(w)), k
