@@ -188,7 +188,8 @@ class Motors(Component):
     def power_parts(self, u):
         vx, vy, vax = u.v_rel_body
         vpar2 = vx * vx + vy * vy
-        vpar = math.sqrt(vpar2)
+        sqrt = math.sqrt
+        vpar = sqrt(vpar2)
         kappa = self.induced_power_factor
         inv2rhoA, c0, R, inv_kf = self._inv2rhoA, self._c0, self._R, self._inv_kf
         vi_state = self._vi
@@ -205,23 +206,27 @@ class Motors(Component):
             vh2 = T * inv2rhoA
             v = vi_state[i]
             if v <= 0.0:
-                v = math.sqrt(vh2)
-            for _ in range(2):  # Newton on f(v) = v sqrt(V_par^2 + (V_ax+v)^2) - vh^2, warm-started
-                s = vax + v
-                root = math.sqrt(vpar2 + s * s)
-                f = v * root - vh2
-                df = root + v * s / root if root > 1e-9 else 1.0
-                v -= f / df
-                if v < 0.0:
-                    v = 0.0
+                v = sqrt(vh2)
+            # Newton on f(v) = v sqrt(V_par^2 + (V_ax+v)^2) - vh^2, warm-started: two steps,
+            # unrolled (the hot loop of every flight; a fleet's energy share, issue 14)
+            s = vax + v
+            root = sqrt(vpar2 + s * s)
+            v -= (v * root - vh2) / (root + v * s / root if root > 1e-9 else 1.0)
+            if v < 0.0:
+                v = 0.0
+            s = vax + v
+            root = sqrt(vpar2 + s * s)
+            v -= (v * root - vh2) / (root + v * s / root if root > 1e-9 else 1.0)
+            if v < 0.0:
+                v = 0.0
             vi_state[i] = v
             if vax < 0.0:
-                v = _descent_inflow(v, vax, vpar2, math.sqrt(vh2))
+                v = _descent_inflow(v, vax, vpar2, sqrt(vh2))
             induced += kappa * T * v
             axial += T * vax
-            omega_r = math.sqrt(T * inv_kf) * R
+            omega_r = sqrt(T * inv_kf) * R
             mu = vpar / omega_r
-            p0 = c0 * T * math.sqrt(T) * (1.0 + 4.65 * mu * mu)
+            p0 = c0 * T * sqrt(T) * (1.0 + 4.65 * mu * mu)
             profile += p0
             wake_vi += v
             if motor:
@@ -238,7 +243,7 @@ class Motors(Component):
             tot = sum(ws)
             if tot > 0.0:
                 scale = self.wake_interference * vi_mean * skew * (0.5 * n) / tot
-                induced += sum(w * thrust[i] for i, w in enumerate(ws)) * scale
+                induced += sum([w * thrust[i] for i, w in enumerate(ws)]) * scale
                 if motor:
                     for i, w in enumerate(ws):
                         shaft[i] += w * thrust[i] * scale

@@ -1,15 +1,6 @@
-"""The task runner: one ML task (``ml.task.Task``) executed during a mission. The mission loop drives
-it (all times are simulated seconds)::
-
-    runner = TaskRunner(task)
-    runner.bind(rng)                          # before each flight; rng from the mission seed
-    ...
-    if runner.due(t):                         # render a frame only when asked
-        runner.on_frame(t, frame, truth, drone_pos)
-    for ev in runner.advance(t):              # every tick: inferences finished by t
-        ...
-    busy_s, tx_b, tx_p, rx_b, rx_p = runner.take_usage()   # per energy tick, since the last call
-    runner.kpis()                             # at the end
+"""The task runner: one ML task (``ml.task.Task``) executed during a mission, on simulated
+seconds: ``bind(rng)`` before a flight; ``on_frame(t, frame, truth, drone_pos)`` when
+``due(t)``; ``advance(t)`` every tick; ``take_usage()`` per energy tick; ``kpis()`` at the end.
 
 What happens on a frame (``on_frame``): if the previous inference is still
 running, the frame is dropped (``on_busy="drop"``, counted in
@@ -32,7 +23,8 @@ frame now (the prediction is real) and schedules its simulated timeline:
   reach the model) for the modeled latency on ``ground_device``, then sends
   ``result_bytes`` back down. Latency = capture to result back on the drone.
   One request is in flight at a time (a synchronous client, like the
-  paper's): while it is, the task is busy.
+  paper's): while it is, the task is busy. In a fleet (``share``) the uplink
+  waits for the shared channel and the inference for the shared ground device.
 
 SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and
 alerts (``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight.
@@ -64,8 +56,7 @@ from .templates import Template
 _ZERO_USAGE = (0.0, 0, 0, 0, 0)
 _NO_EVENTS: tuple = ()
 
-#: the computer of a TaskRunner bound outside a Mission to a task without a device
-#: (a Mission binds the drone's own computer instead; FlockAI's drone carries a Pi 4)
+#: the computer of a TaskRunner bound outside a Mission (FlockAI's drone carries a Pi 4)
 STANDALONE_DEVICE = "raspberry-pi-4"
 
 class TaskRunner:
@@ -118,8 +109,13 @@ class TaskRunner:
         self.tx_bytes_total = self.rx_bytes_total = 0
         self.tx_packets_total = self.rx_packets_total = 0
         self.retransmissions = 0
+        self._ground, self._who = None, 0       # a fleet's SharedGround (remote tasks)
         self._bound = True
         return self
+
+    def share(self, ground, who: int) -> None:
+        """Queue this (remote) task on a fleet's ``SharedGround`` as drone ``who``."""
+        self._ground, self._who = ground, who
 
     def _need_bind(self):
         if not self._bound:
@@ -324,6 +320,9 @@ class TaskRunner:
         self._busy_seg(start, enc)
         t_up = start + enc
         up = self.link.transfer(n, dist, self.rng, direction="up")
+        g = self._ground
+        if g is not None:                  # a fleet: wait for the shared channel
+            t_up = g.uplink(self._who, t_up, up.seconds)
         self._radio_rec(t_up, up, "up")
         pred = err = count = None
         compute = 0.0
@@ -335,7 +334,8 @@ class TaskRunner:
         else:
             frame_g = decode_jpeg(data, grey=np.asarray(frame).ndim == 2) if is_image(frame) else frame
             pred, err, compute = self._infer(task.model, frame_g, self.ground_device)
-            t_g = t_up + up.seconds + compute
+            t_g = t_up + up.seconds
+            t_g = (g.compute(t_g, compute) if g is not None else t_g) + compute
             down = self.link.transfer(task.result_bytes, dist, self.rng, direction="down")
             self._radio_rec(t_g, down, "down")
             rx = down.payload_bytes
