@@ -53,15 +53,15 @@ class MemoStore:
             except Exception:           # a sealed entry unpack() cannot use: not trusted
                 status = "replaced"
         value = compute()
-        self.counts[status if self._put(key, pack(value)) else "computed"] += 1
+        self.counts[status if self._put(key, pack, value) else "computed"] += 1
         return value
 
-    def _put(self, key: str, plain) -> bool:
+    def _put(self, key: str, pack, value) -> bool:
         if not self.cache.writes:
             return False
         arrays: dict = {}
         try:
-            blob = seal(key, arrays, _header(plain, arrays), MAGIC)
+            blob = seal(key, arrays, _header(pack(value), arrays), MAGIC)
         except (TypeError, ValueError):        # not plain data: computed, not stored
             return False
         p = self.path(key)
