@@ -182,6 +182,9 @@ def _frame_arrays(df: pd.DataFrame, prefix: str, arrays: dict) -> dict:
             arrays[f"{prefix}{i}"] = s.cat.codes.to_numpy()
             cols.append({"name": c, "categories": [str(x) for x in s.cat.categories],
                          "ordered": bool(s.cat.ordered)})
+        elif pd.api.types.is_string_dtype(s.dtype) and all(isinstance(x, str) for x in s):
+            arrays[f"{prefix}{i}"] = s.to_numpy().astype(str)      # a fleet's "drone" column
+            cols.append({"name": c, "text": str(s.dtype)})
         else:
             arrays[f"{prefix}{i}"] = s.to_numpy()
             cols.append({"name": c})
@@ -195,6 +198,8 @@ def _frame(spec: dict, prefix: str, arrays: dict) -> pd.DataFrame:
         if "categories" in col:
             data[col["name"]] = pd.Categorical.from_codes(
                 a, categories=col["categories"], ordered=col["ordered"])
+        elif col.get("text"):
+            data[col["name"]] = pd.array(a.astype(object), dtype=col["text"])
         else:
             data[col["name"]] = a
     index = pd.Index(arrays[f"{prefix}index"], name=spec["index_name"])
