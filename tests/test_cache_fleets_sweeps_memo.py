@@ -304,3 +304,30 @@ def test_memo_modes_follow_the_cache(tmp_path):
     with caching(FlightCache(tmp_path, "read")) as c:
         views()
     assert c.memo.counts == {"hit": 1}
+
+
+def test_onnx_inference_is_memoised_on_the_model_bytes_and_the_input(tmp_path):
+    path = tmp_path / "det.onnx"
+    shutil.copy(MODELS / "detector.onnx", path)
+    model = fa.ml.OnnxModel(path, name="det")
+    frame = views().frames[0]
+    plain = model(frame)
+    cache = FlightCache(tmp_path / "cache")
+    with caching(cache):
+        model(frame)
+        again = model(frame)
+        other = model(frame[::-1].copy())                  # another input: a miss
+    assert cache.memo.counts == {"stored": 2, "hit": 1}
+    np.testing.assert_array_equal(again, plain)
+    assert not np.array_equal(other, plain)
+    x = model.preprocess(frame)
+    base = memo_key("onnx-run", {"model": path, "providers": ["CPUExecutionProvider"], "input": x})
+    data = bytearray(path.read_bytes())
+    data[-1] ^= 0xFF                                       # same size, one byte changed
+    path.write_bytes(bytes(data))
+    assert memo_key("onnx-run", {"model": path, "providers": ["CPUExecutionProvider"],
+                                 "input": x}) != base
+    env = cache_key.environment()
+    other_env = {**env, "versions": {**env["versions"], "onnxruntime": "0.0.1"}}
+    assert memo_key("onnx-run", {"model": path, "input": x}, other_env) != memo_key(
+        "onnx-run", {"model": path, "input": x}, env)
