@@ -54,9 +54,9 @@ def fixed_views(det_city):
 @pytest.mark.flockai_cache("readwrite")
 def test_a_tight_recall_budget_breaks_in_haze(fixed_views, det_model):
     """The search finds haze (the detector never saw it in training) and shrinks it.
-    Hypothesis's explain phase (which arguments did not matter) is left out: it tried
-    about 100 more conditions, three quarters of the search's time, for a note the
-    test does not read."""
+    Hypothesis's explain phase (which arguments did not matter) is left out: it took
+    three quarters of the search's time (32 of 42 s, profiled) for a note the test
+    does not read; finding and shrinking the haze are unchanged."""
     @settings(max_examples=12, deadline=None, derandomize=True, database=None,
               phases=[p for p in Phase if p is not Phase.explain])
     @given(cond=fst.conditions(noise=False))

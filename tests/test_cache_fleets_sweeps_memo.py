@@ -331,3 +331,17 @@ def test_onnx_inference_is_memoised_on_the_model_bytes_and_the_input(tmp_path):
     other_env = {**env, "versions": {**env["versions"], "onnxruntime": "0.0.1"}}
     assert memo_key("onnx-run", {"model": path, "input": x}, other_env) != memo_key(
         "onnx-run", {"model": path, "input": x}, env)
+
+
+def test_a_cached_flight_keeps_the_worlds_people(tmp_path):
+    """Regression: a flight read from the cache had no ``people`` (the flight-path
+    picture lost them)."""
+    def mission():
+        return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=1.0),
+                          world=WORLD)
+    with caching(FlightCache(tmp_path)):
+        flown = mission().run()
+        again = mission().run()
+    assert again.cache["status"] == "hit"
+    assert len(flown.people) == 30
+    np.testing.assert_array_equal(again.people, flown.people)
