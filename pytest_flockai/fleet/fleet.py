@@ -14,6 +14,7 @@ import math
 import time as _time
 
 from .. import _check
+from .. import cache as _cache
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
@@ -145,6 +146,10 @@ class Fleet:
         return f"Fleet({[fd.name for fd in self.drones]!r})"
 
     def run(self) -> "result.FleetResult":
+        found = _cache.lookup(self, result.FleetResult)     # the flight cache, if one is open
+        if found is not None and found.result is not None:
+            publish(found.result, self)
+            return found.result
         wall0 = _time.perf_counter()
         plans = self._plans()
         names = [fd.name for fd in self.drones]
@@ -163,6 +168,8 @@ class Fleet:
         stats["offload"] = off
         stats["ground"] = ground
         res = result.build(self, runs, stats, _time.perf_counter() - wall0)
+        if found is not None and found.status != "off":
+            found.store(res)
         publish(res, self)
         return res
 
