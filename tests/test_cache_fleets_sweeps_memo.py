@@ -17,6 +17,7 @@ from pytest_flockai.cache.store import entries
 from pytest_flockai.fleet.result import FleetResult
 from pytest_flockai.ml.envelope import envelope
 from pytest_flockai.ml.evaluation import FrameRecord, detection_kpis
+from pytest_flockai.ml.runner import TaskRunner
 from pytest_flockai.sweeps import runner
 
 MODELS = Path(__file__).resolve().parent.parent / "fixtures" / "models"
@@ -345,3 +346,19 @@ def test_a_cached_flight_keeps_the_worlds_people(tmp_path):
     assert again.cache["status"] == "hit"
     assert len(flown.people) == 30
     np.testing.assert_array_equal(again.people, flown.people)
+
+
+def test_measured_latency_times_the_model_not_a_memoised_answer(tmp_path):
+    """A task with ``latency="measured"`` times the model on the host: with the memo
+    open and the answer already stored, the model still runs (no hit, nothing stored)."""
+    model = fa.ml.OnnxModel(MODELS / "detector.onnx", name="det")
+    frame = views().frames[0]
+    cache = FlightCache(tmp_path / "cache")
+    with caching(cache):
+        model(frame)                                       # stored
+        for latency in ("measured", "modeled"):
+            r = TaskRunner(fa.Task(model, period_s=1.0, latency=latency,
+                                   device="jetson-orin-nano")).bind(np.random.default_rng(0))
+            pred, err, _ = r._infer(model, frame, r.device)
+            assert err is None and pred is not None
+    assert cache.memo.counts == {"stored": 1, "hit": 1}    # the modeled run's hit only

@@ -2,35 +2,34 @@
 seconds: ``bind(rng)`` before a flight; ``on_frame(t, frame, truth, drone_pos)`` when
 ``due(t)``; ``advance(t)`` every tick; ``take_usage()`` per energy tick; ``kpis()`` at the end.
 
-What happens on a frame (``on_frame``): if the previous inference is still
-running, the frame is dropped (``on_busy="drop"``, counted in
-``frames_dropped``) or queued (``on_busy="queue"``, up to ``max_queue``
-waiting frames, then dropped). Otherwise the runner RUNS the real model on the
-frame now (the prediction is real) and schedules its simulated timeline:
+What happens on a frame (``on_frame``): if the previous inference is still running, the
+frame is dropped (``on_busy="drop"``, counted in ``frames_dropped``) or queued
+(``on_busy="queue"``, up to ``max_queue`` waiting frames, then dropped). Otherwise the
+runner RUNS the real model on the frame now (the prediction is real) and schedules its
+simulated timeline:
 
-- ``onboard``: compute on the drone's device for the modeled latency
-  ``overhead_s + MACs / macs_per_s`` (or the measured, scaled host time). The
-  result is on board at the end: that is the inference latency. Then, as in
-  the paper's scenario 1 (section 5.2), the drone sends the frame, annotated
-  with the count and position and JPEG-encoded with OpenCV (real size), when
-  the predicted count reaches ``crowd_threshold`` (``alert="frame"``);
-  otherwise a ``result_bytes`` result message (count, position, time).
-  ``alert="result"`` always sends the small message.
-- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame
-  (``cv2.imencode``, quality ``jpeg_quality``: real byte size), sends it up
-  the link at the current distance to ``ground_station``, the ground
-  decodes it and runs the model on the *decoded* frame (so JPEG artefacts
-  reach the model) for the modeled latency on ``ground_device``, then sends
-  ``result_bytes`` back down. Latency = capture to result back on the drone.
-  One request is in flight at a time (a synchronous client, like the
-  paper's): while it is, the task is busy. In a fleet (``share``) the uplink
-  waits for the shared channel and the inference for the shared ground device.
+- ``onboard``: compute on the drone's device for the modeled latency ``overhead_s + MACs /
+  macs_per_s`` (or the measured, scaled host time). The result is on board at the end:
+  that is the inference latency. Then, as in the paper's scenario 1 (section 5.2), the
+  drone sends the frame, annotated with the count and position and JPEG-encoded with
+  OpenCV (real size), when the predicted count reaches ``crowd_threshold``
+  (``alert="frame"``); otherwise a ``result_bytes`` result message (count, position,
+  time). ``alert="result"`` always sends the small message.
+- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame (``cv2.imencode``,
+  quality ``jpeg_quality``: real byte size), sends it up the link at the current distance
+  to ``ground_station``, the ground decodes it and runs the model on the *decoded* frame
+  (so JPEG artefacts reach the model) for the modeled latency on ``ground_device``, then
+  sends ``result_bytes`` back down. Latency = capture to result back on the drone.
+  One request is in flight at a time (a synchronous client, like the paper's): while it
+  is, the task is busy. In a fleet (``share``) the uplink waits for the shared channel
+  and the inference for the shared ground device. ``latency="measured"`` times the
+  model on the host and never takes a memoised (``pytest_flockai.memo``) answer.
 
 SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and
 alerts (``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight.
 
-A model raising during inference gives a failed inference (``ok=False``,
-the exception text in ``error``, ``inference_failures``); the flight goes on.
+A model raising during inference gives a failed inference (``ok=False``, the exception
+text in ``error``, ``inference_failures``); the flight goes on.
 A link out of range fails a remote inference the same way.
 """
 
@@ -42,6 +41,7 @@ import time
 
 import numpy as np
 
+from .. import memo
 from ..comm.link import link as _link
 from ..compute.latency import (calibrate, compute_seconds, modeled_latency, resolve_device,
                                scale_to_device)
@@ -244,7 +244,8 @@ class TaskRunner:
         pred = err = None
         t0 = time.perf_counter()
         try:
-            pred = model(frame)
+            with memo.remembering(None if measured else memo.active()):
+                pred = model(frame)
         except Exception as e:  # the flight goes on
             err = f"{type(e).__name__}: {e}"
         wall = time.perf_counter() - t0
@@ -384,8 +385,7 @@ class TaskRunner:
                "frames_dropped": self.frames_dropped, "inference_failures": self.inference_failures,
                "tx_bytes": self.tx_bytes_total, "tx_packets": self.tx_packets_total,
                "rx_bytes": self.rx_bytes_total, "rx_packets": self.rx_packets_total,
-               "retransmissions": self.retransmissions,
-               "in_flight": len(self._pending)}
+               "retransmissions": self.retransmissions, "in_flight": len(self._pending)}
         m = self.scorer.crowd()
         if m is not None:
             out.update(crowd_encounters=m["crowd_encounters"], crowds_missed=m["crowds_missed"])
