@@ -81,10 +81,9 @@ class RotorDrag(Clocked):
         bx = r00 * ax + r10 * ay + r20 * az           # air-relative velocity, body frame
         by = r01 * ax + r11 * ay + r21 * az
         p, qq, rr = v[3], v[4], v[5]                   # free joint: body-frame angular velocity
-        c, act = self.c, self.act
+        c = self.c
         fx = fy = mx = my = mz = 0.0
-        for i, (x, y, h) in enumerate(self.hubs):
-            T = act[i]
+        for (x, y, h), T in zip(self.hubs, self.act.tolist()):
             if T <= 0.0:
                 continue
             k = -c * math.sqrt(T)
