@@ -66,7 +66,7 @@ def test_constant_speed_in_still_air_feels_the_h_force_of_the_formula():
         want = _formula(d, act, v, q)
         assert np.allclose(f, want, rtol=0.02, atol=1e-3), (t, f, want)
     f = np.mean([r[1] for r in cruise], axis=0)
-    # opposes the motion (+x), about 0.2 N for the Mavic at 12 m/s (body drag there: 2 N)
+    # opposes the motion (+x), about 0.12 N for the Mavic at 12 m/s (body drag there: 2 N)
     assert f[0] < -0.1 and abs(f[1]) < 0.02 * abs(f[0])
     body = 0.5 * RHO_SEA_LEVEL * d.airframe.drag_area_m2[0] * 12.0 ** 2
     assert 0.03 * body < -f[0] < 0.5 * body
@@ -81,7 +81,7 @@ def test_the_h_force_tilts_the_drone_further_at_the_same_speed():
         pitches.append(np.mean([math.asin(_rot(r[4])[0, 2]) for r in cruise]))
         if bd == 0.0:
             assert all(r[1] == [0.0, 0.0, 0.0] for r in rows)   # no component, no force
-    # thrust tilt: tan(pitch) = (body drag + H) / (m g); H adds about a tenth of body drag
+    # thrust tilt: tan(pitch) = (body drag + H) / (m g); H adds about 6 % to the body drag
     assert pitches[1] > pitches[0] * 1.03
 
 
