@@ -96,7 +96,10 @@ def test_crazyflie_holds_position_in_5mps_wind_and_tilts_into_it():
     t0 = tel[tel.stage == "pilot"].index[0]
     held = tel[(tel.stage == "pilot") & (tel.index > t0 + 5.0)]
     err = np.sqrt(held.x ** 2 + held.y ** 2 + (held.z - 1.0) ** 2)
-    assert err.max() < 0.5
+    # 0.5 m until issue 15's rotor drag: the H-force (airframe/rotor_drag.py) adds ~10 % to
+    # the wind's force on the Crazyflie and the slow integral leaves it 0.41 m downwind
+    # instead of 0.37 m (largest error 0.51 m, was 0.46 m); budget widened by 0.05 m
+    assert err.max() < 0.55
     # wind blows towards +x: the drone pitches its nose down into the wind (-x side),
     # i.e. thrust tilted towards -x: negative pitch about y in our x-forward frame
     assert held.pitch.mean() < -0.05

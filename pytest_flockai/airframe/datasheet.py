@@ -34,6 +34,7 @@ from ..energy.rotors import MOTOR_FIELDS
 from ..errors import ConfigError
 from ..physics import G, RHO_SEA_LEVEL
 from . import motor_law as _law
+from . import rotor_drag as _rotor_drag
 from .params import Field, Section
 
 INCH = 0.0254                      # m (exact, by definition)
@@ -181,7 +182,11 @@ def _max_speed(ds, km_coef, kv, rm, i0, pack_v, om_hover):
     return lo
 
 
-def _body(ds: Section, mass: float, n: int):
+def _body(ds: Section, mass: float, n: int, h_top: float):
+    """Inertia and drag areas. The drag areas close the force balance at top speed and
+    TOP_TILT_DEG: m g tan(tilt) = 1/2 rho CdA V^2 + H, H the rotors' drag there (rotor_drag.py;
+    in-plane speed V cos(tilt), its horizontal share cos(tilt)); the body's CdA is what is left
+    once the rotors' share is taken out (else the H-force would be counted twice)."""
     L, W, H = ds.body_size_m
     arm = 0.5 * ds.diagonal_m
     mb, mr = BODY_MASS_SHARE * mass, (1.0 - BODY_MASS_SHARE) * mass / n
@@ -190,7 +195,8 @@ def _body(ds: Section, mass: float, n: int):
                mb / 12.0 * (L * L + H * H) + n * mr * lever ** 2,
                mb / 12.0 * (L * L + W * W) + n * mr * arm ** 2]
     t = math.radians(TOP_TILT_DEG)
-    seen = 2.0 * mass * G * math.tan(t) / (RHO_SEA_LEVEL * ds.top_speed_m_s ** 2)
+    body_force = max(mass * G * math.tan(t) - h_top * math.cos(t), 0.2 * mass * G * math.tan(t))
+    seen = 2.0 * body_force / (RHO_SEA_LEVEL * ds.top_speed_m_s ** 2)
     az = TOP_CDA_PER_DIAG2 * ds.diagonal_m ** 2
     ax2 = (seen ** 2 - (az * math.sin(t)) ** 2)
     ax = math.sqrt(ax2) / math.cos(t) if ax2 > 0 else 0.2 * seen
@@ -212,17 +218,21 @@ def derive(ds: Section, pack_v: float) -> dict:
     om_design = om_h * math.sqrt(THRUST_TO_WEIGHT)
     eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, pack_v)
     om_max = _max_speed(ds, kq, kv, rm, i0, pack_v, om_h)
+    re_h = 0.75 * om_h * 0.5 * D * CHORD_RATIO * 0.5 * D / NU_SEA_LEVEL
+    blade_drag = ds.prop_blades * CHORD_RATIO / math.pi * CD_REF * (re_h / RE_REF) ** CD_RE_EXP
     rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
-             "time_constant_s": TAU_REF_S * D / TAU_REF_D}
+             "time_constant_s": TAU_REF_S * D / TAU_REF_D, "blade_drag": blade_drag}
     energy = {"figure_of_merit": fm, "induced_power_factor": KAPPA, "motor_efficiency": eta,
               "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE,
               "motor_kv_rpm_v": kv * 30.0 / math.pi, "motor_rm_ohm": rm, "motor_i0_a": i0,
               "motor_i0_rad_s": om_h}
     derived = {"ct": ct, "cp": cp, "figure_of_merit": fm, "hover_rad_s": om_h,
-               "reynolds_075": 0.75 * om_h * 0.5 * D * CHORD_RATIO * 0.5 * D / NU_SEA_LEVEL,
+               "reynolds_075": re_h, "blade_drag": blade_drag,
                "motor_efficiency": eta, "motor_kv_rpm_v": kv * 60.0 / (2.0 * math.pi),
                "motor_rm_ohm": rm, "motor_i0_a": i0}
-    return {"airframe": _body(ds, mass, n), "rotor": rotor, "energy": energy, "derived": derived}
+    h_top = n * _rotor_drag.h_force(blade_drag, D, kf, RHO_SEA_LEVEL, thrust / math.cos(
+        math.radians(TOP_TILT_DEG)), ds.top_speed_m_s * math.cos(math.radians(TOP_TILT_DEG)))
+    return {"airframe": _body(ds, mass, n, h_top), "rotor": rotor, "energy": energy, "derived": derived}
 
 
 def expand(data: dict, where: str) -> tuple[dict, dict | None]:

@@ -15,6 +15,7 @@ import math
 from .. import _check
 from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
+from .rotor_drag import BLADE_DRAG_DEFAULT
 
 
 class Field:
@@ -175,6 +176,10 @@ class Rotor(Section):
                                  bounds=(50.0, 10000.0, "rad/s, not rpm: 480 to 95000 rpm")),
         "time_constant_s": Field("pos", unit="s",
                                  bounds=(0.002, 0.5, "motor and propeller spin-up, 2 ms to 0.5 s")),
+        "blade_drag": Field("nonneg", BLADE_DRAG_DEFAULT,
+                            bounds=(0.0, 0.05, "solidity x section drag, ~0.001 to 0.01"),
+                            doc="sigma x Cd0 (rotor solidity times blade section drag) for the "
+                                "rotor drag (H-force, airframe/rotor_drag.py); 0: none"),
     }
 
     @property

@@ -38,6 +38,7 @@ class DroneData:
         ad = int(model.actuator_actadr[a0])
         self.act = data.act[ad:ad + n_rotors]
         self.body = model.body(f"{prefix}drone").id
+        self.xfrc = data.xfrc_applied[self.body]
 
     @property
     def time(self) -> float:
@@ -66,6 +67,7 @@ class DroneRun(Run):
         drone = plan.drone
         self.suite = suite
         self.model, self.data, self.shared = model, view, shared
+        self.rotor_views = (view.act, view.xfrc)
         self.events = EventLog()
         self.vehicle = st = VehicleState(name, index, e_usable=drone.battery.energy_j)
         q = view.qpos

@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 
 from ..airframe.model import build_spec
+from ..airframe.rotor_drag import RotorDrag
 from ..clock import Clocked
 from ..comm.traffic import Heartbeats, Traffic
 from ..control.controller import CascadedController
@@ -74,6 +75,11 @@ class Run:
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
         mujoco.mj_forward(self.model, self.data)
+        a0 = self.model.actuator("rotor0").id
+        ad, n = int(self.model.actuator_actadr[a0]), drone.airframe.rotor_count
+        #: the rotors' filtered thrusts and the drone body's applied force (RotorDrag)
+        self.rotor_views = (self.data.act[ad:ad + n],
+                            self.data.xfrc_applied[self.model.body("drone").id])
         self.events = EventLog()
         self.vehicle = st = VehicleState("drone", 0, e_usable=drone.battery.energy_j)
         st.home = (0.0, 0.0, float(self.data.qpos[2]))
@@ -119,6 +125,8 @@ class Run:
         if plan.wind is not None:
             rng = seed_sequence(plan.seed, "wind")
             comps.append(WindStep(plan.wind, st, self.model, np.random.default_rng(rng), plan.ctrl_dt))
+        if drone.rotor.blade_drag > 0.0:              # after the wind: this tick's air
+            comps.append(RotorDrag(drone, st, *self.rotor_views, plan.atmosphere.density))
         comps += [Heartbeats(self.traffic, drone.radio),
                   EnergyIntegrator(st, self.meter, d, self.traffic, tasks,
                                    energy_hz=plan.energy_hz, n_rotors=n_rot),
