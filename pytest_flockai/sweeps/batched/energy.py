@@ -29,16 +29,17 @@ MINVAL = 1e-15          # mjMINVAL: MuJoCo's guard in the projected-area quotien
 
 def drag(p, quat, vel, wind):
     """World-frame force of MuJoCo's ellipsoid blunt drag (``fluid_coefs[0]``; the
-    other coefficients are 0 and the air has no viscosity): in the ellipsoid's
-    frame f = -rho C A_proj(v) |v| v, A_proj = pi sqrt(((b c vx)^2 + (a c vy)^2 +
-    (a b vz)^2) / |v|^2), v the velocity relative to the wind."""
+    other coefficients are 0 and the air has no viscosity), as MuJoCo's
+    ``mj_viscousForces`` computes it: in the ellipsoid's frame f = -rho C A_proj |v| v,
+    A_proj = pi sqrt(sum (s_j s_k)^4 v_i^2 / sum (s_j s_k)^2 v_i^2) (s the semi-axes,
+    v the velocity relative to the wind; pi s_j s_k along each axis)."""
     R = rotation(quat)
     lv = R.T @ (vel - wind)
-    a, b, c = p["aero_size"][0], p["aero_size"][1], p["aero_size"][2]
-    num = (b * c * lv[0]) ** 2 + (a * c * lv[1]) ** 2 + (a * b * lv[2]) ** 2
-    den = jnp.sum(lv * lv)
-    area = jnp.pi * jnp.sqrt(num / jnp.maximum(MINVAL, den))
-    return R @ (-p["rho"] * jnp.sqrt(den) * area * p["aero_c"] * lv)
+    s0, s1, s2 = p["aero_size"][0], p["aero_size"][1], p["aero_size"][2]
+    a2 = jnp.stack([(s1 * s2) ** 2, (s2 * s0) ** 2, (s0 * s1) ** 2])
+    v2 = lv * lv
+    area = jnp.pi * jnp.sqrt(jnp.sum(a2 * a2 * v2) / jnp.maximum(MINVAL, jnp.sum(a2 * v2)))
+    return R @ (-p["rho"] * jnp.sqrt(jnp.sum(v2)) * area * p["aero_c"] * lv)
 
 
 def _dryden(h):

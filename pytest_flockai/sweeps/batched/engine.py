@@ -17,6 +17,7 @@ visibly in float32.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import jax
@@ -35,6 +36,8 @@ from . import rows as _rows
 
 #: s of simulated time per compiled chunk (the host checks for the end between chunks)
 CHUNK_S = 2.0
+#: XLA options of the chunk (see README: compile time against run time)
+COMPILER_OPTIONS: dict = {}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
 
 
@@ -51,7 +54,7 @@ def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
                        "sim_time_s": math.nan}
             continue
         groups.setdefault(key, []).append((i, m, num, model))
-    dev = jax.devices(device)[0] if device else None
+    dev = jax.devices(device)[0] if device else jax.devices()[0]
     with jax.enable_x64(True):
         for key, members in groups.items():
             out = _fly_group(key, members, dev)
@@ -101,13 +104,17 @@ def _init_state(num, model, sampler, dev):
 
 
 def _stack_states(states):
-    return jax.tree_util.tree_map(lambda *xs: jnp.stack([jnp.asarray(x) for x in xs]), *states)
+    """The variants' states stacked; strongly typed (numpy first), so the scan's output
+    has the input's types and the chunk compiles once."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])),
+                                  *states)
 
 
 def _fly_group(key, members, dev) -> list[dict]:
     nsub, _, ctrl_dt, book_dt, _, (kinds, tops), pkind = key[:7]
     nums = [num for _, _, num, _ in members]
-    p = _stack(nums)
+    p = jax.device_put(_stack(nums), dev)     # committed, like the chunk's outputs:
+    # uncommitted inputs would compile the chunk a second time
     leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
     samplers, states = [], []
     for _, m, num, model in members:
@@ -115,11 +122,12 @@ def _fly_group(key, members, dev) -> list[dict]:
         smp = m.wind.sampler(rng, ctrl_dt) if (m.wind is not None and m.wind.turbulent) else None
         samplers.append(smp)
         states.append(_init_state(num, model, smp, dev))
-    s = _stack_states(states)
+    s = jax.device_put(_stack_states(states), dev)
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
-    step = _chunk_fn(leaves, sorted(diff), treedef, nsub, ctrl_dt, book_dt,
-                     book_dt == ctrl_dt, kinds, pkind)
-    dvals = tuple(diff[j] for j in sorted(diff))
+    step = _chunk_fn(tuple(sorted(diff)), treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt,
+                     kinds, pkind)
+    dvals = jax.device_put(tuple(diff[j] for j in sorted(diff)), dev)
+    shared = jax.device_put(tuple(leaves), dev)
     t_end = max(num["t_end"] for num in nums)
     t = 0.0
     while True:
@@ -127,7 +135,7 @@ def _fly_group(key, members, dev) -> list[dict]:
         for b, smp in enumerate(samplers):
             if smp is not None:
                 noise[:, b, :] = smp.rng.standard_normal(3 * chunk_ticks).reshape(chunk_ticks, 3)
-        s = step(dvals, p, s, jnp.asarray(noise))
+        s = step(shared, dvals, p, s, jax.device_put(noise, dev))
         t += chunk_ticks * ctrl_dt
         if bool(jnp.all(s["end"] != 0)) or t > t_end + 2 * CHUNK_S:
             break
@@ -135,25 +143,24 @@ def _fly_group(key, members, dev) -> list[dict]:
     return _rows.rows(jax.device_get(s), nums, tops, book_dt)
 
 
-def _chunk_fn(leaves, diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
-    def model_of(dvals):
-        ls = list(leaves)
+@functools.lru_cache(maxsize=16)
+def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
+    """The compiled chunk of one batch structure (cached: a second sweep of the same
+    structure does not compile again)."""
+    def one(shared, dvals, p, s, noise):
+        ls = list(shared)
         for j, val in zip(diff_idx, dvals):
             ls[j] = val
-        return jax.tree_util.tree_unflatten(treedef, ls)
-
-    def one(dvals, p, s, noise):
-        m = model_of(dvals)
+        m = jax.tree_util.tree_unflatten(treedef, ls)
         new = _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind)
         new = jax.tree_util.tree_map(lambda a, b: jnp.asarray(b, dtype=a.dtype), s, new)
         return _sel(s["end"] != 0, s, new)
 
-    batched = jax.vmap(one, in_axes=(0, 0, 0, 0))
+    batched = jax.vmap(one, in_axes=(None, 0, 0, 0, 0))
 
-    @jax.jit
-    def run(dvals, p, s, noise):
-        return jax.lax.scan(lambda st, n: (batched(dvals, p, st, n), None), s, noise)[0]
-    return run
+    def run(shared, dvals, p, s, noise):
+        return jax.lax.scan(lambda st, n: (batched(shared, dvals, p, st, n), None), s, noise)[0]
+    return jax.jit(run, compiler_options=COMPILER_OPTIONS)
 
 
 def _contact(d):

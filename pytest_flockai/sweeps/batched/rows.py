@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from ...comm.traffic import ACK_BYTES
+from ...probes.builtin import BUILTIN
 from .params import END_REASONS
 
 
@@ -31,8 +32,12 @@ def rows(s, nums, tops, book_dt) -> list[dict]:
                     "packets_in": n_hb, "packets_out": n_hb,
                     "cpu_utilization": 0.0, "cpu_time_s": 0.0, "io_time_s": 0.0,
                     "mem_utilization": float(num["mem_utilization"])})
-        out.append(row)
+        out.append({k: row[k] for k in _ORDER if k in row})
     return out
+
+
+#: the core's column order: the built-in probes' metrics, in order
+_ORDER = ["end_reason", "error", "sim_time_s"] + [m.name for cls in BUILTIN for m in cls.metrics]
 
 
 def _flight(s, b, dt) -> dict:
