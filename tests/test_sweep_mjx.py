@@ -108,7 +108,7 @@ def test_the_batched_drag_is_mujocos_fluid_ellipsoid():
             ours = np.asarray(energy.drag({k: jax.numpy.asarray(v) for k, v in num.items()
                                            if k in ("aero_size", "aero_c", "rho")},
                                           quat, vel, wind))
-            assert np.allclose(ours, data.qfrc_fluid[:3], rtol=1e-9, atol=1e-12), (ours, data.qfrc_fluid[:3])
+            assert np.allclose(ours, data.qfrc_fluid[:3], rtol=1e-6, atol=1e-9), (ours, data.qfrc_fluid[:3])
             assert np.linalg.norm(ours) > 0.1
 
 
