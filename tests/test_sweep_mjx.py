@@ -42,14 +42,6 @@ def _zigzag():
     return fa.Mission(fa.drone("crazyflie-2-1"), pilot, seed=3)
 
 
-@pytest.fixture(scope="module")
-def hover():
-    _jax()
-    axes = dict(payload_kg=[0.0, 0.008], wind_mps=[0.0, 2.0])
-    return (fa.sweep(_hover(), workers=1, **axes),
-            fa.sweep(_hover(), backend="mjx", device="cpu", **axes))
-
-
 def _agree(cpu, bat):
     assert list(bat.columns) == list(cpu.columns)
     assert list(bat["end_reason"]) == list(cpu["end_reason"])
@@ -59,21 +51,32 @@ def _agree(cpu, bat):
         assert (rel <= REL).all(), f"{k}: cpu {list(cpu[k])} mjx {list(bat[k])}"
 
 
-def test_hover_over_payload_and_wind_agrees_with_the_core(hover):
-    cpu, bat = hover
+def test_hover_over_payload_and_wind_agrees_with_the_core_and_repeats():
+    """One test, so the batch compiles once (a module fixture would compile again on
+    each xdist worker): payload x wind, the same sweep again, and a battery-reserve
+    mission of the same batch structure (4 variants, payload differing)."""
+    _jax()
+    axes = dict(payload_kg=[0.0, 0.008], wind_mps=[0.0, 2.0])
+    cpu = fa.sweep(_hover(), workers=1, **axes)
+    bat = fa.sweep(_hover(), backend="mjx", device="cpu", **axes)
     assert list(cpu["end_reason"]) == ["landed"] * 4
     _agree(cpu, bat)
     # the variants really differ (a test that cannot fail would not see a lost axis)
     assert bat["energy_total_j"][2] > 1.4 * bat["energy_total_j"][0]
     assert (cpu.attrs["backend"], bat.attrs["backend"]) == ("process", "mjx")
-
-
-def test_the_batched_sweep_is_deterministic(hover):
-    _, first = hover
-    again = fa.sweep(_hover(), backend="mjx", device="cpu", payload_kg=[0.0, 0.008],
-                     wind_mps=[0.0, 2.0])
-    cols = [c for c in first.columns if c != "error"]
-    assert first[cols].equals(again[cols])
+    # determinism: same seed, same DataFrame
+    again = fa.sweep(_hover(), backend="mjx", device="cpu", **axes)
+    cols = [c for c in bat.columns if c != "error"]
+    assert bat[cols].equals(again[cols])
+    # the battery's reserve sends the drone home to land (EndConditions -> go_home)
+    reserve = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0),
+                         until="battery_reserve")
+    axes = dict(payload_kg=[0.0, 0.008], battery__reserve_fraction=[0.95, 0.97])
+    cpu = fa.sweep(reserve, workers=1, **axes)
+    bat = fa.sweep(reserve, backend="mjx", device="cpu", **axes)
+    assert list(cpu["end_reason"]) == ["landed"] * 4
+    assert cpu["flight_time_s"][1] < 0.8 * cpu["flight_time_s"][0]     # 3 % of the charge, not 5
+    _agree(cpu, bat)
 
 
 def test_zigzag_with_turbulent_wind_agrees_with_the_core():
