@@ -6,8 +6,8 @@
 Each cold run starts from an empty cache directory (``-o cache_dir=...``, a
 fresh temporary folder); the warm run repeats the last cold run's command on
 the cache it filled. Prints wall seconds, the warm speed-up, the flights the
-cache served, and the slowest tests of the warm run (what the cache does not
-cover: rendering and ML evaluations outside ``Mission.run()``).
+cache served, and the slowest tests of the warm run (what the cache and its memo
+of views, inference and scores do not cover).
 """
 
 from __future__ import annotations

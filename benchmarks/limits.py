@@ -25,7 +25,10 @@ what = "crazyflie hover, 10 s (import and one small flight)"
 # at 11.6 Hz would take hours), then turned into the DataFrame, as at the end of a flight
 import numpy as np
 from pytest_flockai.probes.telemetry import TelemetryRecorder
+class _Battery:
+    voltage_v, current_a = 15.4, 10.0
 class _Meter:
+    battery = _Battery()
     def totals_by_top(self):
         return {"motors": 1.0, "proc": 0.5, "comm": 0.1}
 class _Data:

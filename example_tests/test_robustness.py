@@ -6,7 +6,7 @@ finds the imaging condition breaking a recall budget and shrinks it."""
 import os
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import Phase, given, settings
 
 import pytest_flockai as fa
 import scenarios
@@ -49,9 +49,16 @@ def fixed_views(det_city):
                                          (-60.0, 80.0, 25.0, 2.0)], {"fov_deg": 51.0})
 
 
+#: derandomized, so the same frames are scored on every run: the flight cache's memo keeps
+#: their COCO scores (the search's cost), as for the wind fuzz of test_what_ifs.py
+@pytest.mark.flockai_cache("readwrite")
 def test_a_tight_recall_budget_breaks_in_haze(fixed_views, det_model):
-    """The search finds haze (the detector never saw it in training) and shrinks it."""
-    @settings(max_examples=12, deadline=None, derandomize=True, database=None)
+    """The search finds haze (the detector never saw it in training) and shrinks it.
+    Hypothesis's explain phase (which arguments did not matter) is left out: it took
+    three quarters of the search's time (32 of 42 s, profiled) for a note the test
+    does not read; finding and shrinking the haze are unchanged."""
+    @settings(max_examples=12, deadline=None, derandomize=True, database=None,
+              phases=[p for p in Phase if p is not Phase.explain])
     @given(cond=fst.conditions(noise=False))
     def recall_holds(cond):
         frames = fixed_views.under(cond)

@@ -9,6 +9,7 @@ from hypothesis import given, settings
 import pytest_flockai as fa
 from pytest_flockai import strategies as fst
 from pytest_flockai.budgets import check
+from pytest_flockai.cache import cacheable
 
 import scenarios
 
@@ -58,6 +59,7 @@ def test_fuzz_wind_and_battery_against_a_flight_time_budget(wind, mah):
     check(r, endurance_s=">= 24 min", crashed="== 0")
 
 
+@cacheable     # collect() only reads the view: its flights may come from the flight cache
 class Detections(fa.probes.Probe):
     """The paper's app-level probe: crowds detected per minute (section 4.5)."""
     name = "app"

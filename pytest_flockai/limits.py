@@ -29,10 +29,13 @@ MAX_TELEMETRY_ROWS = 500_000
 MAX_PROBE_SAMPLES = 250_000
 #: m: the longest side of a world (``World.urban``/``World.scene`` ``size``)
 MAX_WORLD_SIDE_M = 2_000.0
-#: people in a world (scattered plus crowds, or listed)
-MAX_PEOPLE = 10_000
-#: vehicles in a world
-MAX_VEHICLES = 2_000
+#: people in a world (scattered plus crowds, or listed). Every articulated figure adds
+#: ~120 mesh vertices and ~200 faces to the flight's MuJoCo model, and MuJoCo keeps a
+#: bounding-volume hierarchy of every face: at 10,000 people and 2,000 cars a flight
+#: peaked at 1.8 GiB (benchmarks/limits.py), at 3,000 and 1,000 at 0.74 GiB
+MAX_PEOPLE = 3_000
+#: vehicles in a world (~ 0.07 MiB of compiled model each, articulated cars)
+MAX_VEHICLES = 1_000
 #: points of one ``Waypoints`` pilot (a ZigZag's legs included)
 MAX_WAYPOINTS = 100_000
 #: m: how far from home (horizontally or in altitude) a pilot may send the drone

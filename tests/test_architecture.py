@@ -14,7 +14,7 @@ PKG = Path(__file__).resolve().parent.parent / "pytest_flockai"
 #: bottom to top; a name is a top-level module or subpackage of pytest_flockai
 LAYERS = [
     {"errors", "physics", "phases", "clock", "_check", "_io", "kpis", "recording", "result",
-     "limits"},
+     "limits", "memo"},
     {"compute", "world"},
     {"energy", "sensors"},
     {"comm", "airframe"},
@@ -24,9 +24,10 @@ LAYERS = [
      "plugin", "__init__", "sweeps"},
 ]
 PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
-#: function-level imports that are fine: optional extras and GL backends loaded on demand
+#: function-level imports that are fine: optional extras, GL backends loaded on demand, and
+#: scipy.stats (a dependency, but ~1 s to import: only the Latin-hypercube design needs it)
 OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
-            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw"}
+            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats"}
 #: the import-time MuJoCo/GL guard of the package itself (see its docstring), and the
 #: sweep runner loading the batched backend, whose modules import JAX (the optional
 #: extra ``mjx``), only when ``backend="mjx"`` is asked for

@@ -238,7 +238,7 @@ CASES = [
     ("urban-crowd-short", lambda c: fa.World.urban(crowds=[(0, 0, 10)]), ("crowds[0]", "(0, 0, 10)")),
     ("urban-crowd-outside", lambda c: fa.World.urban(crowds=[(1e6, 0, 10, 5)]), ("crowds[0].x", "1000000.0")),
     ("urban-crowd-too-dense", lambda c: fa.World.urban(crowds=[(0, 0, 10_000, 1)]), ("crowds[0].count", "10000")),
-    ("urban-crowds-too-many", lambda c: fa.World.urban(size=(2000, 2000), people=9_000, crowds=[(0, 0, 5000, 50)]), ("people", "14000")),
+    ("urban-crowds-too-many", lambda c: fa.World.urban(size=(2000, 2000), people=2_000, crowds=[(0, 0, 2000, 50)]), ("people", "4000")),
     ("scene-people-int", lambda c: fa.World.scene(people=5), ("people", "5")),
     ("scene-people-3d", lambda c: fa.World.scene(people=[(0, 0, 0)]), ("people", "(0, 0, 0)")),
     ("scene-people-nan", lambda c: fa.World.scene(people=[(math.nan, 0)]), ("people", "non-finite")),

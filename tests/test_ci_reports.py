@@ -2,6 +2,7 @@
 Markdown job summary, GITHUB_STEP_SUMMARY, and the HTML dashboard, this one
 loaded in a real headless Chromium (skipped where none is installed)."""
 
+import base64
 import html.parser
 import json
 import re
@@ -224,3 +225,19 @@ def test_pytest_html_extras(pytester):
     assert re.search(r"(>|&gt;|&amp;gt;)= 1 h", text)             # the budget, however escaped
     # 2 flights x (path, energy) + the attached map; pytest-html escapes the extras' markup
     assert text.count("data:image/png;base64") >= 5
+
+
+def test_a_picture_shared_by_several_tests_is_embedded_once():
+    """A module-scoped flight's pictures appear under every test that uses it: the first
+    embeds the image, the others link to it (the example suite's dashboard was 5.4 MB)."""
+    shared = {"title": "hover: flight path", "data": base64.b64encode(PNG_BYTES).decode()}
+    own = {"title": "map", "data": base64.b64encode(PNG_BYTES + b"x").decode()}
+    doc = {"summary": {"tests": 3}, "tests": [{"nodeid": f"t.py::test_{i}"} for i in range(3)]}
+    pics = {"t.py::test_0": [shared], "t.py::test_1": [shared, own], "t.py::test_2": [shared]}
+    text = dash.dashboard(doc, pictures=pics)
+    page = parse(text)
+    assert sorted(i["alt"] for i in page.images) == ["hover: flight path", "map"]
+    assert text.count(shared["data"]) == 1
+    links = re.findall(r'<a href="#(pic-[0-9a-f]+)">same picture as t\.py::test_0</a>', text)
+    assert len(links) == 2 and f'id="{links[0]}"' in text
+    assert text.count("<figcaption") == 4                # every picture still has its caption

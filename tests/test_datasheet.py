@@ -128,3 +128,82 @@ def test_motors_sized_for_the_maximum_takeoff_mass_lose_less_at_hover(tmp_path):
     assert sized.datasheet["motor_efficiency"] > plain.datasheet["motor_efficiency"] + 0.02
     # the hover point itself (propeller, speed) does not depend on it
     assert sized.datasheet["hover_rad_s"] == pytest.approx(plain.datasheet["hover_rad_s"])
+
+
+def test_motor_size_laws_follow_their_published_motor_set():
+    from pytest_flockai.airframe import motor_law as law
+    # each reference motor's datasheet Rm and I0 from its mass and Kv, within a factor of two;
+    # the log scatter of the motor constant about the law is small (0.11 on this set)
+    errs = []
+    for name, kv, i0, rm, grams in law.REFERENCE_MOTORS:
+        kv_si = kv * 2 * math.pi / 60
+        pred = law.winding_resistance(grams / 1000, kv_si)
+        assert 0.5 < pred / rm < 2.0, name
+        errs.append(math.log(pred / rm) / 2)      # Rm ~ 1/Km^2: half the log error is Km's
+        p0 = law.iron_loss_w(grams / 1000, kv_si * law.I0_TEST_V)
+        assert 0.3 < p0 / (i0 * law.I0_TEST_V) < 3.0, name
+    assert (sum(e * e for e in errs) / len(errs)) ** 0.5 < 0.15
+    # larger motors of a line are relatively better than geometric similarity's m^(5/6)
+    assert 5 / 6 < law.KM_EXP < 1.0
+    # a motor outside the set: T-Motor F40 III 2400 Kv, 30.8 g, 42 mOhm (T-Motor specifications,
+    # as quoted by cameracopter.es/index.php/es/articles-es/39-reviews-es/292-tmotorf40iii-es)
+    assert law.winding_resistance(0.0308, 2400 * 2 * math.pi / 60) == pytest.approx(0.042, rel=0.3)
+
+
+def test_iron_loss_rises_with_speed_as_steinmetz():
+    from pytest_flockai.airframe import motor_law as law
+    assert law.iron_loss_w(0.1, 800.0) / law.iron_loss_w(0.1, 200.0) == pytest.approx(4 ** 1.5)
+    assert law.iron_loss_w(0.2, 500.0) > law.iron_loss_w(0.1, 500.0)
+
+
+def test_overrides_of_a_datasheet_blueprint_are_derived_again(tmp_path):
+    base = fa.drone("dji-air-2s")
+    heavy = fa.drone("dji-air-2s", mass_kg=0.7)
+    assert heavy.airframe.mass_kg == 0.7 and heavy.payload_kg == 0.0
+    # the hover point, the propeller's Reynolds number and the motors sized for 0.7 kg follow
+    d0, d1 = base.datasheet, heavy.datasheet
+    assert d1["hover_rad_s"] == pytest.approx(d0["hover_rad_s"] * math.sqrt(0.7 / 0.595), rel=0.03)
+    assert d1["reynolds_075"] > d0["reynolds_075"]
+    assert heavy.energy.component("motors").motor_rm_ohm != base.energy.component("motors").motor_rm_ohm
+    assert heavy.rotor.max_speed_rad_s > base.rotor.max_speed_rad_s
+    # same as writing the value into the blueprint's [datasheet] table
+    text = (BLUEPRINTS / "dji-air-2s.toml").read_text()
+    assert "mass_kg = 0.595 " in text
+    p = tmp_path / "air-700g.toml"
+    p.write_text(text.replace("mass_kg = 0.595 ", "mass_kg = 0.7 "))
+    assert d1 == fa.drone(str(p)).datasheet
+    # the pack voltage sets the motor model (Kv from the design speed at that voltage)
+    assert fa.drone("dji-air-2s", battery_v=12.0).datasheet["motor_kv_rpm_v"] < d0["motor_kv_rpm_v"]
+    assert fa.drone("dji-air-2s", motor_kv=1100.0).datasheet["motor_kv_rpm_v"] == 1100.0
+    assert fa.drone("dji-air-2s", datasheet__prop_pitch_in=4.5).datasheet["ct"] > d0["ct"]
+    # a payload is the same drone carrying more: nothing derived again
+    loaded = fa.drone("dji-air-2s", payload_kg=0.1)
+    assert loaded.datasheet == d0 and loaded.mass_kg == pytest.approx(0.695)
+
+
+def test_datasheet_overrides_refused_where_they_cannot_be_derived():
+    with pytest.raises(ConfigError, match=r"prop_diameter_in=9\.0 is a \[datasheet\] field, and this "
+                                          r"blueprint has no \[datasheet\] table"):
+        fa.drone("dji-mavic-2-pro", prop_diameter_in=9.0)
+    with pytest.raises(ConfigError, match="datasheet__mass_kg"):
+        fa.drone("dji-mavic-2-pro", datasheet__mass_kg=1.0)
+    with pytest.raises(ConfigError, match="unknown override 'datasheet__mas_kg'.*mass_kg"):
+        fa.drone("dji-air-2s", datasheet__mas_kg=1.0)
+    with pytest.raises(ConfigError, match=r"\[datasheet\]: mass_kg = -1\.0 .*allowed: > 0"):
+        fa.drone("dji-air-2s", mass_kg=-1.0)
+    # a fitted blueprint's mass_kg stays its airframe field
+    assert fa.drone("dji-mavic-2-pro", mass_kg=1.0).airframe.mass_kg == 1.0
+
+
+def test_a_datasheet_no_load_current_is_taken_at_its_test_voltage(tmp_path):
+    # a maker's I0 is measured without load at a test voltage (10 V by default): at hover the
+    # no-load current follows the iron-loss law, I0 ~ omega^0.5 (loss ~ omega^1.5 / EMF ~ omega)
+    extra = "motor_kv = 1400.0\nmotor_rm_ohm = 0.3\nmotor_i0_a = 0.5\nprop_blades = 2 "
+    d = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": extra})))
+    kv = 1400.0 * 2 * math.pi / 60
+    at_hover = 0.5 * math.sqrt(d.datasheet["hover_rad_s"] / (kv * 10.0))
+    assert d.datasheet["motor_i0_a"] == pytest.approx(at_hover)
+    m = d.energy.component("motors")
+    assert (m.motor_i0_a, m.motor_i0_rad_s) == (pytest.approx(at_hover), d.datasheet["hover_rad_s"])
+    d7 = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": "motor_i0_v = 7.4\n" + extra})))
+    assert d7.datasheet["motor_i0_a"] == pytest.approx(at_hover * math.sqrt(10.0 / 7.4))

@@ -7,7 +7,8 @@ import math
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai.energy.components import Usage, _descent_inflow
+from pytest_flockai.energy.components import Usage
+from pytest_flockai.energy.rotors import _descent_inflow
 
 
 def _glauert(x):          # axial descent, normal working branch: v (v + x) = 1, v > -x

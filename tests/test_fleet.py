@@ -7,6 +7,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai.errors import ConfigError
+from pytest_flockai.ml.events import SharedGround
 
 MAVIC = "dji-mavic-2-pro"
 
@@ -132,7 +133,19 @@ def test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time():
     (lambda d, p: fa.Fleet([fa.FleetDrone("a", d, p), fa.FleetDrone("b", fa.drone("crazyflie-2-1"),
                                                                      p, pad=(5, 0))]),
      r"the drones' \[sim\] rates differ .*allowed: one physics_hz and control_hz"),
-    (lambda d, p: fa.FleetDrone("a", d, p, tasks=[object()]), r"tasks are not supported in a fleet"),
+    (lambda d, p: fa.FleetDrone("a", d, p, tasks=[object()]),
+     r"FleetDrone 'a': Mission: tasks\[0\] = .* is not a Task"),
+    (lambda d, p: fa.FleetDrone("a", d, p, tasks=[fa.Task(_model(), sensor="gps")]),
+     r"task 'cnn' reads sensor = 'gps'; in a fleet a task reads the drone's camera only"),
+    (lambda d, p: fa.Fleet([fa.FleetDrone("a", d, p, tasks=[_task("remote")]),
+                            fa.FleetDrone("b", d, p, pad=(5, 0),
+                                          tasks=[_task("remote", link="sik-915")])]),
+     r"the remote tasks' link differ .*allowed: one link for the fleet's one ground station"),
+    (lambda d, p: fa.Fleet([fa.FleetDrone("a", d, p, tasks=[_task("remote")])],
+                           offload=fa.fleet.Offload()),
+     r"offload = .* and remote tasks \('a': 'cnn'\) together are not supported"),
+    (lambda d, p: fa.Fleet([fa.FleetDrone("a", d, p)], shared_link="yes"),
+     r"shared_link = 'yes' is not allowed"),
 ])
 def test_bad_fleets_raise_config_errors(make, match):
     with pytest.raises(ConfigError, match=match):
@@ -223,3 +236,94 @@ def test_bad_offload():
         fa.fleet.Offload(link="wifi-6")
     with pytest.raises(ConfigError, match=r"Fleet: offload = 3 is not allowed"):
         fa.Fleet([fa.FleetDrone("a", fa.drone(MAVIC), fa.pilots.Hover(5, 1))], offload=3)
+
+
+# -- ML tasks and cameras on fleet drones -----------------------------------------------
+
+def _bright(frame):
+    """A real (if simple) model: the mean brightness of the drone's own rendered frame."""
+    return float(np.asarray(frame).mean())
+
+
+def _model(macs=1e9):
+    return fa.ml.PythonModel(_bright, macs=macs, name="cnn")
+
+
+def _task(execution, period_s=0.5, **kw):
+    kw.setdefault("ground_station", (0, -20, 1))
+    kw.setdefault("crowd_threshold", 1000.0)                 # no alert frames
+    return fa.Task(_model(kw.pop("macs", 1e9)), period_s=period_s, execution=execution, **kw)
+
+
+def camera_fleet(n, execution="remote", shared_link=True, **task):
+    """``n`` Mavics with a small camera (64 x 48) hovering 15 m up over the city, 25 m apart,
+    each running its own camera task every 0.5 s."""
+    world = fa.World.urban(seed=3, size=(160.0, 160.0), people=40, max_building_height=10.0)
+    mavic = fa.drone(MAVIC, width=64, height=48)
+    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", mavic, fa.pilots.Hover(15, 6),
+                                   pad=(25 * i - 40, 10), seed=i, tasks=[_task(execution, **task)])
+                     for i in range(n)], world=world, shared_link=shared_link).run()
+
+
+def test_two_drones_with_camera_tasks_get_their_own_latency_and_evaluation_kpis():
+    r = camera_fleet(2, "onboard", macs=5e8)
+    preds = {}
+    for name in ("drone-1", "drone-2"):
+        k = {key[len(name) + 1:]: v for key, v in r.kpis.items() if key.startswith(name + ".")}
+        assert k["cnn.inference_count"] >= 10
+        assert 0 < k["cnn.inference_latency_p95_s"] == k["inference_latency_p95_s"] < 0.5
+        assert "cnn.count_mae" in k                   # the task's evaluation against the truth
+        assert k["cpu_time_s"] > 0                   # the on-board computer was busy
+        preds[name] = [e["count"] for e in r.events if e["kind"] == "inference"
+                       and e["drone"] == name]
+    # each drone renders its own view of the shared world: they see different ground
+    assert preds["drone-1"] != preds["drone-2"]
+    assert r.kpis["fleet.inference_latency_p95_s"] > 0
+
+
+def test_remote_task_latency_grows_with_the_fleet_on_a_shared_link():
+    """64 kbit/s telemetry radio: a 64 x 48 JPEG takes ~0.3 s of airtime, frames every
+    0.5 s, so four drones sharing the channel queue for it; on their own channels they
+    do not (the ground GPU is shared in both, and fast)."""
+    shared = {n: camera_fleet(n, link="sik-915").kpis for n in (1, 4)}
+    own4 = camera_fleet(4, link="sik-915", shared_link=False).kpis
+    p1, p4 = (shared[n]["fleet.inference_latency_p95_s"] for n in (1, 4))
+    print(f"remote task p95 on a shared 64 kbit/s link: 1 drone {p1:.3f} s, 4 drones {p4:.3f} s;"
+          f" 4 drones on their own links {own4['fleet.inference_latency_p95_s']:.3f} s")
+    assert p4 > 1.5 * p1
+    for i in range(1, 5):
+        assert own4[f"drone-{i}.cnn.inference_latency_p95_s"] > 0
+    assert shared[4]["link.queue_delay_p95_s"] > 0.1 and shared[1]["link.queue_delay_p95_s"] == 0
+    assert own4["link.queue_delay_p95_s"] == 0.0
+    assert own4["fleet.inference_latency_p95_s"] < 1.2 * p1
+    assert 0 < shared[4]["ground.utilization"] < 0.1
+
+
+def test_camera_fleets_are_deterministic():
+    a, b = camera_fleet(2, link="sik-915").kpis, camera_fleet(2, link="sik-915").kpis
+    assert a == b and a["drone-2.cnn.inference_count"] > 0
+
+
+def test_shared_ground_is_one_fifo_channel_and_one_fifo_device():
+    g = SharedGround(shared_link=True)
+    assert g.uplink(0, 1.0, 0.3) == 1.0 and g.uplink(1, 1.0, 0.3) == pytest.approx(1.3)
+    assert g.uplink(1, 5.0, 0.3) == 5.0                       # the channel was free again
+    assert g.compute(1.3, 0.1) == 1.3 and g.compute(1.35, 0.1) == pytest.approx(1.4)
+    assert g.link_wait == pytest.approx([0.0, 0.3, 0.0]) and g.busy_s == pytest.approx(0.2)
+    own = SharedGround(shared_link=False)                     # a channel per drone
+    assert own.uplink(0, 1.0, 0.3) == 1.0 and own.uplink(1, 1.0, 0.3) == 1.0
+
+
+def test_a_fleet_of_one_with_a_remote_camera_task_flies_like_the_single_mission():
+    """The same scheduler, camera and runner as a single flight: one drone alone on the
+    ground station gives the single Mission's KPIs, task KPIs included, exactly."""
+    world = fa.World.urban(seed=3, size=(160.0, 160.0), people=40, max_building_height=10.0)
+    mavic = fa.drone(MAVIC, width=64, height=48)
+    pilot = fa.pilots.Waypoints([(0, 0, 15), (20, 0, 15)], speed=5)
+    single = fa.Mission(mavic, pilot, world, tasks=[_task("remote", link="sik-915")], seed=3).run()
+    fleet = fa.Fleet([fa.FleetDrone("solo", mavic, pilot, pad=(0, 0), seed=3,
+                                    tasks=[_task("remote", link="sik-915")])], world=world).run()
+    assert single.kpis["cnn.inference_count"] > 20
+    for k, v in single.kpis.items():
+        w = fleet.kpis[f"solo.{k}"]
+        assert v == w or (math.isnan(v) and math.isnan(w)), k

@@ -149,7 +149,7 @@ def test_the_blueprint_file_bytes_change_the_key(tmp_path):
 
 
 @pytest.mark.parametrize("what", ["pytest-flockai", "mujoco", "onnxruntime",
-                                  "opencv-python-headless", "numpy"])
+                                  "opencv-python-headless", "numpy", "pycocotools"])
 def test_each_package_version_changes_the_key(what):
     env = cache_key.environment()
     assert env["versions"][what] is not None

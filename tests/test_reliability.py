@@ -146,7 +146,7 @@ def test_the_wall_clock_guard_stops_a_runaway_flight_with_the_partial_result():
 
 
 def test_limits_are_stated_in_the_error_and_can_be_raised(monkeypatch):
-    with pytest.raises(ConfigError, match="limits.MAX_PEOPLE = 10000"):
+    with pytest.raises(ConfigError, match="limits.MAX_PEOPLE = 3000"):
         fa.World.urban(people=limits.MAX_PEOPLE + 1)
     monkeypatch.setattr(limits, "MAX_PEOPLE", 30_000)
     assert len(fa.World.urban(size=(100, 100), people=10_001, building_density=0.0).people) == 10_001

@@ -18,11 +18,11 @@ derived one ("fields a user knows better").
   Blasius; the regime of small propellers, Lissaman, Annu. Rev. Fluid Mech. 15,
   1983). The figure of merit follows: FM = C_T^1.5 / sqrt(2) / C_P.
 - Motor: the DC motor model (Kv, winding resistance Rm, no-load current I0),
-  eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover.
-  Without Rm: the motor constant Km = Kt / sqrt(Rm) of a reference motor,
-  scaled with motor mass as Km ~ m^(5/6) (geometric similarity: Kt ~ N L^2,
-  Rm ~ N^2 / L, so Km^2 ~ L^5 whatever the winding N). Without I0: an iron
-  loss growing with speed as omega^1.5 (Steinmetz: hysteresis ~ f, eddy ~ f^2).
+  eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover (the energy
+  model recomputes it at every operating point, energy/rotors.py Motors). Without Rm or
+  I0: the size laws of ``motor_law.py``, fitted over a published line of 20 multirotor
+  motors of 18-360 g (Km = Kt / sqrt(Rm) ~ m^0.92, no-load loss ~ m^1.25 omega^1.5), for
+  motors weighing MOTOR_MASS_SHARE of the take-off mass they are sized for.
 - Body: drag areas from the top speed, inertia from a box and rotor masses.
 """
 
@@ -30,8 +30,10 @@ from __future__ import annotations
 
 import math
 
+from ..energy.rotors import MOTOR_FIELDS
 from ..errors import ConfigError
 from ..physics import G, RHO_SEA_LEVEL
+from . import motor_law as _law
 from .params import Field, Section
 
 INCH = 0.0254                      # m (exact, by definition)
@@ -56,16 +58,9 @@ KAPPA = 1.15
 CD_REF, RE_REF = 0.040, 6.0e4
 #: C_d ~ Re^CD_RE_EXP, laminar skin friction (Blasius: C_f = 1.328 Re^-1/2)
 CD_RE_EXP = -0.5
-#: reference motor for the motor constant: T-Motor F40 III 2400 Kv (T-Motor specifications,
-#: store-en.tmotor.com): 42 mOhm, 30.8 g -> Km = (60 / (2 pi 2400)) / sqrt(0.042) N m / sqrt(W)
-KM_REF = (60.0 / (2.0 * math.pi * 2400.0)) / math.sqrt(0.042)
-KM_REF_MASS_KG = 0.0308
 #: estimate: the motors of a multirotor weigh about 10 % of the take-off mass they are sized
 #: for (all motors; the maximum take-off mass where the maker publishes one)
 MOTOR_MASS_SHARE = 0.10
-#: estimate: no-load (iron and bearing) loss at full speed, 3 % of the maximum shaft
-#: power: idle currents of 0.3-1 A against 10-30 A maximum in outrunner datasheets
-IRON_LOSS_SHARE = 0.03
 #: estimate: design thrust-to-weight at full throttle when no Kv is given (the Mavic's
 #: 5 m/s ascent and 72 km/h at 35 deg tilt need 1.22; 2-3 is the usual design range)
 THRUST_TO_WEIGHT = 2.5
@@ -79,7 +74,7 @@ TOP_TILT_DEG = 35.0
 #: ~0.035 m^2 from above, Cd ~0.9) = 0.030 m^2 over 0.354^2 m^2
 TOP_CDA_PER_DIAG2 = 0.030 / 0.354 ** 2
 #: share of the fore rotors' near-wake induced velocity the aft rotors ingest once the wake is
-#: flat (energy/components.py Motors: weighted by the wake skew squared and by how far each rotor
+#: flat (energy/rotors.py Motors: weighted by the wake skew squared and by how far each rotor
 #: is aft). Geometry, not a fit: in the "x" layout each aft rotor sits directly behind a fore
 #: rotor, one to two diameters downstream, so a flattened wake covers its whole disc; the
 #: near-wake velocity (v_i, not the far wake's 2 v_i: the wake has not contracted yet)
@@ -110,9 +105,13 @@ class Datasheet(Section):
         "motor_kv": Field("optpos", None, unit="rpm/V", bounds=(10.0, 100000.0, "rpm per volt"),
                           doc="speed constant; default: the design thrust-to-weight at the pack voltage"),
         "motor_rm_ohm": Field("optpos", None, unit="ohm", bounds=(0.001, 50.0, "winding resistance"),
-                              doc="winding resistance; default: the motor-constant scaling"),
+                              doc="winding resistance; default: the size law of motor_law.py"),
         "motor_i0_a": Field("optpos", None, unit="A", bounds=(0.001, 20.0, "no-load current"),
-                            doc="no-load current at the hover speed; default: the iron-loss estimate"),
+                            doc="no-load current at motor_i0_v; default: the size law of motor_law.py"),
+        "motor_i0_v": Field("pos", _law.I0_TEST_V, unit="V",
+                            bounds=(0.5, 100.0, "the test voltage of a no-load current"),
+                            doc="the voltage motor_i0_a is given at (default 10 V, the usual test "
+                                "voltage of motor datasheets)"),
     }
 
 
@@ -150,22 +149,20 @@ def motor_efficiency(torque_nm: float, omega: float, *, kv_rad: float, rm: float
 
 
 def _motor(ds: Section, mass: float, n: int, q_hover: float, om_hover: float, om_max: float,
-           p_max: float, pack_v: float):
+           pack_v: float):
     """(eta at hover, Kv in rad/s/V, Rm, I0) from the datasheet or the defaults."""
-    # a motor sized for the maximum take-off mass: its full speed and power at that thrust
+    # a motor sized for the maximum take-off mass: its full speed at that thrust
     scale = max(mass, ds.max_takeoff_mass_kg or mass) / mass
-    om_max, p_max = om_max * math.sqrt(scale), p_max * scale ** 1.5
+    om_max = om_max * math.sqrt(scale)
     kv = ds.motor_kv * 2.0 * math.pi / 60.0 if ds.motor_kv else om_max / (0.85 * pack_v)
-    if ds.motor_rm_ohm is not None:
-        rm = ds.motor_rm_ohm
-    else:
-        km = KM_REF * (MOTOR_MASS_SHARE * scale * mass / n / KM_REF_MASS_KG) ** (5.0 / 6.0)
-        rm = (1.0 / kv) ** 2 / km ** 2            # Km = Kt / sqrt(Rm), Kt = 1 / Kv (SI)
+    m_motor = MOTOR_MASS_SHARE * scale * mass / n
+    rm = ds.motor_rm_ohm if ds.motor_rm_ohm is not None else _law.winding_resistance(m_motor, kv)
     if ds.motor_i0_a is not None:
-        i0 = ds.motor_i0_a
-    else:
-        p_iron = IRON_LOSS_SHARE * p_max * (om_hover / om_max) ** 1.5
-        i0 = p_iron * kv / om_hover               # the iron loss as current at the back EMF
+        # measured at the no-load speed Kv x motor_i0_v; at hover by the iron-loss law
+        # (loss ~ omega^1.5 over back EMF ~ omega)
+        i0 = ds.motor_i0_a * (om_hover / (kv * ds.motor_i0_v)) ** (_law.IRON_SPEED_EXP - 1.0)
+    else:                                         # the iron loss as current at the back EMF
+        i0 = _law.iron_loss_w(m_motor, om_hover) * kv / om_hover
     return motor_efficiency(q_hover, om_hover, kv_rad=kv, rm=rm, i0=i0), kv, rm, i0
 
 
@@ -213,12 +210,14 @@ def derive(ds: Section, pack_v: float) -> dict:
     kq = cp * RHO_SEA_LEVEL * D ** 5 / (8.0 * math.pi ** 3)
     q_h = kq * om_h ** 2
     om_design = om_h * math.sqrt(THRUST_TO_WEIGHT)
-    eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, kq * om_design ** 3, pack_v)
+    eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, pack_v)
     om_max = _max_speed(ds, kq, kv, rm, i0, pack_v, om_h)
     rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
              "time_constant_s": TAU_REF_S * D / TAU_REF_D}
     energy = {"figure_of_merit": fm, "induced_power_factor": KAPPA, "motor_efficiency": eta,
-              "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE}
+              "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE,
+              "motor_kv_rpm_v": kv * 30.0 / math.pi, "motor_rm_ohm": rm, "motor_i0_a": i0,
+              "motor_i0_rad_s": om_h}
     derived = {"ct": ct, "cp": cp, "figure_of_merit": fm, "hover_rad_s": om_h,
                "reynolds_075": 0.75 * om_h * 0.5 * D * CHORD_RATIO * 0.5 * D / NU_SEA_LEVEL,
                "motor_efficiency": eta, "motor_kv_rpm_v": kv * 60.0 / (2.0 * math.pi),
@@ -243,6 +242,10 @@ def expand(data: dict, where: str) -> tuple[dict, dict | None]:
         if not isinstance(own, dict):
             raise ConfigError(f"{where} [{sec}]: expected a table, got {own!r}")
         merged[sec] = {**out[sec], **own}
+    own_energy = data.get("energy", {})
+    if "motor_efficiency" in own_energy and not any(k in own_energy for k in MOTOR_FIELDS):
+        for k in MOTOR_FIELDS:         # the user's constant efficiency wins over the motor model
+            del merged["energy"][k]
     return merged, out["derived"]
 
 

@@ -21,6 +21,7 @@ from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
 from ..physics import G, RHO_SEA_LEVEL  # G re-exported: airframe.drone.G
 from ..sensors import Sensor
+from .datasheet import Datasheet
 from .datasheet import expand as _expand_datasheet
 from .params import Airframe, Battery, Camera, EnergyParams, Radio, Rotor, Sim
 
@@ -246,7 +247,10 @@ def drone(name_or_path: str | Path, **overrides) -> Drone:
 
     Keyword overrides: ``battery_mah``, ``battery_v``, ``payload_kg``,
     ``device``, ``physics_hz``, ``control_hz``, or any field name of a section
-    (``mass_kg=1.0``, ``usable_fraction=0.9``) or ``section__field``.
+    (``mass_kg=1.0``, ``usable_fraction=0.9``) or ``section__field``. On a blueprint
+    with a ``[datasheet]`` table, its fields (``mass_kg``, ``prop_diameter_in``,
+    ``motor_kv``...) and the pack voltage are set before the derivation, so everything
+    that depends on them is derived again; ``payload_kg`` is the same drone carrying more.
     """
     s = str(name_or_path)
     if s.endswith(".toml") or "/" in s or "\\" in s:
@@ -258,6 +262,10 @@ def drone(name_or_path: str | Path, **overrides) -> Drone:
                               f"available: {', '.join(names)} (or a path to a .toml file)")
         with (_blueprint_dir() / f"{s}.toml").open("rb") as fh:
             data, source = tomllib.load(fh), f"blueprint {s!r}"
+    if "datasheet" in data:
+        data, overrides = _datasheet_overrides(data, overrides)
+    else:
+        _no_datasheet_fields(overrides, source)
     d = Drone(data, source=source)
     for key, value in overrides.items():
         section, field = _resolve_override(key)
@@ -268,6 +276,39 @@ def drone(name_or_path: str | Path, **overrides) -> Drone:
         setattr(target, field, value)
     d.check(source)
     return d
+
+
+def _datasheet_overrides(data: dict, overrides: dict):
+    """(blueprint dict, remaining overrides): the overrides a [datasheet] derivation depends
+    on (its own fields; the pack voltage, which sets the motor model) written into the
+    tables before the Drone is built, so they are derived again."""
+    data = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
+    rest = {}
+    for key, value in overrides.items():
+        field = key[len("datasheet__"):] if key.startswith("datasheet__") else key
+        if field in Datasheet.FIELDS and (field == key or key.startswith("datasheet__")):
+            data["datasheet"][field] = value
+        elif key in ("battery_v", "voltage_v", "battery__voltage_v") and isinstance(
+                data.get("battery"), dict):
+            data["battery"]["voltage_v"] = value
+        elif key.startswith("datasheet__"):
+            raise ConfigError(f"drone(): unknown override {key!r}{close_matches(field, Datasheet.FIELDS)}; "
+                              f"allowed [datasheet] fields: {', '.join(Datasheet.FIELDS)}")
+        else:
+            rest[key] = value
+    return data, rest
+
+
+def _no_datasheet_fields(overrides: dict, source: str):
+    for key, value in overrides.items():
+        explicit = key.startswith("datasheet__")
+        field = key[len("datasheet__"):] if explicit else key
+        if explicit or (field in Datasheet.FIELDS
+                        and not any(field in c.FIELDS for c in _SECTIONS.values())):
+            raise ConfigError(f"{source}: override {key}={value!r} is a [datasheet] field, and this "
+                              f"blueprint has no [datasheet] table to derive from; allowed: the "
+                              f"fields of its own tables (airframe, rotor, battery, ...), e.g. "
+                              f"mass_kg, thrust_coeff, diameter_m")
 
 
 def _resolve_override(key: str):

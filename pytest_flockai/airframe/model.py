@@ -53,10 +53,13 @@ def world_spec(name: str, world=None, *, physics_dt: float, rho: float = RHO_SEA
 
 
 def add_drone(spec: mujoco.MjSpec, drone, *, rho: float = RHO_SEA_LEVEL, prefix: str = "",
-              pos=(0.0, 0.0)) -> None:
+              pos=(0.0, 0.0), visual: bool = True) -> None:
     """Add ``drone`` to ``spec`` standing at ``pos`` (x, y) on the ground: its body,
     joint, geoms, sites and actuators named with ``prefix`` (a fleet puts several
-    drones in one model; a single flight uses no prefix)."""
+    drones in one model; a single flight uses no prefix). ``visual=False`` leaves
+    out the arms and propellers: they neither collide nor carry mass (the inertia
+    is explicit), only cameras and rays see them, and each costs MuJoCo time on
+    every physics step (a fleet without cameras or rangefinders leaves them out)."""
     p = prefix
     af = drone.airframe
     L, W, H = af.body_size_m
@@ -77,10 +80,13 @@ def add_drone(spec: mujoco.MjSpec, drone, *, rho: float = RHO_SEA_LEVEL, prefix:
     r_prop = 0.5 * drone.rotor.diameter_m
     fmax = drone.rotor.max_thrust_n * rho / RHO_SEA_LEVEL
     for i, (x, y, spin) in enumerate(drone.rotor_layout()):
-        body.add_geom(name=f"{p}arm{i}", type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[0, 0, 0, x, y, 0],
-                      size=[0.1 * H, 0, 0], contype=0, conaffinity=0, rgba=[0.2, 0.2, 0.2, 1])
-        body.add_geom(name=f"{p}prop{i}", type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[x, y, 0.5 * H],
-                      size=[r_prop, 0.002, 0], contype=0, conaffinity=0, rgba=[0.7, 0.7, 0.75, 0.5])
+        if visual:
+            body.add_geom(name=f"{p}arm{i}", type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+                          fromto=[0, 0, 0, x, y, 0], size=[0.1 * H, 0, 0], contype=0,
+                          conaffinity=0, rgba=[0.2, 0.2, 0.2, 1])
+            body.add_geom(name=f"{p}prop{i}", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                          pos=[x, y, 0.5 * H], size=[r_prop, 0.002, 0], contype=0, conaffinity=0,
+                          rgba=[0.7, 0.7, 0.75, 0.5])
         body.add_site(name=f"{p}rotor{i}", pos=[x, y, 0.5 * H])
         act = spec.add_actuator(name=f"{p}rotor{i}", target=f"{p}rotor{i}",
                                 trntype=mujoco.mjtTrn.mjTRN_SITE)

@@ -259,6 +259,15 @@ class EnergyParams(Section):
         "flight_controller_w": Field("nonneg", unit="W"),
         "io_w": Field("nonneg", 0.0, unit="W"),
         "sensors": Field("powers", {}, doc="sensor name = watts"),
+        # the DC motor model, all four or none: with it the motors' efficiency is computed at
+        # each operating point (energy/rotors.py Motors); a [datasheet] blueprint derives them
+        "motor_kv_rpm_v": Field("optpos", None, unit="rpm/V", bounds=(10.0, 100000.0, "rpm per volt")),
+        "motor_rm_ohm": Field("optpos", None, unit="ohm",
+                              bounds=(0.0005, 1000.0, "winding resistance of any motor size")),
+        "motor_i0_a": Field("optpos", None, unit="A", bounds=(0.0001, 20.0, "no-load current"),
+                            doc="no-load current at motor_i0_rad_s"),
+        "motor_i0_rad_s": Field("optpos", None, unit="rad/s", bounds=(1.0, 20000.0, "rotor speed"),
+                                doc="the speed motor_i0_a is given at"),
     }
 
 

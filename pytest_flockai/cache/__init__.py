@@ -1,7 +1,9 @@
 """The flight cache: a completed FlightResult reused when nothing that shapes it
 changed (see ``key.py`` for what the key covers, ``store.py`` for the files).
 
-``Mission.run()`` asks the cache of the current context, if one is open::
+``Mission.run()`` and ``Fleet.run()`` ask the cache of the current context, if one
+is open (a fleet is keyed by every drone's full scenario and the fleet's own
+settings: pads, area, swath, offload)::
 
     from pytest_flockai.cache import FlightCache, caching
     with caching(FlightCache(".flights")):
@@ -18,8 +20,10 @@ from __future__ import annotations
 from contextlib import contextmanager
 from contextvars import ContextVar
 
+from .. import memo as _memo
 from ..errors import ConfigError
-from .key import Uncacheable, cacheable, flight_key
+from .key import Uncacheable, cacheable, flight_key, memo_key
+from .memo import MemoStore
 from .store import MODES, CacheWarning, CorruptEntry, FlightCache, Lookup
 
 _ACTIVE: ContextVar[FlightCache | None] = ContextVar("pytest_flockai_flight_cache", default=None)
@@ -27,13 +31,16 @@ _ACTIVE: ContextVar[FlightCache | None] = ContextVar("pytest_flockai_flight_cach
 
 @contextmanager
 def caching(cache: FlightCache | None):
-    """Use ``cache`` for every ``Mission.run()`` inside the block (None: no cache)."""
+    """Use ``cache`` for every ``Mission.run()`` and ``Fleet.run()`` inside the block,
+    and its memo store for the memoised computations (``pytest_flockai.memo``:
+    rendered views, detection scores, envelopes); None: no cache."""
     if cache is not None and not isinstance(cache, FlightCache):
         raise ConfigError(f"caching: cache = {cache!r} is not allowed; expected a FlightCache "
                           f"or None")
     token = _ACTIVE.set(cache)
     try:
-        yield cache
+        with _memo.remembering(cache.memo if cache is not None else None):
+            yield cache
     finally:
         _ACTIVE.reset(token)
 
@@ -42,11 +49,14 @@ def active() -> FlightCache | None:
     return _ACTIVE.get()
 
 
-def lookup(mission) -> Lookup | None:
-    """The current cache's answer for ``mission`` (None when no cache is open)."""
+def lookup(mission, result_type=None) -> Lookup | None:
+    """The current cache's answer for ``mission`` (None when no cache is open); a
+    ``Fleet`` passes its ``result_type`` (FleetResult)."""
     cache = _ACTIVE.get()
-    return cache.lookup(mission) if cache is not None else None
+    if cache is None:
+        return None
+    return cache.lookup(mission) if result_type is None else cache.lookup(mission, result_type)
 
 
-__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MODES", "Uncacheable",
-           "active", "cacheable", "caching", "flight_key", "lookup"]
+__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MODES", "MemoStore",
+           "Uncacheable", "active", "cacheable", "caching", "flight_key", "lookup", "memo_key"]

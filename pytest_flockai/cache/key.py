@@ -6,7 +6,7 @@ pilot, the world (its arrays too), the tasks (the model file's bytes for ONNX
 models), sensors, probes, wind, conditions, seed, ``until`` and every rate and
 limit of the mission, plus the environment that flies it: the package version
 and a hash of the package's own source files, and the versions of Python,
-NumPy, MuJoCo, ONNX Runtime and OpenCV.
+NumPy, MuJoCo, ONNX Runtime, OpenCV and pycocotools (the detection KPIs).
 
 Objects are keyed by their class and their attributes, recursively. A flight
 that runs code of yours (your functions, a ``PythonModel`` around a lambda, a
@@ -73,7 +73,8 @@ def environment() -> dict:
 @functools.lru_cache(maxsize=1)
 def _environment() -> dict:
     versions = {}
-    for dist in ("pytest-flockai", "mujoco", "onnxruntime", "opencv-python-headless", "numpy"):
+    for dist in ("pytest-flockai", "mujoco", "onnxruntime", "opencv-python-headless", "numpy",
+                 "pycocotools"):                  # pycocotools: the detection KPIs
         try:
             versions[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:
@@ -95,15 +96,26 @@ def source_hash() -> str:
 
 
 def flight_key(mission, env: dict | None = None) -> str:
-    """The hex key of ``mission``; raises Uncacheable when it cannot be keyed."""
-    if getattr(mission, "components", None):
-        names = ", ".join(type(c).__name__ for c in mission.components)
-        raise Uncacheable(f"the mission has components of its own ({names})")
-    if getattr(mission, "subscribers", None):
-        raise Uncacheable("the mission has live subscribers (Mission.subscribe)")
-    if getattr(mission, "dataset_dir", None) is not None:
-        raise Uncacheable("the mission records a dataset (dataset_dir), which writes files")
+    """The hex key of ``mission`` (a Mission, or a Fleet: its drones' missions and
+    its own settings); raises Uncacheable when it cannot be keyed."""
+    for m in getattr(mission, "missions", None) or [mission]:
+        if getattr(m, "components", None):
+            names = ", ".join(type(c).__name__ for c in m.components)
+            raise Uncacheable(f"the mission has components of its own ({names})")
+        if getattr(m, "subscribers", None):
+            raise Uncacheable("the mission has live subscribers (Mission.subscribe)")
+        if getattr(m, "dataset_dir", None) is not None:
+            raise Uncacheable("the mission records a dataset (dataset_dir), which writes files")
     doc = {"mission": _Walker().walk(mission, "mission"),
+           "environment": env if env is not None else environment()}
+    text = json.dumps(doc, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def memo_key(kind: str, inputs, env: dict | None = None) -> str:
+    """The hex key of a memoised computation (``pytest_flockai.memo``): its kind, its
+    inputs walked as a flight's are, and the environment; raises Uncacheable."""
+    doc = {"memo": kind, "inputs": _Walker().walk(inputs, kind),
            "environment": env if env is not None else environment()}
     text = json.dumps(doc, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()

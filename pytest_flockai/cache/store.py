@@ -16,9 +16,6 @@ flight, store it), ``"readwrite"``.
 
 from __future__ import annotations
 
-import hashlib
-import io
-import json
 import shutil
 import threading
 import warnings
@@ -32,8 +29,9 @@ from .._io import atomic_write
 from ..errors import ConfigError
 from ..result import FlightResult
 from . import key as _key
+from . import memo as _memo_store
+from .entry import MAGIC, CorruptEntry, read_entry, seal, unseal
 
-MAGIC = b"pytest-flockai-flight-cache/1\n"
 MODES = ("off", "read", "write", "readwrite")
 
 
@@ -74,6 +72,7 @@ class FlightCache:
         self.mode = mode
         self.write_error: str | None = None        # set once a write failed (warned once)
         self._lock = threading.Lock()               # guards write_error only, never a flight
+        self._memo = None
 
     @property
     def reads(self) -> bool:
@@ -83,6 +82,13 @@ class FlightCache:
     def writes(self) -> bool:
         return self.mode in ("write", "readwrite") and self.write_error is None
 
+    @property
+    def memo(self):
+        """The memo store beside the flights (``pytest_flockai.cache.memo``)."""
+        if self._memo is None:
+            self._memo = _memo_store.MemoStore(self)
+        return self._memo
+
     def path(self, key: str) -> Path:
         return self.directory / key[:2] / f"{key}.flight"
 
@@ -91,8 +97,9 @@ class FlightCache:
         shutil.rmtree(self.directory, ignore_errors=True)
 
     # -- lookups --------------------------------------------------------------------------
-    def lookup(self, mission) -> Lookup:
-        """The cached result of ``mission`` (status "hit"), or a Lookup to store it with."""
+    def lookup(self, mission, result_type=FlightResult) -> Lookup:
+        """The cached result of ``mission`` (a Mission, or a Fleet with ``result_type``
+        FleetResult) with status "hit", or a Lookup to store it with."""
         if self.mode == "off":
             return Lookup("off")
         try:
@@ -102,26 +109,18 @@ class FlightCache:
         status = "flown"
         if self.reads:
             try:
-                res = self.get(key)
+                res = self.get(key, result_type)
             except CorruptEntry as exc:
-                res, status = None, "replaced"
-                reason = str(exc)
-                return Lookup(status, key, reason, cache=self)
+                return Lookup("replaced", key, str(exc), cache=self)
             if res is not None:
                 res.cache = {"status": "hit", "key": key, "reason": None}
                 return Lookup("hit", key, result=res, cache=self)
         return Lookup(status, key, cache=self)
 
-    def get(self, key: str) -> FlightResult | None:
+    def get(self, key: str, result_type=FlightResult) -> FlightResult | None:
         """The entry of ``key``, None when there is none; CorruptEntry when it is unusable."""
-        p = self.path(key)
-        try:
-            data = p.read_bytes()
-        except (FileNotFoundError, NotADirectoryError):
-            return None
-        except OSError as exc:
-            raise CorruptEntry(f"cannot read {p}: {exc}") from None
-        return decode(data, key)
+        data = read_entry(self.path(key))
+        return None if data is None else decode(data, key, result_type)
 
     def put(self, key: str, result: FlightResult, *, replaced: bool = False) -> str:
         """Store ``result``; returns the Lookup status ("stored", "replaced" or "flown")."""
@@ -133,57 +132,44 @@ class FlightCache:
             p.parent.mkdir(parents=True, exist_ok=True)
             atomic_write(p, lambda fh: fh.write(blob), text=False)
         except OSError as exc:
-            with self._lock:
-                first = self.write_error is None
-                self.write_error = f"{self.directory}: {exc.strerror or exc}"
-            if first:
-                warnings.warn(f"pytest-flockai: the flight cache cannot be written "
-                              f"({self.write_error}); flights are flown and not stored for the "
-                              f"rest of this run", CacheWarning, stacklevel=2)
+            self.write_failed(exc)
             return "replaced" if replaced else "flown"
         return "replaced" if replaced else "stored"
 
-
-class CorruptEntry(Exception):
-    """A cache entry that must not be trusted (the message says why)."""
+    def write_failed(self, exc: OSError) -> None:
+        """Stop writing for the rest of the run; warn the first time."""
+        with self._lock:
+            first = self.write_error is None
+            self.write_error = f"{self.directory}: {exc.strerror or exc}"
+        if first:
+            warnings.warn(f"pytest-flockai: the flight cache cannot be written "
+                          f"({self.write_error}); flights are flown and not stored for the "
+                          f"rest of this run", CacheWarning, stacklevel=3)
 
 
 # -- the entry format ----------------------------------------------------------------------------
 def encode(key: str, result: FlightResult) -> bytes:
-    arrays, header = _arrays(result)
-    header_bytes = json.dumps(header).encode()
-    arrays["header"] = np.frombuffer(header_bytes, dtype=np.uint8)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    payload = buf.getvalue()
-    meta = {"key": key, "size": len(payload), "sha256": hashlib.sha256(payload).hexdigest()}
-    return MAGIC + json.dumps(meta).encode() + b"\n" + payload
+    """A flight's entry; a fleet's (a result with ``drones``) holds each drone's too."""
+    arrays: dict = {}
+    header = _arrays(result, "", arrays)
+    drones = getattr(result, "drones", None)
+    if drones is not None:
+        header["drones"] = [{"name": name, **_arrays(r, f"d{i}_", arrays)}
+                            for i, (name, r) in enumerate(drones.items())]
+    return seal(key, arrays, header)
 
 
-def decode(data: bytes, key: str) -> FlightResult:
-    if not data.startswith(MAGIC):
-        raise CorruptEntry("not a flight cache entry (bad magic)")
-    rest = data[len(MAGIC):]
-    nl = rest.find(b"\n")
+def decode(data: bytes, key: str, result_type=FlightResult) -> FlightResult:
+    header, arrays = unseal(data, key)
     try:
-        meta = json.loads(rest[:nl]) if nl > 0 else None
-    except ValueError:
-        meta = None
-    if not isinstance(meta, dict):
-        raise CorruptEntry("unreadable entry header")
-    payload = rest[nl + 1:]
-    if meta.get("key") != key:
-        raise CorruptEntry(f"entry is for key {str(meta.get('key'))[:12]}..., not {key[:12]}...")
-    if meta.get("size") != len(payload):
-        raise CorruptEntry(f"truncated: {len(payload)} of {meta.get('size')} bytes")
-    if meta.get("sha256") != hashlib.sha256(payload).hexdigest():
-        raise CorruptEntry("payload hash mismatch (the entry was modified)")
-    try:
-        with np.load(io.BytesIO(payload), allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-        header = json.loads(arrays.pop("header").tobytes().decode())
-        return _result(header, arrays)
-    except Exception as exc:   # a well-hashed but malformed payload: still never trusted
+        out = _result(header, "", arrays, result_type)
+        if "drones" in header:
+            out.drones = {d["name"]: _result(d, f"d{i}_", arrays, FlightResult)
+                          for i, d in enumerate(header["drones"])}
+        elif result_type is not FlightResult:
+            raise ValueError(f"a single flight's entry, not a {result_type.__name__}")
+        return out
+    except Exception as exc:
         raise CorruptEntry(f"malformed payload ({type(exc).__name__}: {exc})") from None
 
 
@@ -196,6 +182,9 @@ def _frame_arrays(df: pd.DataFrame, prefix: str, arrays: dict) -> dict:
             arrays[f"{prefix}{i}"] = s.cat.codes.to_numpy()
             cols.append({"name": c, "categories": [str(x) for x in s.cat.categories],
                          "ordered": bool(s.cat.ordered)})
+        elif pd.api.types.is_string_dtype(s.dtype) and all(isinstance(x, str) for x in s):
+            arrays[f"{prefix}{i}"] = s.to_numpy().astype(str)      # a fleet's "drone" column
+            cols.append({"name": c, "text": str(s.dtype)})
         else:
             arrays[f"{prefix}{i}"] = s.to_numpy()
             cols.append({"name": c})
@@ -209,28 +198,35 @@ def _frame(spec: dict, prefix: str, arrays: dict) -> pd.DataFrame:
         if "categories" in col:
             data[col["name"]] = pd.Categorical.from_codes(
                 a, categories=col["categories"], ordered=col["ordered"])
+        elif col.get("text"):
+            data[col["name"]] = pd.array(a.astype(object), dtype=col["text"])
         else:
             data[col["name"]] = a
     index = pd.Index(arrays[f"{prefix}index"], name=spec["index_name"])
     return pd.DataFrame(data, index=index, columns=[c["name"] for c in spec["columns"]])
 
 
-def _arrays(r: FlightResult):
-    arrays: dict = {}
+def _arrays(r: FlightResult, prefix: str, arrays: dict) -> dict:
     header = {"kpis": r.kpis, "events": r.events, "scenario": r.scenario,
               "energy_breakdown": r.energy_breakdown, "end_reason": r.end_reason,
               "wall_time_s": r.wall_time_s, "probe_errors": r.probe_errors,
-              "telemetry": _frame_arrays(r.telemetry, "t_", arrays), "probes": []}
+              "telemetry": _frame_arrays(r.telemetry, f"{prefix}t_", arrays), "probes": []}
     for j, (name, df) in enumerate(r.probe_samples.items()):
-        header["probes"].append({"name": name, **_frame_arrays(df, f"p{j}_", arrays)})
-    return arrays, header
+        header["probes"].append({"name": name, **_frame_arrays(df, f"{prefix}p{j}_", arrays)})
+    people = getattr(r, "people", None)
+    if people is not None:                 # the world's people, drawn on the flight path
+        arrays[f"{prefix}people"] = np.asarray(people)
+    return header
 
 
-def _result(h: dict, arrays: dict) -> FlightResult:
-    samples = {p["name"]: _frame(p, f"p{j}_", arrays) for j, p in enumerate(h["probes"])}
-    return FlightResult(h["kpis"], _frame(h["telemetry"], "t_", arrays), h["events"],
-                        h["scenario"], h["energy_breakdown"], h["end_reason"],
-                        h["wall_time_s"], probe_samples=samples, probe_errors=h["probe_errors"])
+def _result(h: dict, prefix: str, arrays: dict, result_type) -> FlightResult:
+    samples = {p["name"]: _frame(p, f"{prefix}p{j}_", arrays) for j, p in enumerate(h["probes"])}
+    out = result_type(h["kpis"], _frame(h["telemetry"], f"{prefix}t_", arrays), h["events"],
+                      h["scenario"], h["energy_breakdown"], h["end_reason"], h["wall_time_s"],
+                      probe_samples=samples, probe_errors=h["probe_errors"])
+    if f"{prefix}people" in arrays:
+        out.people = arrays[f"{prefix}people"]
+    return out
 
 
 def entries(directory) -> list[Path]:
@@ -239,5 +235,5 @@ def entries(directory) -> list[Path]:
     return sorted(d.glob("*/*.flight")) if d.is_dir() else []
 
 
-__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MODES", "decode", "encode",
-           "entries"]
+__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MAGIC", "MODES", "decode",
+           "encode", "entries"]

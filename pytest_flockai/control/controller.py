@@ -88,24 +88,26 @@ class CascadedController:
         q: qpos (x y z qw qx qy qz), v: qvel (vx vy vz world; wx wy wz body),
         sp: setpoint list (px py pz vx vy vz ax ay az yaw). Returns rotor thrusts (N).
         """
-        x, y, z, qw, qx, qy, qz = q[0], q[1], q[2], q[3], q[4], q[5], q[6]
-        vx, vy, vz, wx, wy, wz = v[0], v[1], v[2], v[3], v[4], v[5]
+        x, y, z, qw, qx, qy, qz = q
+        vx, vy, vz, wx, wy, wz = v
+        spx, spy, spz, rvx, rvy, rvz, sax, say, saz, yaw = sp
         kp, kv, ki = self.k_pos, self.k_vel, self.k_vel_i
         # position -> velocity setpoint (P + feedforward)
-        vsx = sp[3] + kp * (sp[0] - x)
-        vsy = sp[4] + kp * (sp[1] - y)
-        vsz = sp[5] + kp * (sp[2] - z)
+        vsx = rvx + kp * (spx - x)
+        vsy = rvy + kp * (spy - y)
+        vsz = rvz + kp * (spz - z)
         # velocity -> acceleration (PI + feedforward of the reference's acceleration and drag)
         ex, ey, ez = vsx - vx, vsy - vy, vsz - vz
-        rvx, rvy, rvz = sp[3], sp[4], sp[5]
         rs = math.sqrt(rvx * rvx + rvy * rvy + rvz * rvz)
         kh, kz = self.kd_h * rs, self.kd_v * rs
-        ax = sp[6] + kv * ex + ki * self.ix + kh * rvx
-        ay = sp[7] + kv * ey + ki * self.iy + kh * rvy
-        az = sp[8] + kv * ez + ki * self.iz + kz * rvz
+        ix, iy, iz = self.ix, self.iy, self.iz
+        ax = sax + kv * ex + ki * ix + kh * rvx
+        ay = say + kv * ey + ki * iy + kh * rvy
+        az = saz + kv * ez + ki * iz + kz * rvz
         sat = False
-        if az > self.a_up:
-            az, sat = self.a_up, True
+        a_up = self.a_up
+        if az > a_up:
+            az, sat = a_up, True
         elif az < -self.a_down:
             az, sat = -self.a_down, True
         fz = az + G
@@ -119,13 +121,13 @@ class CascadedController:
         if not sat:
             dt = self.dt
             lim, lz = self.i_lim_h, self.i_lim_z
-            self.ix = min(lim, max(-lim, self.ix + ex * dt))
-            self.iy = min(lim, max(-lim, self.iy + ey * dt))
-            self.iz = min(lz, max(-lz, self.iz + ez * dt))
+            self.ix = min(lim, max(-lim, ix + ex * dt))
+            self.iy = min(lim, max(-lim, iy + ey * dt))
+            self.iz = min(lz, max(-lz, iz + ez * dt))
         # desired thrust direction b3d and attitude (yaw sp[9])
         nrm = math.sqrt(ax * ax + ay * ay + fz * fz)
         d2x, d2y, d2z = ax / nrm, ay / nrm, fz / nrm
-        cy, sy = math.cos(sp[9]), math.sin(sp[9])
+        cy, sy = math.cos(yaw), math.sin(yaw)
         # b2d = b3d x b1c, b1c = (cy, sy, 0)
         b2x, b2y, b2z = -d2z * sy, d2z * cy, d2x * sy - d2y * cy
         n2 = math.sqrt(b2x * b2x + b2y * b2y + b2z * b2z)
@@ -156,12 +158,18 @@ class CascadedController:
         ty = Jy * kr * (-ka * ery - wy) + (Jx - Jz) * wz * wx
         tz = Jz * self.k_yaw_rate * (-self.k_yaw * erz - wz) + (Jy - Jx) * wx * wy
         # collective thrust along the current body z
-        m = self.mass
-        T = m * (ax * r2x + ay * r2y + fz * r2z)
+        T = self.mass * (ax * r2x + ay * r2y + fz * r2z)
         if T < 0.0:
             T = 0.0
         self.collective = T
-        return self._mix(T, tx, ty, tz)
+        # the mixer; unsaturated (the usual case) here, saturated in _mix
+        fmax = self.fmax
+        f = [b0 * T + b1 * tx + b2 * ty + b3 * tz for b0, b1, b2, b3 in self.B]
+        for fi in f:
+            if fi < 0.0 or fi > fmax:
+                return self._mix(T, tx, ty, tz)
+        self.f = f
+        return f
 
     def _mix(self, T, tx, ty, tz):
         B, fmax = self.B, self.fmax

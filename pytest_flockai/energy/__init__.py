@@ -1,12 +1,12 @@
 """Energy: a composable model E_total = E_motors + E_proc + E_comm.
 
-See ``components.py`` for the component interface and the built-ins and
-``model.py`` for the composition (inspect, replace, remove, add).
+See ``components.py`` for the component interface and the built-ins, ``rotors.py``
+for the rotors' power and ``model.py`` for the composition (inspect, replace, remove, add).
 """
 
-from .components import (Component, Constant, HoverPower, Motors, RadioLinear,
-                          RadioStates, SoC, Usage)
+from .components import Component, Constant, RadioLinear, RadioStates, SoC, Usage
 from .model import EnergyModel, Group
+from .rotors import HoverPower, Motors
 
 __all__ = ["Component", "Constant", "EnergyModel", "Group", "HoverPower", "Motors",
            "RadioLinear", "RadioStates", "SoC", "Usage"]

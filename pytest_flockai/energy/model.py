@@ -17,7 +17,8 @@ import copy
 
 from ..errors import ConfigError, close_matches
 from ..physics import RHO_SEA_LEVEL
-from .components import Component, Constant, Motors, RadioLinear, SoC, Usage
+from .components import Component, Constant, RadioLinear, SoC, Usage
+from .rotors import MOTOR_FIELDS, Motors
 
 
 class Group(Component):
@@ -141,7 +142,8 @@ class EnergyModel(Group):
         motors = Motors("motors", figure_of_merit=p.figure_of_merit,
                         induced_power_factor=p.induced_power_factor,
                         motor_efficiency=p.motor_efficiency, esc_efficiency=p.esc_efficiency,
-                        wake_interference=p.wake_interference)
+                        wake_interference=p.wake_interference,
+                        **{k: getattr(p, k) for k in MOTOR_FIELDS})
         proc = Group("proc", description="processing: flight controller, SoC, I/O, sensors")
         proc.add(Constant("fc", p.flight_controller_w, "flight controller"))
         if device is not None:

@@ -15,7 +15,11 @@ from ..energy.model import Meter
 from ..mission.assemble import Run, sensor_suite
 from ..mission.plan import seed_sequence
 from ..mission.state import EventLog, VehicleState
-from ..sensors import Camera, SensorSuite
+from ..ml.events import SharedGround
+from ..sensors import GPS, IMU, Barometer, BatterySensor, Camera, Compass, SensorSuite
+
+#: sensors that read the drone's own state only: they never look at a geom
+BLIND = (IMU, GPS, Barometer, Compass, BatterySensor)
 
 
 class DroneData:
@@ -74,6 +78,27 @@ class DroneRun(Run):
             drone.energy, extra_sensors=list(drone.extra_sensors) + list(plan.sensors),
             device=plan.onboard_device, blueprint_device=drone.device), drone, rho=rho)
         self.components = self._components(plan, subscribers, probes)
+        # the task scheduler reads the camera, which renders the whole MjData
+        self.scheduler.data = shared
+
+
+def _suite(plan) -> SensorSuite:
+    """The drone's sensors: the single flight's, less the blueprint's camera when no
+    task of the drone reads it (it still draws power through the energy model)."""
+    sensors = sensor_suite(plan).sensors
+    if not any(tk.sensor == "camera" for tk in plan.tasks):
+        sensors = [sn for sn in sensors if not isinstance(sn, Camera)]
+    return SensorSuite(sensors)
+
+
+def share_ground(runs, shared_link: bool) -> SharedGround:
+    """One ground station for the remote tasks of every drone (``ml.events.SharedGround``)."""
+    ground = SharedGround(shared_link)
+    for i, r in enumerate(runs):
+        for runner in r.scheduler.runners:
+            if runner.task.execution == "remote":
+                runner.share(ground, i)
+    return ground
 
 
 def prefix_of(name: str) -> str:
@@ -84,14 +109,13 @@ def build(plans, missions, names, pads, world, probes_of) -> tuple:
     """The fleet's model, its MjData and one ``DroneRun`` per drone."""
     p0 = plans[0]
     spec = world_spec("fleet", world, physics_dt=p0.physics_dt, rho=p0.atmosphere.density)
-    suites = []
-    for plan, name, pad in zip(plans, names, pads):
-        add_drone(spec, plan.drone, rho=plan.atmosphere.density, prefix=prefix_of(name), pos=pad)
-        # the blueprint's camera draws power through the energy model; nothing in a
-        # fleet reads frames (no tasks yet), so it is not put into the model
-        suite = SensorSuite([sn for sn in sensor_suite(plan).sensors if not isinstance(sn, Camera)])
+    suites = [_suite(plan) for plan in plans]
+    # arms and propellers only show in cameras and rays: left out when nothing looks
+    visual = any(not isinstance(sn, BLIND) for suite in suites for sn in suite.sensors)
+    for plan, name, pad, suite in zip(plans, names, pads, suites):
+        add_drone(spec, plan.drone, rho=plan.atmosphere.density, prefix=prefix_of(name), pos=pad,
+                  visual=visual)
         suite.add_to_spec(spec, f"{prefix_of(name)}drone")
-        suites.append(suite)
     model = spec.compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)

@@ -14,11 +14,12 @@ import math
 import time as _time
 
 from .. import _check
+from .. import cache as _cache
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
 from ..mission import Mission
-from ..mission.plan import resolve
+from ..mission.plan import check_tasks, resolve
 from ..recording import publish
 from ..world import World
 from . import assemble, loop, result
@@ -37,7 +38,6 @@ class FleetDrone:
 
     def __init__(self, name: str, drone: Drone, pilot: Pilot, pad=(0.0, 0.0), *, tasks=(),
                  seed: int = 0, probes=None):
-        # tasks: reserved; cameras and ML tasks on fleet drones are not built yet
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "./ "):
             raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; expected a non-empty "
                               f"str without '.', '/' or spaces (it prefixes the drone's KPIs)")
@@ -50,16 +50,23 @@ class FleetDrone:
             raise ConfigError(f"FleetDrone {name!r}: drone.add_sensor(...) sensors "
                               f"({', '.join(s.name for s in drone.extra_sensors)}) are not "
                               f"supported in a fleet yet; allowed: the blueprint's own sensors")
-        if tasks:
-            raise ConfigError(f"FleetDrone {name!r}: tasks = {tasks!r}: ML tasks are not "
-                              f"supported in a fleet yet; allowed: no tasks")
+        try:
+            tasks = check_tasks(tasks, drone, ())      # the single Mission's checks
+        except ConfigError as e:
+            raise ConfigError(f"FleetDrone {name!r}: {e}") from None
+        for tk in tasks:
+            if tk.sensor != "camera":
+                raise ConfigError(f"FleetDrone {name!r}: task {tk.name!r} reads sensor = "
+                                  f"{tk.sensor!r}; in a fleet a task reads the drone's camera "
+                                  f"only; allowed: sensor='camera'")
         self.name, self.drone, self.pilot = name, drone, pilot
         self.pad = _check.vector("pad", pad, 2, where=f"FleetDrone {name!r}")
         self.tasks, self.seed, self.probes = tuple(tasks or ()), seed, probes
 
     def to_dict(self) -> dict:
         return {"name": self.name, "drone": self.drone.name, "pilot": self.pilot.to_dict(),
-                "pad": list(self.pad), "seed": self.seed}
+                "pad": list(self.pad), "seed": self.seed,
+                "tasks": [tk.to_dict() for tk in self.tasks]}
 
     def __repr__(self):
         return f"FleetDrone({self.name!r}, {self.drone.name!r}, pad={self.pad})"
@@ -70,14 +77,17 @@ class Fleet:
     area=None, swath_m=None, ...).run() -> FleetResult``.
 
     ``offload``: remote inference of every drone on one ground station over a
-    shared (or per-drone) channel (``fa.fleet.Offload``).
+    shared (or per-drone) channel (``fa.fleet.Offload``). The drones' remote
+    ``Task``s share one ground station too: one channel (``shared_link=True``;
+    else one per drone) and one ground device, each a FIFO queue.
     ``area`` = ((x0, y0), (x1, y1)) and ``swath_m`` (the ground width one pass
     covers) give ``fleet.coverage_fraction``; ``until`` and ``max_time_s`` are
     the Mission's, for every drone."""
 
     def __init__(self, drones, world=None, *, until="landed", max_time_s: float = 4 * 3600.0,
                  telemetry_hz: float = 10.0, area=None, swath_m: float | None = None,
-                 name: str | None = None, offload: Offload | None = None):
+                 name: str | None = None, offload: Offload | None = None,
+                 shared_link: bool = True):
         try:
             drones = list(drones)
         except TypeError:
@@ -99,6 +109,11 @@ class Fleet:
             raise ConfigError(f"Fleet: offload = {offload!r} is not allowed; expected None or "
                               f"fa.fleet.Offload(...)")
         self.drones, self.world, self.name, self.offload = drones, world, name, offload
+        if not isinstance(shared_link, bool):
+            raise ConfigError(f"Fleet: shared_link = {shared_link!r} is not allowed; expected "
+                              f"True or False")
+        self.shared_link = shared_link
+        self.remote = _check_remote(drones, offload)
         self.area = _check_area(area)
         self.swath_m = None if swath_m is None else _check.positive("swath_m", swath_m, where="Fleet")
         if (self.area is None) != (self.swath_m is None):
@@ -124,12 +139,17 @@ class Fleet:
                 "world": self.world.to_dict() if self.world is not None else {"name": "empty"},
                 "area": [list(c) for c in self.area] if self.area else None,
                 "swath_m": self.swath_m,
-                "offload": self.offload.to_dict() if self.offload is not None else None}
+                "offload": self.offload.to_dict() if self.offload is not None else None,
+                "shared_link": self.shared_link}
 
     def __repr__(self):
         return f"Fleet({[fd.name for fd in self.drones]!r})"
 
     def run(self) -> "result.FleetResult":
+        found = _cache.lookup(self, result.FleetResult)     # the flight cache, if one is open
+        if found is not None and found.result is not None:
+            publish(found.result, self)
+            return found.result
         wall0 = _time.perf_counter()
         plans = self._plans()
         names = [fd.name for fd in self.drones]
@@ -137,6 +157,7 @@ class Fleet:
                                            [fd.pad for fd in self.drones], self.world,
                                            lambda m: m.probes)
         off = OffloadStep(self.offload, runs) if self.offload is not None else None
+        ground = assemble.share_ground(runs, self.shared_link) if self.remote else None
         try:
             stats = loop.fly(model, data, runs, plans[0].substeps, off)
         except SimulationError as exc:
@@ -145,7 +166,10 @@ class Fleet:
             publish(exc.result, self)
             raise
         stats["offload"] = off
+        stats["ground"] = ground
         res = result.build(self, runs, stats, _time.perf_counter() - wall0)
+        if found is not None and found.status != "off":
+            found.store(res)
         publish(res, self)
         return res
 
@@ -166,6 +190,27 @@ def _check_unique(drones) -> None:
                     f"Fleet: drones[{i}].pad = {tuple(a.pad)} ({a.name!r}) is {gap:.2f} m from "
                     f"drones[{j}].pad = {tuple(b.pad)} ({b.name!r}); two drones at one pad; "
                     f"allowed: pads at least {PAD_CLEARANCE_M:g} m apart")
+
+
+def _check_remote(drones, offload) -> list:
+    """The fleet's remote tasks, which share one ground station: one link, one ground
+    device, one station position; not beside ``offload`` (a second queue model)."""
+    remote = [(fd.name, tk) for fd in drones for tk in fd.tasks if tk.execution == "remote"]
+    if remote and offload is not None:
+        raise ConfigError(f"Fleet: offload = {offload!r} and remote tasks ({remote[0][0]!r}: "
+                          f"{remote[0][1].name!r}) together are not supported; allowed: one "
+                          f"of them (the remote tasks queue on the fleet's ground station)")
+    for field in ("link", "ground_device", "ground_station"):
+        seen = {}
+        for name, tk in remote:
+            v = getattr(tk, field)
+            key = getattr(v, "name", None) or tuple(v)
+            seen.setdefault(key, f"{name}: {tk.name}")
+        if len(seen) > 1:
+            got = ", ".join(f"{who} -> {key}" for key, who in seen.items())
+            raise ConfigError(f"Fleet: the remote tasks' {field} differ ({got}); allowed: one "
+                              f"{field} for the fleet's one ground station")
+    return remote
 
 
 def _check_area(area):

@@ -44,58 +44,58 @@ class _Member:
 def fly(model, data, runs, nsub: int, offload=None) -> dict:
     """Fly every run of the fleet; returns ``{"min_separation_m": m, "t_end": [s, ...]}``."""
     members = [_Member(r) for r in runs]
+    live = list(members)                 # the drones still flying, in the fleet's order
     body_of = {r.data.body: i for i, r in enumerate(runs)}
     step, sqrt = mujoco.mj_step, math.sqrt
     half_tick = 0.5 * nsub * model.opt.timestep
     sep_period = 1.0 / SEPARATION_HZ
     t_sep = 0.0
     min_sep = math.inf
-    while True:
+    while live:
         t = data.time
-        live = 0
-        for m in members:
-            if not m.active:
-                continue
-            _tick(m, t, sqrt)
-            if m.s.end_reason is not None:
-                _end(m, t)
+        ended = False
+        for m in live:
+            # the single flight's tick (mission.loop.fly), inline: this runs N x per tick
+            s = m.s
+            s.q = q = m.qpos.tolist()
+            s.v = v = m.qvel.tolist()
+            z, vx, vy, vz = q[2], v[0], v[1], v[2]
+            if not (z == z and abs(z) < 1e5 and vx == vx):
+                raise SimulationError(f"simulation diverged at t = {t:.3f} s for {s.name} "
+                                      f"(position or velocity not finite: z = {z!r}, vx = {vx!r})")
+            s.speed = sqrt(vx * vx + vy * vy + vz * vz)
+            s.qc, s.vc = q, v
+            if t >= m.next_any:
+                for c, c_step in m.ordered:
+                    if t >= c.next_due:
+                        c_step(t)
+                m.next_any = min([c.next_due for c in m.clocked], default=math.inf)
             else:
-                live += 1
-        if live == 0:
-            break
+                for c_step in m.ticking:
+                    c_step(t)
+            if s.end_reason is not None:
+                _end(m, t)
+                ended = True
+        if ended:
+            live = [m for m in live if m.active]
+            if not live:
+                break
         if offload is not None and t >= offload.next_due:
             offload.step(t, members)
         if t >= t_sep:
             t_sep += sep_period
-            min_sep = min(min_sep, _separation(members, sqrt))
+            if len(live) > 1:
+                min_sep = min(min_sep, _separation(live, sqrt))
         step(model, data, nsub)
         if data.ncon > 0:
             _contacts(model, data, members, body_of)
+            if not all(m.active for m in live):
+                live = [m for m in live if m.active]
         if data.time < t + half_tick:                    # MuJoCo reset the state inside mj_step
             raise SimulationError(f"MuJoCo reset the fleet's simulation at t = {t:.3f} s "
                                   f"(unstable physics); check the blueprints or lower the "
                                   f"physics timestep")
     return {"min_separation_m": min_sep, "t_end": [m.t_end for m in members]}
-
-
-def _tick(m, t, sqrt) -> None:
-    s = m.s
-    s.q = q = m.qpos.tolist()
-    s.v = v = m.qvel.tolist()
-    z, vx, vy, vz = q[2], v[0], v[1], v[2]
-    if not (z == z and abs(z) < 1e5 and vx == vx):
-        raise SimulationError(f"simulation diverged at t = {t:.3f} s for {s.name} (position or "
-                              f"velocity not finite: z = {z!r}, vx = {vx!r})")
-    s.speed = sqrt(vx * vx + vy * vy + vz * vz)
-    s.qc, s.vc = q, v
-    if t >= m.next_any:
-        for c, c_step in m.ordered:
-            if t >= c.next_due:
-                c_step(t)
-        m.next_any = min([c.next_due for c in m.clocked], default=math.inf)
-    else:
-        for c_step in m.ticking:
-            c_step(t)
 
 
 def _end(m, t) -> None:
@@ -107,18 +107,18 @@ def _end(m, t) -> None:
         c.finish(t)
 
 
-def _separation(members, sqrt) -> float:
+def _separation(live, sqrt) -> float:
     """The smallest distance between two drones in the air now (inf if < 2)."""
-    pts = [m.s.q for m in members if m.active and m.s.airborne and m.s.stage != TAKEOFF]
-    best = math.inf
-    for i in range(len(pts)):
-        a = pts[i]
+    pts = [m.s.q for m in live if m.s.airborne and m.s.stage != TAKEOFF]
+    best = math.inf                    # squared: sqrt is monotonic, one sqrt at the end
+    for i in range(len(pts) - 1):
+        ax, ay, az = pts[i][:3]
         for b in pts[i + 1:]:
-            dx, dy, dz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
-            d = sqrt(dx * dx + dy * dy + dz * dz)
+            dx, dy, dz = ax - b[0], ay - b[1], az - b[2]
+            d = dx * dx + dy * dy + dz * dz
             if d < best:
                 best = d
-    return best
+    return sqrt(best)
 
 
 def _contacts(model, data, members, body_of) -> None:

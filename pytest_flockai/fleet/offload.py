@@ -18,8 +18,9 @@ every station has the same transmission probability tau per slot).
 Backoff slots and collisions are not modelled beyond the link's own
 ``per_packet_s`` and retransmissions. ``shared_link=False``: each drone has its
 own channel (no contention). The ground device is one FIFO server shared by
-all drones, in order of the frames' arrival. The small downlink results are
-not queued on the channel.
+all drones, in order of the frames' arrival (the channel and the device are an
+``ml.events.SharedGround``, the queues the fleet's remote ``Task``s use too). The
+small downlink results are not queued on the channel.
 
 Bytes and packets are charged to each drone's radio (its energy). KPIs
 (``kpis``): per drone ``<name>.offload.latency_p95_s`` (capture to result)
@@ -42,6 +43,7 @@ from ..compute.latency import modeled_latency
 from ..control.stages import PILOT
 from ..errors import ConfigError
 from ..mission.plan import seed_sequence
+from ..ml.events import SharedGround
 
 
 class Offload:
@@ -81,12 +83,9 @@ class OffloadStep:
         self.next_due = spec.period_s
         self._k = 0
         n = len(runs)
-        self.channel_free = [0.0] * (1 if spec.shared_link else n)
-        self.ground_free = 0.0
-        self.busy_s = 0.0
+        # the channel(s) and the ground device: the queues the remote tasks use too
+        self.ground = SharedGround(spec.shared_link)
         self.latency = [[] for _ in range(n)]
-        self.link_wait: list = []
-        self.ground_wait: list = []
 
     def step(self, t: float, members) -> None:
         sp = self.spec
@@ -104,21 +103,16 @@ class OffloadStep:
             q = s.q
             dist = math.dist((q[0], q[1], q[2]), gs)
             up = sp.link.transfer(sp.frame_bytes, dist, self.rngs[i], direction="up")
-            c = 0 if sp.shared_link else i
-            start = max(t, self.channel_free[c])
-            self.channel_free[c] = start + up.seconds
-            self.link_wait.append(start - t)
+            start = self.ground.uplink(i, t, up.seconds)
             self.runs[i].traffic.add(up.bytes_on_air, up.packets, 0, 0)
             if up.delivered:
                 arrivals.append((start + up.seconds, i, dist))
+        g = self.ground
         for arrive, i, dist in sorted(arrivals):
-            g0 = max(arrive, self.ground_free)
-            self.ground_wait.append(g0 - arrive)
-            self.ground_free = g0 + sp.compute_s
-            self.busy_s += sp.compute_s
+            g.compute(arrive, sp.compute_s)
             down = sp.link.transfer(sp.result_bytes, dist, self.rngs[i], direction="down")
             self.runs[i].traffic.add(0, 0, down.bytes_on_air, down.packets)
-            self.latency[i].append(self.ground_free + down.seconds - t)
+            self.latency[i].append(g.ground_free + down.seconds - t)
 
     def kpis(self, names, makespan_s: float) -> dict:
         out = {}
@@ -128,12 +122,18 @@ class OffloadStep:
             out[f"{name}.offload.latency_p95_s"] = _pct(lat, 95)
         every = [x for lat in self.latency for x in lat]
         out["offload.latency_p95_s"] = _pct(every, 95)
-        out["link.queue_delay_p95_s"] = _pct(self.link_wait, 95)
-        out["ground.queue_delay_mean_s"] = float(np.mean(self.ground_wait)) if self.ground_wait \
-            else math.nan
-        out["ground.queue_delay_p95_s"] = _pct(self.ground_wait, 95)
-        out["ground.utilization"] = min(1.0, self.busy_s / makespan_s) if makespan_s > 0 else 0.0
+        out.update(ground_kpis(self.ground, makespan_s))
         return out
+
+
+def ground_kpis(g, makespan_s: float) -> dict:
+    """The shared ground station's KPIs from its ``ml.events.SharedGround`` (the
+    offload's or the remote tasks')."""
+    return {"link.queue_delay_p95_s": _pct(g.link_wait, 95),
+            "ground.queue_delay_mean_s": float(np.mean(g.ground_wait)) if g.ground_wait
+            else math.nan,
+            "ground.queue_delay_p95_s": _pct(g.ground_wait, 95),
+            "ground.utilization": min(1.0, g.busy_s / makespan_s) if makespan_s > 0 else 0.0}
 
 
 def _pct(xs, q) -> float:

@@ -11,7 +11,10 @@ Fleet KPIs:
   pilot's plan, from the telemetry (only with ``Fleet(area=..., swath_m=...)``);
 - ``fleet.coverage_time_s``: from the first drone starting its pilot's plan to
   the last drone ending it (take-off, return and landing left out);
-- ``fleet.crashes``, ``fleet.drones``, ``fleet.energy_total_j`` (the sum).
+- ``fleet.crashes``, ``fleet.drones``, ``fleet.energy_total_j`` (the sum);
+- ``fleet.inference_latency_p95_s``: over every drone's answered inferences (with tasks);
+  with remote tasks, the shared ground station's ``link.queue_delay_p95_s``,
+  ``ground.queue_delay_mean_s`` / ``_p95_s`` and ``ground.utilization``.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import pandas as pd
 
 from ..mission import result as _single
 from ..result import FlightResult
+from .offload import ground_kpis
 
 #: the coverage grid has at most this many cells along a side
 MAX_GRID = 400
@@ -79,6 +83,13 @@ def fleet_kpis(fleet, drones: dict, stats: dict, ends, tel) -> dict:
     off = stats.get("offload")
     if off is not None:
         out.update(off.kpis(list(drones), out["fleet.makespan_s"]))
+    ground = stats.get("ground")
+    if ground is not None:                 # the remote tasks' shared ground station
+        out.update(ground_kpis(ground, out["fleet.makespan_s"]))
+    lat = [e["latency_s"] for r in drones.values() for e in r.events
+           if e["kind"] == "inference" and e["ok"]]
+    if lat:
+        out["fleet.inference_latency_p95_s"] = float(np.percentile(lat, 95))
     return out
 
 

@@ -15,6 +15,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from .. import memo
 from ..errors import ConfigError
 from ..sensors.conditions import Conditions
 from ..sensors.views import ViewSet
@@ -28,10 +29,23 @@ def envelope(model, world, *, altitudes_m=(15.0, 25.0, 35.0, 50.0), speeds_mps=(
              classes=CLASSES, score_threshold: float = 0.4, min_visible: float = 0.25,
              decode="auto", area=60.0) -> pd.DataFrame:
     """KPIs of ``model`` at each (altitude, speed) on ``views`` random views of ``world``
-    (positions within ``area`` m of home, random headings, from the seed)."""
+    (positions within ``area`` m of home, random headings, from the seed); memoised
+    (``pytest_flockai.memo``) on every argument, the model's file bytes included."""
     cond = conditions if conditions is not None else Conditions(exposure_s=1 / 60)
     if not isinstance(cond, Conditions):
         raise ConfigError(f"envelope: conditions = {conditions!r} is not a fa.Conditions")
+    args = dict(altitudes_m=altitudes_m, speeds_mps=speeds_mps, cond=cond, views=views, seed=seed,
+                camera=camera, classes=classes, score_threshold=score_threshold,
+                min_visible=min_visible, decode=decode, area=area)
+    return memo.recall("envelope", {"model": model, "world": world, **args},
+                       lambda: _envelope(model, world, **args),
+                       pack=lambda df: {"columns": list(df.columns),
+                                        "rows": df.to_numpy(dtype=float).tolist()},
+                       unpack=lambda d: pd.DataFrame(d["rows"], columns=d["columns"]))
+
+
+def _envelope(model, world, *, altitudes_m, speeds_mps, cond, views, seed, camera, classes,
+              score_threshold, min_visible, decode, area) -> pd.DataFrame:
     rng = np.random.default_rng(seed)
     xy = rng.uniform(-area, area, size=(views, 2))
     yaw = rng.uniform(-math.pi, math.pi, size=views)

@@ -43,6 +43,7 @@ import numpy as np
 from pycocotools.coco import COCO
 from pycocotools.cocoeval import COCOeval
 
+from .. import memo
 from ..errors import ConfigError
 from .detections import Detections
 
@@ -72,10 +73,21 @@ def _band(lo, hi, unit):
 
 
 def detection_kpis(records, classes, *, score_threshold: float, min_visible: float) -> dict:
-    """The detection KPIs of ``records`` (frames whose inference ran)."""
+    """The detection KPIs of ``records`` (frames whose inference ran); memoised
+    (``pytest_flockai.memo``) on what COCOeval reads of them."""
     recs = [r for r in records if r.detections is not None]
     if not recs:
         return {}
+    inputs = {"records": [(r.index, r.truth, r.detections, r.altitude_m, r.width, r.height)
+                          for r in recs],
+              "classes": list(classes), "score_threshold": score_threshold,
+              "min_visible": min_visible}
+    return memo.recall("detection-kpis", inputs,
+                       lambda: _detection_kpis(recs, classes, score_threshold, min_visible),
+                       pack=dict, unpack=dict)
+
+
+def _detection_kpis(recs, classes, score_threshold: float, min_visible: float) -> dict:
     gt, dts, info = _coco_inputs(recs, classes, min_visible)
     if not gt["annotations"]:
         return {"map50": math.nan, "map50_95": math.nan, "recall": math.nan,

@@ -17,6 +17,40 @@ class DeviceClock:
         self.free_at = -math.inf
 
 
+class SharedGround:
+    """One ground station serving the remote tasks of several drones (a fleet): a
+    radio channel that carries one uplink at a time (``shared_link=True``; else a
+    channel per drone) and one ground device that runs one inference at a time,
+    each a FIFO server in the order requests reach it, as ``fleet.Offload``
+    models the fleet's frames. Requests of one instant are served in the order
+    they are made (the fleet steps its drones in order). It keeps the waits and
+    the device's busy time for the fleet's KPIs."""
+
+    def __init__(self, shared_link: bool = True):
+        self.shared_link = shared_link
+        self.channel_free: dict = {}
+        self.ground_free = -math.inf
+        self.busy_s = 0.0
+        self.link_wait: list = []
+        self.ground_wait: list = []
+
+    def uplink(self, who: int, t: float, seconds: float) -> float:
+        """Start of an uplink of ``seconds`` ready at ``t`` from drone ``who``."""
+        key = 0 if self.shared_link else who
+        start = max(t, self.channel_free.get(key, -math.inf))
+        self.channel_free[key] = start + seconds
+        self.link_wait.append(start - t)
+        return start
+
+    def compute(self, t: float, seconds: float) -> float:
+        """Start of an inference of ``seconds`` arriving at ``t``."""
+        start = max(t, self.ground_free)
+        self.ground_free = start + seconds
+        self.busy_s += seconds
+        self.ground_wait.append(start - t)
+        return start
+
+
 class InferenceEvent:
     """One inference, as returned by ``TaskRunner.advance``."""
 

@@ -21,12 +21,14 @@ from __future__ import annotations
 import math
 import os
 from numbers import Integral, Real
+from pathlib import Path
 
 import cv2
 import numpy as np
 import onnx
 import onnxruntime as ort
 
+from .. import memo
 from ..errors import ConfigError
 from .macs import _param_count, count_macs
 
@@ -348,8 +350,14 @@ class OnnxModel(Model):
         return np.ascontiguousarray(x)
 
     def run(self, x: np.ndarray):
-        """Run on an already preprocessed batch; raw outputs."""
-        return self.session.run(None, {self.input_name: x})
+        """Run on an already preprocessed batch; raw outputs. Memoised
+        (``pytest_flockai.memo``) on the model file's bytes, the execution providers
+        and the input's bytes."""
+        inputs = {"model": Path(self.path), "providers": self.session.get_providers(),
+                  "input": x}
+        return memo.recall("onnx-run", inputs, lambda: self.session.run(None, {self.input_name: x}),
+                           pack=lambda outs: {"outs": list(outs)},
+                           unpack=lambda d: list(d["outs"]))
 
     def __call__(self, frame):
         outs = self.run(self.preprocess(frame))

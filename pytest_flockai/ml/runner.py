@@ -1,44 +1,35 @@
-"""The task runner: one ML task (``ml.task.Task``) executed during a mission. The mission loop drives
-it (all times are simulated seconds)::
+"""The task runner: one ML task (``ml.task.Task``) executed during a mission, on simulated
+seconds: ``bind(rng)`` before a flight; ``on_frame(t, frame, truth, drone_pos)`` when
+``due(t)``; ``advance(t)`` every tick; ``take_usage()`` per energy tick; ``kpis()`` at the end.
 
-    runner = TaskRunner(task)
-    runner.bind(rng)                          # before each flight; rng from the mission seed
-    ...
-    if runner.due(t):                         # render a frame only when asked
-        runner.on_frame(t, frame, truth, drone_pos)
-    for ev in runner.advance(t):              # every tick: inferences finished by t
-        ...
-    busy_s, tx_b, tx_p, rx_b, rx_p = runner.take_usage()   # per energy tick, since the last call
-    runner.kpis()                             # at the end
+What happens on a frame (``on_frame``): if the previous inference is still running, the
+frame is dropped (``on_busy="drop"``, counted in ``frames_dropped``) or queued
+(``on_busy="queue"``, up to ``max_queue`` waiting frames, then dropped). Otherwise the
+runner RUNS the real model on the frame now (the prediction is real) and schedules its
+simulated timeline:
 
-What happens on a frame (``on_frame``): if the previous inference is still
-running, the frame is dropped (``on_busy="drop"``, counted in
-``frames_dropped``) or queued (``on_busy="queue"``, up to ``max_queue``
-waiting frames, then dropped). Otherwise the runner RUNS the real model on the
-frame now (the prediction is real) and schedules its simulated timeline:
-
-- ``onboard``: compute on the drone's device for the modeled latency
-  ``overhead_s + MACs / macs_per_s`` (or the measured, scaled host time). The
-  result is on board at the end: that is the inference latency. Then, as in
-  the paper's scenario 1 (section 5.2), the drone sends the frame, annotated
-  with the count and position and JPEG-encoded with OpenCV (real size), when
-  the predicted count reaches ``crowd_threshold`` (``alert="frame"``);
-  otherwise a ``result_bytes`` result message (count, position, time).
-  ``alert="result"`` always sends the small message.
-- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame
-  (``cv2.imencode``, quality ``jpeg_quality``: real byte size), sends it up
-  the link at the current distance to ``ground_station``, the ground
-  decodes it and runs the model on the *decoded* frame (so JPEG artefacts
-  reach the model) for the modeled latency on ``ground_device``, then sends
-  ``result_bytes`` back down. Latency = capture to result back on the drone.
-  One request is in flight at a time (a synchronous client, like the
-  paper's): while it is, the task is busy.
+- ``onboard``: compute on the drone's device for the modeled latency ``overhead_s + MACs /
+  macs_per_s`` (or the measured, scaled host time). The result is on board at the end:
+  that is the inference latency. Then, as in the paper's scenario 1 (section 5.2), the
+  drone sends the frame, annotated with the count and position and JPEG-encoded with
+  OpenCV (real size), when the predicted count reaches ``crowd_threshold``
+  (``alert="frame"``); otherwise a ``result_bytes`` result message (count, position,
+  time). ``alert="result"`` always sends the small message.
+- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame (``cv2.imencode``,
+  quality ``jpeg_quality``: real byte size), sends it up the link at the current distance
+  to ``ground_station``, the ground decodes it and runs the model on the *decoded* frame
+  (so JPEG artefacts reach the model) for the modeled latency on ``ground_device``, then
+  sends ``result_bytes`` back down. Latency = capture to result back on the drone.
+  One request is in flight at a time (a synchronous client, like the paper's): while it
+  is, the task is busy. In a fleet (``share``) the uplink waits for the shared channel
+  and the inference for the shared ground device. ``latency="measured"`` times the
+  model on the host and never takes a memoised (``pytest_flockai.memo``) answer.
 
 SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and
 alerts (``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight.
 
-A model raising during inference gives a failed inference (``ok=False``,
-the exception text in ``error``, ``inference_failures``); the flight goes on.
+A model raising during inference gives a failed inference (``ok=False``, the exception
+text in ``error``, ``inference_failures``); the flight goes on.
 A link out of range fails a remote inference the same way.
 """
 
@@ -50,6 +41,7 @@ import time
 
 import numpy as np
 
+from .. import memo
 from ..comm.link import link as _link
 from ..compute.latency import (calibrate, compute_seconds, modeled_latency, resolve_device,
                                scale_to_device)
@@ -64,8 +56,7 @@ from .templates import Template
 _ZERO_USAGE = (0.0, 0, 0, 0, 0)
 _NO_EVENTS: tuple = ()
 
-#: the computer of a TaskRunner bound outside a Mission to a task without a device
-#: (a Mission binds the drone's own computer instead; FlockAI's drone carries a Pi 4)
+#: the computer of a TaskRunner bound outside a Mission (FlockAI's drone carries a Pi 4)
 STANDALONE_DEVICE = "raspberry-pi-4"
 
 class TaskRunner:
@@ -118,8 +109,13 @@ class TaskRunner:
         self.tx_bytes_total = self.rx_bytes_total = 0
         self.tx_packets_total = self.rx_packets_total = 0
         self.retransmissions = 0
+        self._ground, self._who = None, 0       # a fleet's SharedGround (remote tasks)
         self._bound = True
         return self
+
+    def share(self, ground, who: int) -> None:
+        """Queue this (remote) task on a fleet's ``SharedGround`` as drone ``who``."""
+        self._ground, self._who = ground, who
 
     def _need_bind(self):
         if not self._bound:
@@ -248,7 +244,8 @@ class TaskRunner:
         pred = err = None
         t0 = time.perf_counter()
         try:
-            pred = model(frame)
+            with memo.remembering(None if measured else memo.active()):
+                pred = model(frame)
         except Exception as e:  # the flight goes on
             err = f"{type(e).__name__}: {e}"
         wall = time.perf_counter() - t0
@@ -324,6 +321,9 @@ class TaskRunner:
         self._busy_seg(start, enc)
         t_up = start + enc
         up = self.link.transfer(n, dist, self.rng, direction="up")
+        g = self._ground
+        if g is not None:                  # a fleet: wait for the shared channel
+            t_up = g.uplink(self._who, t_up, up.seconds)
         self._radio_rec(t_up, up, "up")
         pred = err = count = None
         compute = 0.0
@@ -335,7 +335,8 @@ class TaskRunner:
         else:
             frame_g = decode_jpeg(data, grey=np.asarray(frame).ndim == 2) if is_image(frame) else frame
             pred, err, compute = self._infer(task.model, frame_g, self.ground_device)
-            t_g = t_up + up.seconds + compute
+            t_g = t_up + up.seconds
+            t_g = (g.compute(t_g, compute) if g is not None else t_g) + compute
             down = self.link.transfer(task.result_bytes, dist, self.rng, direction="down")
             self._radio_rec(t_g, down, "down")
             rx = down.payload_bytes
@@ -384,8 +385,7 @@ class TaskRunner:
                "frames_dropped": self.frames_dropped, "inference_failures": self.inference_failures,
                "tx_bytes": self.tx_bytes_total, "tx_packets": self.tx_packets_total,
                "rx_bytes": self.rx_bytes_total, "rx_packets": self.rx_packets_total,
-               "retransmissions": self.retransmissions,
-               "in_flight": len(self._pending)}
+               "retransmissions": self.retransmissions, "in_flight": len(self._pending)}
         m = self.scorer.crowd()
         if m is not None:
             out.update(crowd_encounters=m["crowd_encounters"], crowds_missed=m["crowds_missed"])

@@ -157,7 +157,7 @@ class ProbeHub:
                     raise ConfigError(f"probe {p.name!r}: collect() returned unknown metric {k!r}"
                                       f"{close_matches(str(k), p._metric_names)}; its metrics: "
                                       f"{', '.join(p._metric_names)}")
-                if isinstance(v, bool) or not isinstance(v, Real) or v != v:
+                if (type(v) is not float and (isinstance(v, bool) or not isinstance(v, Real))) or v != v:
                     raise ConfigError(f"probe {p.name!r}: metric {k!r} = {v!r} is not a number")
             return values
         except Exception as exc:

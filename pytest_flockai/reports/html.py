@@ -13,6 +13,7 @@ opens the page sorted (how the browser test checks it).
 
 from __future__ import annotations
 
+import hashlib
 import html as _html
 import math
 
@@ -147,16 +148,26 @@ def _kpis(doc) -> str:
 
 
 def _pictures(doc, pictures: dict) -> str:
-    out = []
+    """Each test's pictures. A picture already shown for an earlier test (a shared fixture
+    flight's path, seen by every test that uses it) is embedded once and linked after."""
+    out, seen = [], {}
     for t in doc.get("tests", ()):
         pics = pictures.get(t["nodeid"]) or []
         if not pics:
             continue
-        imgs = "".join(f'<figure><img alt="{_e(p["title"])}" '
-                       f'src="data:{_e(p.get("mime", "image/png"))};base64,{p["data"]}">'
-                       f'<figcaption class="muted">{_e(p["title"])}</figcaption></figure>'
-                       for p in pics)
-        out.append(f'<h3>{_e(t["nodeid"])}</h3><div class="pics">{imgs}</div>')
+        figs = []
+        for p in pics:
+            key = hashlib.sha256(p["data"].encode()).hexdigest()[:16]
+            cap = f'<figcaption class="muted">{_e(p["title"])}</figcaption>'
+            if key in seen:
+                figs.append(f'<figure class="same"><a href="#pic-{key}">same picture as '
+                            f'{_e(seen[key])}</a>{cap}</figure>')
+                continue
+            seen[key] = t["nodeid"]
+            figs.append(f'<figure id="pic-{key}"><img alt="{_e(p["title"])}" '
+                        f'src="data:{_e(p.get("mime", "image/png"))};base64,{p["data"]}">'
+                        f'{cap}</figure>')
+        out.append(f'<h3>{_e(t["nodeid"])}</h3><div class="pics">{"".join(figs)}</div>')
     return "".join(out) or '<p class="muted">No pictures (they need matplotlib).</p>'
 
 

@@ -233,7 +233,10 @@ class Camera(Sensor):
         _, R = gimbal_pose((0, 0, 0), 0.0, self.pitch_deg)
         q = np.zeros(4)
         mujoco.mju_mat2Quat(q, R.reshape(-1))
-        body.add_camera(name=self.name, pos=list(self.mount), quat=list(q), fovy=self.fov_deg)
+        # a fleet's drone bodies are "<name>/drone": its camera is "<name>/camera"
+        prefix = body_name.rpartition("/")[0]
+        body.add_camera(name=f"{prefix}/{self.name}" if prefix else self.name,
+                        pos=list(self.mount), quat=list(q), fovy=self.fov_deg)
         vg = spec.visual.global_
         vg.offwidth = max(int(vg.offwidth), self.width)
         vg.offheight = max(int(vg.offheight), self.height)

@@ -19,6 +19,7 @@ import math
 import mujoco
 import numpy as np
 
+from .. import memo
 from ..errors import ConfigError
 from ..world.truth import gimbal_pose
 from .camera import Camera, FrameRenderer, ground_distance, record_skew
@@ -59,15 +60,8 @@ class ViewSet:
     def __init__(self, world, poses, camera=None, *, depth: bool = True):
         cam = self.camera = _camera_params(camera)
         rows = _poses(poses)
-        spec = mujoco.MjSpec()
-        spec.modelname = "flockai_views"
-        world.add_to_spec(spec)
-        vg = spec.visual.global_
-        vg.offwidth = max(int(vg.offwidth), cam.width)
-        vg.offheight = max(int(vg.offheight), cam.height)
-        self._model = spec.compile()
-        self._data = mujoco.MjData(self._model)
-        mujoco.mj_forward(self._model, self._data)
+        self._world = world
+        self._model = self._data = None          # compiled on the first render
         points = world.truth_points()
         occ = world.occluders if cam.occlusion else None
         objects = world.objects if cam.objects else None
@@ -76,6 +70,30 @@ class ViewSet:
         self.frames, self.distances = self._render(depth)
 
     def _render(self, depth: bool, sun_dir=None, shadows: bool = False):
+        """(frames, distances); memoised (``pytest_flockai.memo``) on the world, the
+        poses, the camera and the light."""
+        inputs = {"world": self._world, "poses": self.poses, "camera": self.camera,
+                  "depth": depth, "sun_dir": sun_dir, "shadows": shadows}
+        out = memo.recall("views", inputs, lambda: self._render_now(depth, sun_dir, shadows),
+                          pack=lambda fd: {"frames": fd[0], "distances": fd[1]},
+                          unpack=lambda d: (list(d["frames"]), list(d["distances"])))
+        return out
+
+    def _compile(self) -> None:
+        cam = self.camera
+        spec = mujoco.MjSpec()
+        spec.modelname = "flockai_views"
+        self._world.add_to_spec(spec)
+        vg = spec.visual.global_
+        vg.offwidth = max(int(vg.offwidth), cam.width)
+        vg.offheight = max(int(vg.offheight), cam.height)
+        self._model = spec.compile()
+        self._data = mujoco.MjData(self._model)
+        mujoco.mj_forward(self._model, self._data)
+
+    def _render_now(self, depth: bool, sun_dir, shadows: bool):
+        if self._model is None:
+            self._compile()
         cam = self.camera
         renderer = FrameRenderer(self._model, cam.width, cam.height)
         frames, distances = [], []
@@ -101,8 +119,7 @@ class ViewSet:
         (m/s, world frame) during its exposure; ``seed``: the sensor noise."""
         if not isinstance(conditions, Conditions):
             raise ConfigError(f"ViewSet.under: conditions = {conditions!r} is not a fa.Conditions")
-        rng = np.random.default_rng(seed)
-        cam, out = self.camera, []
+        cam, items = self.camera, []
         frames, distances = self.frames, self.distances
         if conditions.needs_depth and any(d is None for d in distances):
             raise ConfigError("ViewSet.under: haze needs depth; build the ViewSet with depth=True")
@@ -119,9 +136,18 @@ class ViewSet:
             t = dataclasses.replace(truth, blur_px=blur,
                                     objects=dataclasses.replace(truth.objects))
             record_skew(t, skew, cam.width, cam.height)
-            out.append((apply_conditions(frame, conditions, rng, distance=dist, blur=blur,
-                                         skew=skew), t))
-        return out
+            items.append((frame, dist, blur, skew, t))
+
+        def apply():
+            rng = np.random.default_rng(seed)
+            return [apply_conditions(f, conditions, rng, distance=d, blur=b, skew=s)
+                    for f, d, b, s, _ in items]
+        inputs = {"world": self._world, "poses": self.poses, "camera": cam,
+                  "depth": [d is not None for d in distances], "conditions": conditions,
+                  "velocity": velocity, "seed": seed}
+        seen = memo.recall("views-under", inputs, apply, pack=lambda fs: {"frames": fs},
+                           unpack=lambda d: list(d["frames"]))
+        return list(zip(seen, [it[4] for it in items]))
 
 
 def render_views(world, poses, camera_params=None, *, conditions=None, velocity=(0.0, 0.0, 0.0),

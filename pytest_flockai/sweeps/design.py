@@ -18,7 +18,6 @@ import math
 from numbers import Integral, Real
 
 import numpy as np
-from scipy.stats import qmc
 
 from ..errors import ConfigError
 from .axes import INTEGER_AXES
@@ -97,6 +96,8 @@ def variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]:
     if method == "random":
         u = rng.random((samples, len(names)))
     else:
+        # scipy.stats takes ~1 s to import: loaded here, not with the package
+        from scipy.stats import qmc
         u = qmc.LatinHypercube(d=len(names), rng=rng).random(samples)
     out = []
     for row in u:

@@ -15,7 +15,12 @@ the core's components in JAX, ``batched/``; ``pip install
 missions without tasks (``batched.params.check`` names anything else).
 
 Flights of a sweep are not handed to the recording sink of the caller (the
-pytest plugin records the sweep as a whole).
+pytest plugin records the sweep as a whole). Each variant is a flight of the
+flight cache open in the caller's context (``pytest_flockai.cache``): the
+caller looks every variant up first and sends only the misses to the workers,
+which open the same cache directory in the same mode and store what they fly;
+a sweep whose variants are all cached starts no worker. ``df.attrs["cache"]``
+counts the variants per cache status ("hit", "stored", ...).
 """
 
 from __future__ import annotations
@@ -25,11 +30,13 @@ import multiprocessing
 import os
 import pickle
 import time
+from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 
 import pandas as pd
 
 from .. import budgets as _budgets
+from .. import cache as _cache
 from ..errors import ConfigError, FlockAIError
 from ..mission import Mission
 from ..recording import recording
@@ -41,6 +48,7 @@ BACKENDS = ("process", "mjx")
 #: JAX platforms the mjx backend runs on (None: JAX's default device)
 DEVICES = (None, "cpu", "gpu", "cuda", "tpu")
 _BASE: list = []        # the base mission inside a worker process
+_CACHE: list = []       # the caller's flight cache, opened again inside a worker process
 
 
 def default_workers() -> int:
@@ -77,13 +85,16 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
     parsed = _budgets.parse_many(budgets or {})
     workers = _check_workers(workers)
     wall0 = time.perf_counter()
-    rows = (fly(base_mission, plan, workers) if backend == "process"
-            else _fly_batched(base_mission, plan, device))
+    if backend == "process":
+        rows, statuses = fly(base_mission, plan, workers)
+    else:                       # the batched path neither reads nor stores the flight cache
+        rows, statuses = _fly_batched(base_mission, plan, device), []
     wall = time.perf_counter() - wall0
     df = frame(rows, list(axes), parsed)
     df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
-                     "wall_s": wall, "backend": backend, "device": device})
+                     "wall_s": wall, "backend": backend, "device": device,
+                     "cache": dict(Counter(s for s in statuses if s is not None))})
     return df
 
 
@@ -121,16 +132,37 @@ def _check_workers(workers) -> int:
     return workers
 
 
-def fly(base, plan: list[dict], workers: int) -> list[dict]:
-    """One row dict per variant, in the plan's order."""
-    workers = min(workers, len(plan))
+def fly(base, plan: list[dict], workers: int) -> tuple[list[dict], list]:
+    """One row dict per variant, in the plan's order, and each variant's cache status."""
+    cache = _cache.active()
+    done = {i: hit for i, v in enumerate(plan) if (hit := _cached(base, v, cache)) is not None}
+    todo = [i for i in range(len(plan)) if i not in done]
+    workers = min(workers, len(todo))
     if workers <= 1:
         with recording(_drop):
-            return [fly_one(base, v) for v in plan]
-    ctx = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
-                             initargs=(_blob(base),)) as pool:
-        return list(pool.map(_fly_in_worker, plan, chunksize=1))
+            flown = [_fly_and_status(base, plan[i]) for i in todo]
+    else:
+        ctx = multiprocessing.get_context("spawn")
+        where = (str(cache.directory), cache.mode) if cache is not None else None
+        with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
+                                 initargs=(_blob(base), where)) as pool:
+            flown = list(pool.map(_fly_in_worker, [plan[i] for i in todo], chunksize=1))
+    done.update(zip(todo, flown))
+    return [done[i][0] for i in range(len(plan))], [done[i][1] for i in range(len(plan))]
+
+
+def _cached(base, values: dict, cache) -> tuple[dict, str] | None:
+    """(row, "hit") when the cache holds this variant's flight, else None."""
+    if cache is None or not cache.reads:
+        return None
+    try:
+        mission = _axes.apply(base, values)
+    except FlockAIError:
+        return None                  # flown (and reported) as a failed variant
+    found = cache.lookup(mission)
+    if found.result is None:
+        return None
+    return row_of(values, found.result, None), "hit"
 
 
 def _blob(base) -> bytes:
@@ -151,22 +183,37 @@ def _drop(result, mission) -> None:
     """The sink of a sweep's own flights: they are summed up in the DataFrame."""
 
 
-def _init(blob: bytes) -> None:
+def _init(blob: bytes, where) -> None:
     _BASE[:] = [pickle.loads(blob)]
+    _CACHE[:] = [_cache.FlightCache(*where) if where is not None else None]
 
 
-def _fly_in_worker(values: dict) -> dict:
-    return fly_one(_BASE[0], values)
+def _fly_in_worker(values: dict) -> tuple[dict, str | None]:
+    with _cache.caching(_CACHE[0]):
+        return _fly_and_status(_BASE[0], values)
+
+
+def _fly_and_status(base, values: dict) -> tuple[dict, str | None]:
+    row, result = _fly(base, values)
+    return row, (getattr(result, "cache", None) or {}).get("status")
 
 
 def fly_one(base, values: dict) -> dict:
-    row = dict(values)
+    return _fly(base, values)[0]
+
+
+def _fly(base, values: dict):
     try:
         result = _axes.apply(base, values).run()
         error = None
     except FlockAIError as exc:
         result = getattr(exc, "result", None)
         error = f"{type(exc).__name__}: {exc}"
+    return row_of(values, result, error), result
+
+
+def row_of(values: dict, result, error) -> dict:
+    row = dict(values)
     row["end_reason"] = getattr(result, "end_reason", None) or ("error" if error else None)
     row["error"] = error
     row["sim_time_s"] = result.sim_time_s if result is not None else math.nan

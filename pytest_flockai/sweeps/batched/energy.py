@@ -3,8 +3,9 @@ battery circuit) and the flight book in ``jax.numpy``, for one variant.
 
 The branch-free twins of ``airframe/model.py``'s fluid ellipsoid (MuJoCo's
 blunt drag, which MJX lacks: MJX implements only the inertia-box fluid model),
-``world/wind.py`` (``WindSampler``), ``energy/components.py`` (``Motors``,
-``Constant``, ``SoC``, ``RadioLinear``, ``RadioStates``, ``HoverPower``),
+``world/wind.py`` (``WindSampler``), ``energy/components.py`` (``Constant``,
+``SoC``, ``RadioLinear``, ``RadioStates``),
+``energy/rotors.py`` (``Motors``, ``HoverPower``),
 ``energy/battery.py`` (``Circuit.draw``), ``energy/integrator.py``,
 ``comm/traffic.py`` (``Heartbeats``) and ``mission/book.py``.
 """
@@ -19,7 +20,7 @@ from ...clock import CLOCK_EPS
 from ...comm.traffic import ACK_BYTES
 from ...control.stages import LAND, PILOT, TAKEOFF
 from ...energy.battery import CUTOFF_HOLD_S
-from ...energy.components import VRS_K
+from ...energy.rotors import VRS_K
 from ...mission.book import ACCEL_SMOOTHING_S, ACCEL_THRESHOLD, HOVER_SPEED
 from ...world.wind import FT
 from .control import rotation
@@ -97,8 +98,10 @@ def motors(p, thrust, vrel, vi):
     v = jnp.where(vax < 0.0, _descent_inflow(v, vax, vpar2, jnp.sqrt(vh2)), v)
     induced = jnp.sum(jnp.where(on, p["m_kappa"] * T * v, 0.0))
     axial = jnp.sum(jnp.where(on, T * vax, 0.0))
-    mu = vpar / (jnp.sqrt(T * p["m_inv_kf"]) * p["m_R"])
-    profile = jnp.sum(jnp.where(on, p["m_c0"] * T * jnp.sqrt(T) * (1.0 + 4.65 * mu * mu), 0.0))
+    omega = jnp.sqrt(T * p["m_inv_kf"])
+    mu = vpar / (omega * p["m_R"])
+    p0 = p["m_c0"] * T * jnp.sqrt(T) * (1.0 + 4.65 * mu * mu)
+    profile = jnp.sum(jnp.where(on, p0, 0.0))
     wake_vi = jnp.sum(jnp.where(on, v, 0.0))
     n = thrust.shape[0]
     vps = jnp.where(vpar > 0.1, vpar, 1.0)
@@ -109,8 +112,24 @@ def motors(p, thrust, vrel, vi):
     scale = p["m_wake"] * vi_mean * skew * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
     use = (p["m_wake"] > 0.0) & (vpar > 0.1) & (wake_vi > 0.0) & (tot > 0.0)
     induced = induced + jnp.where(use, jnp.sum(ws * thrust) * scale, 0.0)
-    axial = jnp.where(induced + profile + axial < 0.0, -(induced + profile), axial)
-    return (induced + profile + axial) * p["m_inv_eta"], vi
+    shaft = jnp.where(on, p["m_kappa"] * T * v + T * vax + p0 + jnp.where(use, ws * thrust * scale,
+                                                                         0.0), 0.0)
+    total = induced + profile + axial
+    inv_eta = jnp.where(p["m_model"] & (total >= 0.0) & (total > 1e-12),
+                        _electrical(p, shaft, jnp.where(on, omega, 0.0))
+                        / (jnp.where(total > 1e-12, total, 1.0) * p["m_esc"]), p["m_inv_eta"])
+    axial = jnp.where(total < 0.0, -(induced + profile), axial)
+    return (induced + profile + axial) * inv_eta, vi
+
+
+def _electrical(p, shaft, omega):
+    """``Motors._electrical``: the DC motor model's power at each rotor's operating point."""
+    on = omega > 0.0
+    om = jnp.where(on, omega, 1.0)
+    q = jnp.where(shaft > 0.0, shaft / om, 0.0)
+    i_nl = p["m_i0"] * jnp.sqrt(om * p["m_inv_w0"])
+    cur = q * p["m_kv"] + i_nl
+    return jnp.sum(jnp.where(on, q * om + i_nl * om / p["m_kv"] + cur * cur * p["m_rm"], 0.0))
 
 
 def _ocv(p, soc):

@@ -20,9 +20,10 @@ import numpy as np
 from ...airframe.model import build_spec
 from ...control.controller import CascadedController
 from ...control.pilots import Hover, Waypoints, ZigZag
-from ...energy.components import Constant, HoverPower, Motors, RadioLinear, RadioStates, SoC
+from ...energy.components import Constant, RadioLinear, RadioStates, SoC
 from ...energy.factory import flight_energy_model
 from ...energy.model import Meter
+from ...energy.rotors import HoverPower, Motors
 from ...errors import ConfigError
 from ...mission.book import book_period
 from ...mission.plan import resolve, seed_sequence
@@ -103,7 +104,12 @@ def _energy(meter) -> tuple[tuple, dict]:
                    m_inv_kf=motors._inv_kf, m_inv_eta=motors._inv_eta,
                    m_kappa=motors.induced_power_factor, m_wake=motors.wake_interference,
                    m_dirs=np.asarray(motors._dirs, dtype=float),
-                   m_vi0=np.asarray(motors._vi, dtype=float))
+                   m_vi0=np.asarray(motors._vi, dtype=float),
+                   # the DC motor model (datasheet blueprints), else a constant efficiency
+                   m_model=motors._kv is not None, m_esc=motors.esc_efficiency,
+                   m_kv=motors._kv or 1.0, m_rm=motors.motor_rm_ohm or 0.0,
+                   m_i0=motors.motor_i0_a or 0.0,
+                   m_inv_w0=1.0 / motors.motor_i0_rad_s if motors.motor_i0_rad_s else 0.0)
     return (tuple(kinds), tuple(tops)), num
 
 

@@ -1,0 +1,102 @@
+"""The memo store of the flight cache: computations memoised through
+``pytest_flockai.memo`` (rendered views, detection scores, envelopes), stored in
+the flight cache's directory under ``memo/`` with the same checks as a flight
+(the entry names its key, its payload's size and SHA-256; an .npz loaded without
+pickle), the same modes and the same atomic writes. A truncated, tampered or
+unreadable entry is never trusted: the value is computed again and the entry
+rewritten. ``counts`` says what happened, per status.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from .._io import atomic_write
+from . import key as _key
+from .entry import CorruptEntry, read_entry, seal, unseal
+
+MAGIC = b"pytest-flockai-memo/1\n"
+
+
+class MemoStore:
+    """``recall`` for ``pytest_flockai.memo``, kept in ``cache``'s directory and mode."""
+
+    def __init__(self, cache):
+        self.cache = cache
+        self.counts: Counter = Counter()
+
+    def path(self, key: str) -> Path:
+        return self.cache.directory / "memo" / key[:2] / f"{key}.memo"
+
+    def recall(self, kind: str, inputs, compute, pack, unpack):
+        cache = self.cache
+        if cache.mode == "off":
+            return compute()
+        try:
+            key = _key.memo_key(kind, inputs)
+        except _key.Uncacheable:
+            self.counts["bypass"] += 1
+            return compute()
+        status = "stored"
+        if cache.reads:
+            try:
+                data = read_entry(self.path(key))
+                if data is not None:
+                    value = unpack(_plain(*unseal(data, key, MAGIC)))
+                    self.counts["hit"] += 1
+                    return value
+            except CorruptEntry:
+                status = "replaced"
+            except Exception:           # a sealed entry unpack() cannot use: not trusted
+                status = "replaced"
+        value = compute()
+        self.counts[status if self._put(key, pack, value) else "computed"] += 1
+        return value
+
+    def _put(self, key: str, pack, value) -> bool:
+        if not self.cache.writes:
+            return False
+        arrays: dict = {}
+        try:
+            blob = seal(key, arrays, _header(pack(value), arrays), MAGIC)
+        except (TypeError, ValueError):        # not plain data: computed, not stored
+            return False
+        p = self.path(key)
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write(p, lambda fh: fh.write(blob), text=False)
+        except OSError as exc:
+            self.cache.write_failed(exc)
+            return False
+        return True
+
+
+def _header(value, arrays: dict):
+    """Plain data with every NumPy array replaced by {"@": name} (the array goes to ``arrays``)."""
+    if isinstance(value, np.ndarray):
+        name = f"a{len(arrays)}"
+        arrays[name] = value
+        return {"@": name}
+    if isinstance(value, dict):
+        return {"{}": [[k, _header(v, arrays)] for k, v in value.items()]}
+    if isinstance(value, (list, tuple)):
+        return [_header(v, arrays) for v in value]
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise TypeError(f"memo values are plain data and NumPy arrays, not {type(value).__name__}")
+
+
+def _plain(header, arrays: dict):
+    if isinstance(header, dict):
+        if "@" in header:
+            return arrays[header["@"]]
+        return {k: _plain(v, arrays) for k, v in header["{}"]}
+    if isinstance(header, list):
+        return [_plain(v, arrays) for v in header]
+    return header
+
+
+__all__ = ["MAGIC", "MemoStore"]
