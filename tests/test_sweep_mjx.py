@@ -38,8 +38,10 @@ def _hover():
 
 
 def _zigzag():
-    pilot = fa.pilots.ZigZag(area=((0.0, 0.0), (2.0, 1.0)), altitude=1.0, spacing=1.0, speed=1.0)
-    return fa.Mission(fa.drone("crazyflie-2-1"), pilot, seed=3)
+    """The datasheet Mavic: its motors are the DC motor model (energy/rotors.py)."""
+    pilot = fa.pilots.ZigZag(area=((0.0, 0.0), (20.0, 10.0)), altitude=10.0, spacing=10.0,
+                             speed=6.0)
+    return fa.Mission(fa.drone("dji-mavic-2-pro-datasheet"), pilot, seed=3)
 
 
 def _agree(cpu, bat):
@@ -79,14 +81,14 @@ def test_hover_over_payload_and_wind_agrees_with_the_core_and_repeats():
     _agree(cpu, bat)
 
 
-def test_zigzag_with_turbulent_wind_agrees_with_the_core():
+def test_zigzag_with_turbulent_wind_and_a_motor_model_agrees_with_the_core():
     _jax()
-    axes = dict(payload_kg=[0.0, 0.006], wind_mps=[3.0])
+    axes = dict(payload_kg=[0.0, 0.2], wind_mps=[4.0])
     cpu = fa.sweep(_zigzag(), workers=1, **axes)
     bat = fa.sweep(_zigzag(), backend="mjx", **axes)
     assert list(cpu["end_reason"]) == ["landed", "landed"]
     _agree(cpu, bat)
-    assert (bat["move_time_s"] > 1.0).all()
+    assert (bat["distance_m"] > 40.0).all()          # it flew the legs (20 + 10 + 20 m)
 
 
 def test_the_batched_drag_is_mujocos_fluid_ellipsoid():
