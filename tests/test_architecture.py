@@ -28,8 +28,10 @@ PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
 #: scipy.stats (a dependency, but ~1 s to import: only the Latin-hypercube design needs it)
 OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
             "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats"}
-#: the import-time MuJoCo/GL guard of the package itself (see its docstring)
-ALLOWED_LOCAL = {("__init__.py", "mujoco")}
+#: the import-time MuJoCo/GL guard of the package itself (see its docstring), and the
+#: sweep runner loading the batched backend, whose modules import JAX (the optional
+#: extra ``mjx``), only when ``backend="mjx"`` is asked for
+ALLOWED_LOCAL = {("__init__.py", "mujoco"), ("sweeps/runner.py", ".batched")}
 
 
 def _layer_of(name: str) -> int:

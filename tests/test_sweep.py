@@ -120,7 +120,8 @@ def test_sweep_flights_are_not_recorded_one_by_one():
     (dict(payload_kg=[0.0], workers=0), ["workers = 0"]),
     (dict(payload_kg=[0.0], budgets={"flight_time_s": "long"}), ["flight_time_s", "'long'"]),
     (dict(payload_kg=[0.0], backend="gpu"), ["backend = 'gpu'", "'process'"]),
-    (dict(payload_kg=[0.0], backend="mjx"), ["backend = 'mjx'", "not built", "'process'"]),
+    (dict(payload_kg=[0.0], device="gpu"), ["device = 'gpu'", "backend='mjx'"]),
+    (dict(payload_kg=[0.0], backend="mjx", device="abacus"), ["device = 'abacus'", "'gpu'"]),
     (dict(), ["no axis"]),
 ])
 def test_bad_input_is_a_config_error_naming_it(kwargs, words):

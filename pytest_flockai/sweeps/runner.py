@@ -9,6 +9,11 @@ the same seed gives the same DataFrame whatever the worker count. A
 variant that ends in a ``SimulationError`` (or a combination the mission
 rejects) is a row with its ``error``, not a lost sweep.
 
+``backend="mjx"`` flies every variant in one batch instead (MJX physics and
+the core's components in JAX, ``batched/``; ``pip install
+'pytest-flockai[mjx]'``): same columns, for Hover, Waypoints and ZigZag
+missions without tasks (``batched.params.check`` names anything else).
+
 Flights of a sweep are not handed to the recording sink of the caller (the
 pytest plugin records the sweep as a whole). Each variant is a flight of the
 flight cache open in the caller's context (``pytest_flockai.cache``): the
@@ -37,10 +42,11 @@ from ..mission import Mission
 from ..recording import recording
 from . import axes as _axes
 from . import design
+from .batched import params as _batched
 
-BACKENDS = ("process",)
-#: batched backends described in the issue, not built in this version (see README)
-NOT_BUILT = ("mjx",)
+BACKENDS = ("process", "mjx")
+#: JAX platforms the mjx backend runs on (None: JAX's default device)
+DEVICES = (None, "cpu", "gpu", "cuda", "tpu")
 _BASE: list = []        # the base mission inside a worker process
 _CACHE: list = []       # the caller's flight cache, opened again inside a worker process
 
@@ -53,7 +59,7 @@ def default_workers() -> int:
 
 
 def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, workers=None,
-          backend="process", **axes) -> pd.DataFrame:
+          backend="process", device=None, **axes) -> pd.DataFrame:
     """Fly ``base_mission`` once per variant of ``axes``; one DataFrame row per variant.
 
     Columns: the axes, ``end_reason``, ``error`` (None, or the failure of that
@@ -61,11 +67,12 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
     (``{kpi: "<op> <number> [unit]"}``, as ``@pytest.mark.kpi``) one boolean
     column ``ok_<kpi>`` per budget and ``ok`` (every budget holds and the
     variant flew without error). ``df.attrs`` holds the sweep's settings and its
-    wall time.
+    wall time. ``backend="mjx"`` flies the variants in one JAX batch (``device``:
+    "cpu", "gpu", or None for JAX's default); ``workers`` is then unused.
     """
     if not isinstance(base_mission, Mission):
         raise ConfigError(f"sweep: base_mission = {base_mission!r} is not a fa.Mission")
-    _check_backend(backend, base_mission)
+    _check_backend(backend, base_mission, device)
     for name in axes:
         _axes.check_name(name)
     plan, to_check = design.variants(axes, method, samples, seed)
@@ -78,28 +85,42 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
     parsed = _budgets.parse_many(budgets or {})
     workers = _check_workers(workers)
     wall0 = time.perf_counter()
-    rows, statuses = fly(base_mission, plan, workers)
+    if backend == "process":
+        rows, statuses = fly(base_mission, plan, workers)
+    else:                       # the batched path neither reads nor stores the flight cache
+        rows, statuses = _fly_batched(base_mission, plan, device), []
     wall = time.perf_counter() - wall0
     df = frame(rows, list(axes), parsed)
     df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
-                     "wall_s": wall, "backend": backend,
+                     "wall_s": wall, "backend": backend, "device": device,
                      "cache": dict(Counter(s for s in statuses if s is not None))})
     return df
 
 
-def _check_backend(backend, base) -> None:
-    if backend in BACKENDS:
+def _check_backend(backend, base, device) -> None:
+    if backend not in BACKENDS:
+        raise ConfigError(f"sweep: backend = {backend!r} is not allowed; allowed: "
+                          f"{', '.join(map(repr, BACKENDS))}")
+    if device not in DEVICES:
+        raise ConfigError(f"sweep: device = {device!r} is not allowed; allowed: "
+                          f"{', '.join(map(repr, DEVICES))} (backend='mjx' only)")
+    if backend == "process":
+        if device is not None:
+            raise ConfigError(f"sweep: device = {device!r} needs backend='mjx'; "
+                              f"backend='process' flies on this machine's CPU cores")
         return
-    if backend in NOT_BUILT:
-        if base.tasks:
-            raise ConfigError(f"sweep: backend = {backend!r} cannot fly tasks = "
-                              f"{[getattr(t, 'name', t) for t in base.tasks]!r} (camera and ML "
-                              f"tasks stay per flight); allowed with tasks: backend='process'")
-        raise ConfigError(f"sweep: backend = {backend!r} (MJX/JAX batches) is not built in this "
-                          f"version; allowed: {', '.join(map(repr, BACKENDS))}")
-    raise ConfigError(f"sweep: backend = {backend!r} is not allowed; allowed: "
-                      f"{', '.join(map(repr, BACKENDS))}")
+    _batched.check(base)
+
+
+def _fly_batched(base, plan, device) -> list[dict]:
+    """The variants in one JAX batch (the backend's modules import JAX: loaded here)."""
+    try:
+        from .batched import engine
+    except ImportError as exc:
+        raise ConfigError(f"sweep: backend='mjx' needs JAX and MJX ({exc}); install them with "
+                          f"pip install 'pytest-flockai[mjx]', or use backend='process'") from None
+    return engine.fly(base, plan, device)
 
 
 def _check_workers(workers) -> int:

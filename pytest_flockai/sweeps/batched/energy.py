@@ -1,0 +1,221 @@
+"""Body drag, Dryden wind, the energy integrator (motors, computer, radio,
+battery circuit) and the flight book in ``jax.numpy``, for one variant.
+
+The branch-free twins of ``airframe/model.py``'s fluid ellipsoid (MuJoCo's
+blunt drag, which MJX lacks: MJX implements only the inertia-box fluid model),
+``world/wind.py`` (``WindSampler``), ``energy/components.py`` (``Constant``,
+``SoC``, ``RadioLinear``, ``RadioStates``),
+``energy/rotors.py`` (``Motors``, ``HoverPower``),
+``energy/battery.py`` (``Circuit.draw``), ``energy/integrator.py``,
+``comm/traffic.py`` (``Heartbeats``) and ``mission/book.py``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax.numpy as jnp
+
+from ...clock import CLOCK_EPS
+from ...comm.traffic import ACK_BYTES
+from ...control.stages import LAND, PILOT, TAKEOFF
+from ...energy.battery import CUTOFF_HOLD_S
+from ...energy.rotors import VRS_K
+from ...mission.book import ACCEL_SMOOTHING_S, ACCEL_THRESHOLD, HOVER_SPEED
+from ...world.wind import FT
+from .control import rotation
+
+MINVAL = 1e-15          # mjMINVAL: MuJoCo's guard in the projected-area quotient
+
+
+def drag(p, quat, vel, wind):
+    """World-frame force of MuJoCo's ellipsoid blunt drag (``fluid_coefs[0]``; the
+    other coefficients are 0 and the air has no viscosity), as MuJoCo's
+    ``mj_viscousForces`` computes it: in the ellipsoid's frame f = -rho C A_proj |v| v,
+    A_proj = pi sqrt(sum (s_j s_k)^4 v_i^2 / sum (s_j s_k)^2 v_i^2) (s the semi-axes,
+    v the velocity relative to the wind; pi s_j s_k along each axis)."""
+    R = rotation(quat)
+    lv = R.T @ (vel - wind)
+    s0, s1, s2 = p["aero_size"][0], p["aero_size"][1], p["aero_size"][2]
+    a2 = jnp.stack([(s1 * s2) ** 2, (s2 * s0) ** 2, (s0 * s1) ** 2])
+    v2 = lv * lv
+    area = jnp.pi * jnp.sqrt(jnp.sum(a2 * a2 * v2) / jnp.maximum(MINVAL, jnp.sum(a2 * v2)))
+    return R @ (-p["rho"] * jnp.sqrt(jnp.sum(v2)) * area * p["aero_c"] * lv)
+
+
+def _dryden(h):
+    h = jnp.clip(h / FT, 10.0, 1000.0)
+    k = 0.177 + 0.000823 * h
+    return k ** -0.4, h / k ** 1.2 * FT, h * FT
+
+
+def wind_step(p, s, h, noise, dt):
+    """``WindSampler.step(h)``: (air velocity, new wind state)."""
+    ratio, lu, lw = _dryden(h)
+    given = p["w_gust_std"] >= 0.0
+    su = jnp.where(given, p["w_gust_std"], p["w_sigma_w20"] * ratio)
+    sw = jnp.where(given, p["w_gust_std"] / ratio, p["w_sigma_w20"])
+    fixed = p["w_gust_tau"] > 0.0
+    tu = jnp.where(fixed, p["w_gust_tau"], lu / p["w_carry"])
+    tw = jnp.where(fixed, p["w_gust_tau"], lw / p["w_carry"])
+    ah, aw = jnp.exp(-dt / tu), jnp.exp(-dt / tw)
+    fresh = jnp.stack([ah, su * jnp.sqrt(1.0 - ah * ah), aw, sw * jnp.sqrt(1.0 - aw * aw)])
+    redo = jnp.isnan(s["w_h"]) | (jnp.abs(h - s["w_h"]) > 0.5)
+    coef = jnp.where(redo, fresh, s["w_coef"])
+    g = s["w_g"]
+    g = jnp.stack([coef[0] * g[0] + coef[1] * noise[0], coef[0] * g[1] + coef[1] * noise[1],
+                   coef[2] * g[2] + coef[3] * noise[2]])
+    act = p["w_active"]
+    return (jnp.where(act, p["w_mean"] + g, p["w_mean"]),
+            {"w_g": jnp.where(act, g, s["w_g"]), "w_coef": jnp.where(act, coef, s["w_coef"]),
+             "w_h": jnp.where(act & redo, h, s["w_h"])})
+
+
+def _descent_inflow(vg, vax, vpar2, vh):
+    x = vax / jnp.where(vh > 0.0, vh, 1.0)
+    k1, k2, k3, k4 = VRS_K
+    v_emp = vh * (1.0 + x * (k1 + x * (k2 + x * (k3 + x * k4))))
+    w = vax * vax / jnp.maximum(vax * vax + vpar2, 1e-300)
+    v = jnp.maximum(w * v_emp + (1.0 - w) * vg, vg)
+    return jnp.where((vh <= 0.0) | (x < -2.0), vg, v)
+
+
+def motors(p, thrust, vrel, vi):
+    """``Motors.power_parts`` summed: (electrical power, new induced-velocity state)."""
+    vx, vy, vax = vrel[0], vrel[1], vrel[2]
+    vpar2 = vx * vx + vy * vy
+    vpar = jnp.sqrt(vpar2)
+    on = thrust > 1e-9
+    T = jnp.where(on, thrust, 1.0)
+    vh2 = T * p["m_inv2rhoA"]
+    v = jnp.where(vi <= 0.0, jnp.sqrt(vh2), vi)
+    for _ in range(2):
+        s = vax + v
+        root = jnp.sqrt(vpar2 + s * s)
+        df = jnp.where(root > 1e-9, root + v * s / jnp.where(root > 1e-9, root, 1.0), 1.0)
+        v = jnp.maximum(0.0, v - (v * root - vh2) / df)
+    vi = jnp.where(on, v, vi)
+    v = jnp.where(vax < 0.0, _descent_inflow(v, vax, vpar2, jnp.sqrt(vh2)), v)
+    induced = jnp.sum(jnp.where(on, p["m_kappa"] * T * v, 0.0))
+    axial = jnp.sum(jnp.where(on, T * vax, 0.0))
+    omega = jnp.sqrt(T * p["m_inv_kf"])
+    mu = vpar / (omega * p["m_R"])
+    p0 = p["m_c0"] * T * jnp.sqrt(T) * (1.0 + 4.65 * mu * mu)
+    profile = jnp.sum(jnp.where(on, p0, 0.0))
+    wake_vi = jnp.sum(jnp.where(on, v, 0.0))
+    n = thrust.shape[0]
+    vps = jnp.where(vpar > 0.1, vpar, 1.0)
+    vi_mean = wake_vi / n
+    skew = (vpar / jnp.sqrt(vpar2 + (vax + vi_mean) ** 2)) ** 2
+    ws = jnp.maximum(0.0, -(p["m_dirs"][:, 0] * vx / vps + p["m_dirs"][:, 1] * vy / vps))
+    tot = jnp.sum(ws)
+    scale = p["m_wake"] * vi_mean * skew * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
+    use = (p["m_wake"] > 0.0) & (vpar > 0.1) & (wake_vi > 0.0) & (tot > 0.0)
+    induced = induced + jnp.where(use, jnp.sum(ws * thrust) * scale, 0.0)
+    shaft = jnp.where(on, p["m_kappa"] * T * v + T * vax + p0 + jnp.where(use, ws * thrust * scale,
+                                                                         0.0), 0.0)
+    total = induced + profile + axial
+    inv_eta = jnp.where(p["m_model"] & (total >= 0.0) & (total > 1e-12),
+                        _electrical(p, shaft, jnp.where(on, omega, 0.0))
+                        / (jnp.where(total > 1e-12, total, 1.0) * p["m_esc"]), p["m_inv_eta"])
+    axial = jnp.where(total < 0.0, -(induced + profile), axial)
+    return (induced + profile + axial) * inv_eta, vi
+
+
+def _electrical(p, shaft, omega):
+    """``Motors._electrical``: the DC motor model's power at each rotor's operating point."""
+    on = omega > 0.0
+    om = jnp.where(on, omega, 1.0)
+    q = jnp.where(shaft > 0.0, shaft / om, 0.0)
+    i_nl = p["m_i0"] * jnp.sqrt(om * p["m_inv_w0"])
+    cur = q * p["m_kv"] + i_nl
+    return jnp.sum(jnp.where(on, q * om + i_nl * om / p["m_kv"] + cur * cur * p["m_rm"], 0.0))
+
+
+def _ocv(p, soc):
+    lipo = -1.031 * jnp.exp(-35.0 * soc) + 3.685 + soc * (0.2156 + soc * (-0.1178 + soc * 0.3201))
+    sc = jnp.maximum(soc, 1e-3)
+    liion = 3.7348 - 0.00876 / sc + 0.468 * jnp.exp(-3.5294 * (1.0 - soc))
+    return p["b_cells"] * jnp.where(p["b_lipo"], lipo, liion)
+
+
+def battery(p, s, power, dt):
+    """``Circuit.draw(power, dt)``: (I^2 R loss, new battery state)."""
+    e = _ocv(p, s["b_soc"])
+    shape = (0.07446 + 0.1562 * jnp.exp(-24.37 * s["b_soc"])) / (0.07446 + 0.1562 * math.exp(-12.185))
+    r = p["b_rmid"] * shape
+    disc = e * e - 4.0 * r * power
+    over = disc < 0.0
+    i = jnp.where(over, e / (2.0 * r), jnp.where(
+        power > 0.0, (e - jnp.sqrt(jnp.maximum(disc, 0.0))) / (2.0 * r), 0.0))
+    v = e - i * r
+    low = (i > 0.0) & (v < p["b_vcut"])
+    below = jnp.where(low, s["b_below"] + dt, 0.0)
+    cut = s["b_cut"] | over | (low & (below >= CUTOFF_HOLD_S - 1e-9))
+    return i * i * r, {"b_soc": s["b_soc"] - i * dt / p["b_qc"], "b_below": below, "b_cut": cut,
+                       "b_v": v, "b_vmin": jnp.minimum(s["b_vmin"], v)}
+
+
+def leaf_powers(p, s, thrust, vrel, airborne, edt, kinds):
+    """The power of every leaf of the energy model (W) and the new motor state."""
+    n_hb = s["hb_pending"]
+    tx_b, rx_b = n_hb * p["hb_bytes"], n_hb * ACK_BYTES
+    safe = jnp.where(edt > 0.0, edt, 1.0)
+    out, vi, r_i, s_i = [], s["vi"], 0, 0
+    for k, kind in enumerate(kinds):
+        base = p["const_w"][k]
+        if kind == "Motors":
+            pw, vi = motors(p, thrust, vrel, s["vi"])
+        elif kind == "HoverPower":
+            pw = jnp.where(airborne, base, 0.0)
+        elif kind == "RadioLinear":
+            c = p["radio"][r_i]
+            r_i += 1
+            pw = base + jnp.where(edt > 0.0, (c[0] * tx_b + c[1] * n_hb + c[2] * rx_b
+                                              + c[3] * n_hb) * 1e-6 / safe, 0.0)
+        elif kind == "RadioStates":
+            c = p["states"][s_i]
+            s_i += 1
+            t_tx, t_rx = tx_b * 8.0 / c[3], rx_b * 8.0 / c[3]
+            idle = jnp.maximum(0.0, edt - t_tx - t_rx)
+            pw = jnp.where(edt > 0.0, (c[2] * idle + c[0] * t_tx + c[1] * t_rx) / safe, c[2])
+        else:
+            pw = base
+        out.append(pw)
+    return jnp.stack(out), vi
+
+
+def integrate(p, s, t, thrust, vrel, airborne, kinds):
+    """One energy interval (t_e, t] charged (``EnergyIntegrator.step`` / ``finish``)."""
+    edt = t - s["t_e"]
+    pw, vi = leaf_powers(p, s, thrust, vrel, airborne, edt, kinds)
+    total = jnp.sum(pw)
+    loss, bat = battery(p, s, total, edt)
+    energy = s["energy_j"] + (total + loss) * edt
+    return {**s, **bat, "vi": vi, "e_leaf": s["e_leaf"] + pw * edt, "loss_j": s["loss_j"] + loss * edt,
+            "energy_j": energy, "t_e": t, "hb_drained": s["hb_drained"] + s["hb_pending"],
+            "hb_pending": jnp.zeros_like(s["hb_pending"])}
+
+
+def book(p, s, t, q, v, speed, period, every_tick):
+    """``FlightBook.step``: phases in whole ticks, distance, top speed, tracking error."""
+    bdt = t - s["t_book"]
+    a = math.exp(-period / ACCEL_SMOOTHING_S)
+    dv = v[:3] - s["pv"]
+    acc = jnp.where(bdt > 0.0, a * s["acc"] + (1.0 - a) * jnp.sqrt(jnp.sum(dv * dv))
+                    / jnp.where(bdt > 0.0, bdt, 1.0), s["acc"])
+    stage, air = s["stage"], s["airborne"]
+    phase = jnp.where(stage == TAKEOFF, 0, jnp.where(stage == LAND, 4, jnp.where(
+        speed < HOVER_SPEED, 1, jnp.where(acc > ACCEL_THRESHOLD, 3, 2))))
+    err = jnp.sqrt(jnp.sum((q[:3] - s["sp"][:3]) ** 2))
+    out = {"t_book": t, "pv": v[:3], "acc": jnp.where(air, acc, s["acc"]),
+           "ticks": s["ticks"] + jnp.where(air, jnp.eye(6, dtype=s["ticks"].dtype)[phase], 0),
+           "dist": s["dist"] + jnp.where(air, speed * period, 0.0),
+           "vmax": jnp.where(air, jnp.maximum(s["vmax"], speed), s["vmax"]),
+           "terr": jnp.where(air & (stage == PILOT), jnp.maximum(s["terr"], err), s["terr"]),
+           "b_next": s["b_next"] + (0.0 if every_tick else period)}
+    return out
+
+
+def due(t, t_next):
+    return t >= t_next - CLOCK_EPS

@@ -1,0 +1,244 @@
+"""Fly a sweep's variants in batches: MJX physics, the core's components in JAX.
+
+Variants with the same structure (``params.variant``'s key: rates, rotor
+count, energy leaves, pilot) fly in one batch: their MuJoCo models go to MJX
+(``mjx.put_model``) and the fields that differ (mass, inertia, thrust limits)
+are stacked and ``jax.vmap``-ed with the state; one control tick is the core's
+loop (``mission/loop.py``) in the core's order: stage machine, controller,
+wind, heartbeats, energy integrator, flight book, end conditions, then
+``substeps`` MJX steps with the body drag applied as ``xfrc_applied`` and the
+crash check. ``jax.lax.scan`` runs ``CHUNK_S`` of simulated time per call; the
+host loops over chunks until every variant has ended, feeding each variant's
+own wind noise (the core's random stream: same seed, same gusts). A variant
+that has ended keeps its state. Float64 throughout (``jax.enable_x64`` around
+the backend): the time sum and the energy integral of a 30-minute flight drift
+visibly in float32.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from mujoco import mjx
+
+from ...control.stages import DONE, TAKEOFF
+from ...errors import FlockAIError
+from .. import axes as _axes
+from . import control as C
+from . import energy as E
+from . import params as P
+from . import rows as _rows
+
+#: s of simulated time per compiled chunk (the host checks for the end between chunks)
+CHUNK_S = 2.0
+#: XLA options of the chunk (see README: compile time against run time)
+COMPILER_OPTIONS: dict = {}
+_END = {name: i for i, name in enumerate(P.END_REASONS)}
+
+
+def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
+    """One row dict per variant, in the plan's order (as ``runner.fly_one``)."""
+    rows: list[dict | None] = [None] * len(plan)
+    groups: dict = {}
+    for i, values in enumerate(plan):
+        try:
+            m = _axes.apply(base, values)
+            key, num, model = P.variant(m)
+        except FlockAIError as exc:
+            rows[i] = {**values, "end_reason": "error", "error": f"{type(exc).__name__}: {exc}",
+                       "sim_time_s": math.nan}
+            continue
+        groups.setdefault(key, []).append((i, m, num, model))
+    dev = jax.devices(device)[0] if device else jax.devices()[0]
+    with jax.enable_x64(True):
+        for key, members in groups.items():
+            out = _fly_group(key, members, dev)
+            for (i, _, _, _), row in zip(members, out):
+                rows[i] = {**plan[i], **row}
+    return rows
+
+
+def _stack(items) -> dict:
+    return {k: jnp.asarray(np.stack([np.asarray(it[k]) for it in items])) for k in items[0]}
+
+
+def _models(models, dev):
+    """(shared leaves, batched leaves by index, treedef) of the MJX models."""
+    flat = [jax.tree_util.tree_flatten(mjx.put_model(m, device=dev)) for m in models]
+    treedef = flat[0][1]
+    if any(f[1] != treedef for f in flat[1:]):
+        raise FlockAIError("sweep: backend='mjx': the variants' MuJoCo models differ in "
+                           "structure; sweep the differing axis with backend='process'")
+    leaves = flat[0][0]
+    diff = {j: jnp.stack([f[0][j] for f in flat]) for j in range(len(leaves))
+            if any(not np.array_equal(np.asarray(f[0][j]), np.asarray(leaves[j])) for f in flat[1:])}
+    return leaves, diff, treedef
+
+
+def _init_state(num, model, sampler, dev):
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    home = np.array([0.0, 0.0, float(data.qpos[2])])
+    n = model.nu
+    return {
+        "d": mjx.put_data(model, data, device=dev), "home": home, "stage": np.int32(TAKEOFF),
+        "sp": np.concatenate([home, np.zeros(7)]), "t_stage": 0.0, "leg_p0": home,
+        "leg_p1": np.array([0.0, 0.0, num["altitude"]]), "leg_speed": num["climb_speed"],
+        "pilot_t0": 0.0, "pilot_start": np.zeros(3), "t_land": math.nan, "integ": np.zeros(3),
+        "airborne": True, "end": np.int32(0), "t_end_at": math.nan,
+        "w_g": np.asarray(sampler.g, dtype=float) if sampler is not None else np.zeros(3),
+        "w_coef": np.zeros(4), "w_h": math.nan, "w": np.zeros(3),
+        "hb_next": 0.0, "hb_pending": 0.0, "hb_drained": 0.0,
+        "e_next": num["energy_period"], "t_e": 0.0, "energy_j": 0.0,
+        "e_leaf": np.zeros(len(num["const_w"])), "loss_j": 0.0,
+        "vi": num.get("m_vi0", np.zeros(n)), "vrel": np.zeros(3),
+        "b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": num["b_v0"],
+        "b_next": 0.0, "t_book": 0.0, "acc": 0.0, "pv": np.zeros(3),
+        "ticks": np.zeros(6, dtype=np.int32), "dist": 0.0, "vmax": 0.0, "terr": 0.0,
+        "ec_next": num["energy_period"], "speed": 0.0}
+
+
+def _stack_states(states):
+    """The variants' states stacked; strongly typed (numpy first), so the scan's output
+    has the input's types and the chunk compiles once."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])),
+                                  *states)
+
+
+def _fly_group(key, members, dev) -> list[dict]:
+    nsub, _, ctrl_dt, book_dt, _, (kinds, tops), pkind = key[:7]
+    nums = [num for _, _, num, _ in members]
+    p = jax.device_put(_stack(nums), dev)     # committed, like the chunk's outputs:
+    # uncommitted inputs would compile the chunk a second time
+    leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
+    samplers, states = [], []
+    for _, m, num, model in members:
+        rng = P.wind_rng(m)
+        smp = m.wind.sampler(rng, ctrl_dt) if (m.wind is not None and m.wind.turbulent) else None
+        samplers.append(smp)
+        states.append(_init_state(num, model, smp, dev))
+    s = jax.device_put(_stack_states(states), dev)
+    chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
+    step = _chunk_fn(tuple(sorted(diff)), treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt,
+                     kinds, pkind)
+    dvals = jax.device_put(tuple(diff[j] for j in sorted(diff)), dev)
+    shared = jax.device_put(tuple(leaves), dev)
+    t_end = max(num["t_end"] for num in nums)
+    t = 0.0
+    while True:
+        noise = np.zeros((chunk_ticks, len(members), 3))
+        for b, smp in enumerate(samplers):
+            if smp is not None:
+                noise[:, b, :] = smp.rng.standard_normal(3 * chunk_ticks).reshape(chunk_ticks, 3)
+        s = step(shared, dvals, p, s, jax.device_put(noise, dev))
+        t += chunk_ticks * ctrl_dt
+        if bool(jnp.all(s["end"] != 0)) or t > t_end + 2 * CHUNK_S:
+            break
+    s = jax.vmap(lambda p1, s1: _finish(p1, s1, kinds))(p, s)
+    return _rows.rows(jax.device_get(s), nums, tops, book_dt)
+
+
+@functools.lru_cache(maxsize=16)
+def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
+    """The compiled chunk of one batch structure (cached: a second sweep of the same
+    structure does not compile again)."""
+    def one(shared, dvals, p, s, noise):
+        ls = list(shared)
+        for j, val in zip(diff_idx, dvals):
+            ls[j] = val
+        m = jax.tree_util.tree_unflatten(treedef, ls)
+        new = _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind)
+        new = jax.tree_util.tree_map(lambda a, b: jnp.asarray(b, dtype=a.dtype), s, new)
+        return _sel(s["end"] != 0, s, new)
+
+    batched = jax.vmap(one, in_axes=(None, 0, 0, 0, 0))
+
+    def run(shared, dvals, p, s, noise):
+        return jax.lax.scan(lambda st, n: (batched(shared, dvals, p, st, n), None), s, noise)[0]
+    return jax.jit(run, compiler_options=COMPILER_OPTIONS)
+
+
+def _contact(d):
+    c = d._impl.contact
+    return jnp.any(c.dist < c.includemargin) if c.dist.shape[0] else jnp.zeros((), bool)
+
+
+def _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
+    d = s["d"]
+    t, q, v = d.time, d.qpos, d.qvel
+    ok = jnp.isfinite(q[2]) & (jnp.abs(q[2]) < 1e5) & jnp.isfinite(v[0])
+    speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
+    s = {**s, "speed": speed}
+    s, landed = C.stages(p, s, t, q, v, _contact(d), pkind)
+    f, integ = C.controller(p, s["integ"], q, v, s["sp"], ctrl_dt)
+    off = s["stage"] == DONE
+    s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off}
+    ctrl = jnp.where(off, 0.0, f)
+    w, wst = E.wind_step(p, s, q[2], noise, ctrl_dt)
+    s = {**s, **wst, "w": w}
+    hb = E.due(t, s["hb_next"])
+    s = {**s, "hb_next": s["hb_next"] + jnp.where(hb, p["hb_period"], 0.0),
+         "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
+    vrel = C.rotation(q[3:7]).T @ (v[:3] - w)
+    e_due = E.due(t, s["e_next"])
+    es = E.integrate(p, {**s, "vrel": vrel}, t, d.act, vrel, s["airborne"], kinds)
+    es["e_next"] = s["e_next"] + p["energy_period"]
+    s = _sel(e_due, es, s)
+    b_due = True if book_every else E.due(t, s["b_next"])
+    bs = E.book(p, s, t, q, v, speed, book_dt, book_every)
+    s = _sel(b_due, {**s, **bs}, s)
+    s = _end_conditions(p, s, t, ctrl_dt, landed)
+    s = {**s, "end": jnp.where(ok, s["end"], _END["diverged"])}
+    stepped = _physics(m, p, s, d, ctrl, nsub)
+    return _sel(s["end"] != 0, s, stepped)
+
+
+def _end_conditions(p, s, t, dt, landed):
+    """``EndConditions.step`` where due (its clock, and every tick near the end)."""
+    on_clock = E.due(t, s["ec_next"])
+    run = on_clock | (t >= p["t_end"] - dt - E.CLOCK_EPS)
+    end = jnp.where(landed, _END["landed"], s["end"])
+    live = run & (end == 0)
+    empty = live & ((s["energy_j"] >= p["e_usable"]) | s["b_cut"])
+    end = jnp.where(empty, _END["battery_depleted"], end)
+    reserve = live & ~empty & p["use_reserve"] & (s["stage"] == C.PILOT) & (
+        p["e_usable"] - s["energy_j"] <= p["reserve_j"])
+    s = C.go_home(p, s, t, reserve)
+    timeout = live & ~empty & (t + 0.5 * dt >= p["t_end"])
+    end = jnp.where(timeout, jnp.where(p["timed"], _END["time"], _END["time_cap"]), end)
+    return {**s, "end": end, "ec_next": s["ec_next"] + jnp.where(on_clock, p["energy_period"], 0.0)}
+
+
+def _physics(m, p, s, d, ctrl, nsub):
+    """``substeps`` MJX steps with the body drag, then the crash check (``loop._impact``)."""
+    d = d.replace(ctrl=ctrl)
+
+    def sub(_, dd):
+        f = E.drag(p, dd.qpos[3:7], dd.qvel[:3], s["w"])
+        xf = jnp.zeros_like(dd.xfrc_applied).at[1, :3].set(f)
+        out = mjx.step(m, dd.replace(xfrc_applied=xf))
+        return jax.tree_util.tree_map(lambda a, b: b.astype(a.dtype), dd, out)
+    d = jax.lax.fori_loop(0, nsub, sub, d)
+    flipped = d.xmat[1, 2, 2] < 0.0
+    on_pad = (s["stage"] == TAKEOFF) & (s["d"].qpos[2] < s["home"][2] + 0.05)
+    crash = _contact(d) & (s["stage"] != DONE) & (flipped | (~on_pad & (s["speed"] > 2.0)))
+    return {**s, "d": d, "end": jnp.where(crash, _END["crashed"], s["end"]),
+            "t_end_at": jnp.where(crash, d.time, s["t_end_at"])}
+
+
+def _finish(p, s, kinds):
+    """``EnergyIntegrator.finish``: the last, partial interval (the last usage's
+    air-relative velocity, as the core)."""
+    t = s["d"].time
+    es = E.integrate(p, s, t, s["d"].act, s["vrel"], s["airborne"], kinds)
+    return _sel(t > s["t_e"], es, s)
+
+
+def _sel(cond, a: dict, b: dict) -> dict:
+    """``a`` where ``cond``, else ``b`` (dicts of arrays and MJX data, same keys)."""
+    return jax.tree_util.tree_map(lambda x, y: jnp.where(cond, x, y), a, b)
