@@ -117,6 +117,54 @@ def test_the_batched_drag_is_mujocos_fluid_ellipsoid():
             assert np.linalg.norm(ours) > 0.1
 
 
+def test_the_batched_rotor_drag_is_the_cores_h_force():
+    """The batched step applies every rotor's H-force (airframe/rotor_drag.py) itself:
+    the same world-frame force and torque as ``RotorDrag.step`` on the same state, and
+    the batched profile power leaves out the H-force's work as ``Motors`` does."""
+    _jax()
+    import jax
+    from types import SimpleNamespace
+
+    from pytest_flockai.airframe.rotor_drag import RotorDrag
+    from pytest_flockai.energy import Motors
+    from pytest_flockai.energy.factory import flight_energy_model
+    from pytest_flockai.energy.model import Meter
+    from pytest_flockai.sweeps.batched import energy, params
+    for name in ("dji-mavic-2-pro", "generic-hexa-680"):
+        drone = fa.drone(name)
+        m = fa.Mission(drone, fa.pilots.Hover())
+        _, num, _ = params.variant(m)
+        assert num["h_c"] > 0 and num["m_hk"] > 0
+        rng = np.random.default_rng(2)
+        n = drone.airframe.rotor_count
+        with jax.enable_x64(True):
+            p = {k: jax.numpy.asarray(v) for k, v in num.items()
+                 if isinstance(v, (bool, float, np.ndarray))}
+            for _ in range(4):
+                quat = rng.normal(size=4)
+                quat /= np.linalg.norm(quat)
+                q = np.r_[0.0, 0.0, 10.0, quat]
+                v = np.r_[rng.normal(0, 6, 3), rng.normal(0, 1.5, 3)]
+                wind, act = rng.normal(0, 4, 3), rng.uniform(0.0, 8.0, n)
+                act[0] = 0.0                                   # a stopped rotor: no force
+                xfrc = np.zeros(6)
+                core = RotorDrag(drone, SimpleNamespace(q=q, v=v, w=wind), act, xfrc, num["rho"])
+                core.step(0.0)
+                f, tq = energy.rotor_drag(p, quat, v, wind, act)
+                assert np.allclose(np.asarray(f), xfrc[:3], rtol=1e-9, atol=1e-12)
+                assert np.allclose(np.asarray(tq), xfrc[3:], rtol=1e-9, atol=1e-12)
+                assert np.linalg.norm(xfrc[:3]) > 1e-3
+            thrust = np.full(n, drone.mass_kg * 9.81 / n)
+            vrel = np.array([12.0, 0.0, 0.0])
+            usage = SimpleNamespace(v_rel_body=tuple(vrel), thrust=thrust.tolist())
+            meter = Meter(flight_energy_model(drone.energy), drone, rho=num["rho"])
+            motors = [c for _, c in meter.model.leaves() if isinstance(c, Motors)][0]
+            want = sum(motors.power_parts(usage))
+            got, _ = energy.motors(p, jax.numpy.asarray(thrust), jax.numpy.asarray(vrel),
+                                   jax.numpy.asarray(num["m_vi0"]))
+            assert float(got) == pytest.approx(want, rel=1e-9)
+
+
 @pytest.mark.parametrize("make, words", [
     (lambda: fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Orbit(radius=2.0, altitude=1.0)),
      ["pilot = Orbit", "backend='process'"]),

@@ -53,6 +53,13 @@ def h_force(blade_drag: float, diameter_m: float, kf: float, rho: float, thrust_
     return h_coefficient(blade_drag, diameter_m, kf, rho) * math.sqrt(thrust_n) * v_par
 
 
+def hubs(drone) -> list[tuple[float, float, float]]:
+    """Body-frame (x, y, h) of every rotor hub: the layout's arm ends at the height of the
+    top of the body above the centre of mass (airframe/model.py)."""
+    h = 0.5 * drone.airframe.body_size_m[2]
+    return [(x, y, h) for x, y, _ in drone.rotor_layout()]
+
+
 class RotorDrag(Clocked):
     """The H-force of every rotor as a clocked component (every control tick)."""
 
@@ -64,8 +71,7 @@ class RotorDrag(Clocked):
         rot = drone.rotor
         self.st, self.act, self.xfrc = state, act, xfrc
         self.c = h_coefficient(rot.blade_drag, rot.diameter_m, rot.thrust_coeff, rho)
-        h = 0.5 * drone.airframe.body_size_m[2]        # hub height above the CoM (model.py)
-        self.hubs = [(x, y, h) for x, y, _ in drone.rotor_layout()]
+        self.hubs = hubs(drone)
         self.force = (0.0, 0.0, 0.0)                   # world frame, last tick (N)
         xfrc[:] = 0.0
 

@@ -43,6 +43,23 @@ def drag(p, quat, vel, wind):
     return R @ (-p["rho"] * jnp.sqrt(jnp.sum(v2)) * area * p["aero_c"] * lv)
 
 
+def rotor_drag(p, quat, qvel, wind, act):
+    """World-frame (force, torque about the CoM) of every rotor's H-force, as
+    ``airframe.rotor_drag.RotorDrag.step``: per hub, -c sqrt(T) times the in-plane part of
+    the air-relative velocity plus omega x r (body frame), summed and rotated to the world."""
+    R = rotation(quat)
+    b = R.T @ (qvel[:3] - wind)
+    wx, wy, wz = qvel[3], qvel[4], qvel[5]               # free joint: body-frame rates
+    x, y, h = p["h_hubs"][:, 0], p["h_hubs"][:, 1], p["h_hubs"][:, 2]
+    on = act > 0.0
+    k = jnp.where(on, -p["h_c"] * jnp.sqrt(jnp.where(on, act, 0.0)), 0.0)
+    hx = k * (b[0] + wy * h - wz * y)
+    hy = k * (b[1] + wz * x - wx * h)
+    f = jnp.stack([jnp.sum(hx), jnp.sum(hy), jnp.zeros_like(b[0])])
+    tq = jnp.stack([-jnp.sum(h * hy), jnp.sum(h * hx), jnp.sum(x * hy - y * hx)])
+    return R @ f, R @ tq
+
+
 def _dryden(h):
     h = jnp.clip(h / FT, 10.0, 1000.0)
     k = 0.177 + 0.000823 * h
@@ -100,7 +117,10 @@ def motors(p, thrust, vrel, vi):
     axial = jnp.sum(jnp.where(on, T * vax, 0.0))
     omega = jnp.sqrt(T * p["m_inv_kf"])
     mu = vpar / (omega * p["m_R"])
-    p0 = p["m_c0"] * T * jnp.sqrt(T) * (1.0 + 4.65 * mu * mu)
+    p0h = p["m_c0"] * T * jnp.sqrt(T)
+    # the H-force's work is paid through the tilt (energy/rotors.py, airframe/rotor_drag.py)
+    wr = omega * p["m_R"]
+    p0 = jnp.maximum(p0h, p0h * (1.0 + 4.65 * mu * mu) - p["m_hk"] * wr * wr * wr * mu * mu)
     profile = jnp.sum(jnp.where(on, p0, 0.0))
     wake_vi = jnp.sum(jnp.where(on, v, 0.0))
     n = thrust.shape[0]

@@ -215,12 +215,15 @@ def _end_conditions(p, s, t, dt, landed):
 
 
 def _physics(m, p, s, d, ctrl, nsub):
-    """``substeps`` MJX steps with the body drag, then the crash check (``loop._impact``)."""
+    """``substeps`` MJX steps with the body drag (every step, as MuJoCo's fluid model) and
+    the rotor drag (from the tick's state, held over the tick as ``RotorDrag``), then the
+    crash check (``loop._impact``)."""
+    hf, hm = E.rotor_drag(p, d.qpos[3:7], d.qvel, s["w"], d.act)
     d = d.replace(ctrl=ctrl)
 
     def sub(_, dd):
         f = E.drag(p, dd.qpos[3:7], dd.qvel[:3], s["w"])
-        xf = jnp.zeros_like(dd.xfrc_applied).at[1, :3].set(f)
+        xf = jnp.zeros_like(dd.xfrc_applied).at[1, :3].set(f + hf).at[1, 3:].set(hm)
         out = mjx.step(m, dd.replace(xfrc_applied=xf))
         return jax.tree_util.tree_map(lambda a, b: b.astype(a.dtype), dd, out)
     d = jax.lax.fori_loop(0, nsub, sub, d)

@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from ...airframe.model import build_spec
+from ...airframe.rotor_drag import h_coefficient, hubs
 from ...control.controller import CascadedController
 from ...control.pilots import Hover, Waypoints, ZigZag
 from ...energy.components import Constant, RadioLinear, RadioStates, SoC
@@ -101,7 +102,7 @@ def _energy(meter) -> tuple[tuple, dict]:
     num["const_w"] = np.asarray(num["const_w"], dtype=float)
     if motors is not None:
         num.update(m_inv2rhoA=motors._inv2rhoA, m_c0=motors._c0, m_R=motors._R,
-                   m_inv_kf=motors._inv_kf, m_inv_eta=motors._inv_eta,
+                   m_inv_kf=motors._inv_kf, m_inv_eta=motors._inv_eta, m_hk=motors._hk,
                    m_kappa=motors.induced_power_factor, m_wake=motors.wake_interference,
                    m_dirs=np.asarray(motors._dirs, dtype=float),
                    m_vi0=np.asarray(motors._vi, dtype=float),
@@ -166,6 +167,10 @@ def variant(m) -> tuple[tuple, dict, object]:
            "altitude": float(plan.pilot.altitude), "climb_speed": plan.climb_speed,
            "descent_speed": plan.descent_speed, "return_home": plan.return_home,
            "rho": rho, "aero_size": sizes, "aero_c": c_blunt,
+           # rotor drag (airframe/rotor_drag.py RotorDrag; blade_drag 0: none)
+           "h_c": h_coefficient(drone.rotor.blade_drag, drone.rotor.diameter_m,
+                                drone.rotor.thrust_coeff, rho),
+           "h_hubs": np.asarray(hubs(drone), dtype=float),
            "e_usable": bat.energy_j, "reserve_j": bat.reserve_fraction * bat.energy_j,
            "b_lipo": circ.chemistry == "lipo", "b_cells": float(circ.cells), "b_qc": circ.q_c,
            "b_rmid": circ.r_mid, "b_vcut": circ.v_cut, "b_v0": circ.voltage_v,
