@@ -6,7 +6,7 @@ energy breakdown. Same tolerance rule as tests/test_golden.py."""
 import json
 
 import pytest
-from test_golden import REL_TOL, _diff
+from test_golden import REL_TOL, diff
 
 from golden import fleet_scenarios as golden
 
@@ -16,6 +16,5 @@ RECORDED = json.loads(golden.GOLDEN.read_text())
 @pytest.mark.parametrize("name", sorted(RECORDED))
 def test_golden_fleet_unchanged(name):
     got = json.loads(json.dumps(golden.fly(name), default=float))
-    out: list = []
-    _diff("", RECORDED[name], got, out)
+    out = diff(name, RECORDED[name], got)
     assert not out, f"golden fleet {name!r} moved (rel tol {REL_TOL:g}):\n" + "\n".join(out[:40])
