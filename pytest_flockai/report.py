@@ -267,7 +267,7 @@ def regressions(flights: dict, base: dict, max_regression_pct: float, *,
 
 
 # -- artifacts -----------------------------------------------------------------------------
-def _safe(name: str) -> str:
+def safe_name(name: str) -> str:
     """A file name for a test id or flight name: the name itself when it is
     already a plain file name, else a readable version of it with a short hash
     of the full name (``a/b``, ``a_b``, ``a:b`` and ``a b`` get different
@@ -282,13 +282,13 @@ def _safe(name: str) -> str:
 def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
     """Telemetry CSV and the flight's JSON (scenario, KPIs, events) under
     ``directory/<nodeid>/``; returns that folder."""
-    folder = Path(directory) / _safe(nodeid)
+    folder = Path(directory) / safe_name(nodeid)
     folder.mkdir(parents=True, exist_ok=True)
-    result.telemetry.to_csv(folder / f"{_safe(flight)}.telemetry.csv")
-    write_json_atomic(folder / f"{_safe(flight)}.json", result.to_dict())
+    result.telemetry.to_csv(folder / f"{safe_name(flight)}.telemetry.csv")
+    write_json_atomic(folder / f"{safe_name(flight)}.json", result.to_dict())
     if plots.available():
-        plots.energy_figure(result, folder / f"{_safe(flight)}.energy.png")
-        plots.path_figure(result, folder / f"{_safe(flight)}.path.png")
+        plots.energy_figure(result, folder / f"{safe_name(flight)}.energy.png")
+        plots.path_figure(result, folder / f"{safe_name(flight)}.path.png")
     else:
         warnings.warn("pytest-flockai: matplotlib is not installed, so --flockai-artifacts writes "
                       "telemetry and JSON but no pictures (pip install 'pytest-flockai[plots]')",
@@ -333,4 +333,4 @@ def table(headers: list[str], rows: list[list[str]], indent: str = "  ") -> str:
 
 __all__ = ["BASELINE_SCHEMA", "SCHEMA", "ReportError", "baseline_from_tests", "build_report",
            "check_writable", "environment", "format_kpi", "jsonable", "load_baseline",
-           "regressions", "table", "write_artifacts", "write_json_atomic"]
+           "regressions", "safe_name", "table", "write_artifacts", "write_json_atomic"]

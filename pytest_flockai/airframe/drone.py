@@ -268,7 +268,7 @@ def drone(name_or_path: str | Path, **overrides) -> Drone:
         _no_datasheet_fields(overrides, source)
     d = Drone(data, source=source)
     for key, value in overrides.items():
-        section, field = _resolve_override(key)
+        section, field = resolve_override(key)
         target = d if section is None else getattr(d, section)
         if target is None:
             raise ConfigError(f"{source}: override {key}={value!r} needs a [{section}] table, "
@@ -311,7 +311,9 @@ def _no_datasheet_fields(overrides: dict, source: str):
                               f"mass_kg, thrust_coeff, diameter_m")
 
 
-def _resolve_override(key: str):
+def resolve_override(key: str):
+    """(section, field) of a ``fa.drone()`` override name (an alias such as ``mass_kg``, or
+    ``section__field``); a ConfigError with did-you-mean hints for an unknown one."""
     if key in _ALIASES:
         return _ALIASES[key]
     if "__" in key:

@@ -23,7 +23,6 @@ from .ci_reports import PICTURE_PROPERTY
 from .recorder import STATE
 
 MARKER = "flockai_sweep"
-SETTINGS = ("samples", "method", "seed", "workers")
 
 
 def marked(item) -> bool:
@@ -111,7 +110,7 @@ def write_envelope(item, st, artifacts) -> None:
     kpi = next((x.budget.kpi for x in st.markers.budgets), "flight_time_s")
     x, y = (axes + axes)[:2] if axes else ("", "")
     try:
-        folder = Path(artifacts) / _report._safe(item.nodeid)   # the flights' folder
+        folder = Path(artifacts) / _report.safe_name(item.nodeid)   # the flights' folder
         folder.mkdir(parents=True, exist_ok=True)
         written = envelope.save(df, folder / "sweep", x, y, kpi)
     except OSError as exc:

@@ -25,7 +25,7 @@ import copy
 import math
 from numbers import Integral, Real
 
-from ..airframe.drone import _resolve_override
+from ..airframe.drone import resolve_override
 from ..errors import ConfigError, close_matches
 from ..mission.plan import check_until, resolve
 from ..world.wind import Wind
@@ -46,7 +46,7 @@ def check_name(name: str) -> None:
     if name in MISSION_AXES:
         return
     try:
-        _resolve_override(name)
+        resolve_override(name)
     except ConfigError:
         known = list(MISSION_AXES) + ["payload_kg", "battery_mah", "battery_v", "physics_hz",
                                       "control_hz"]
@@ -69,7 +69,7 @@ def apply(base, values: dict):
         elif name in ("wind_mps", "wind_dir_deg"):
             _number(name, value)
         else:
-            section, field = _resolve_override(name)
+            section, field = resolve_override(name)
             target = m.drone if section is None else getattr(m.drone, section)
             if target is None:
                 raise ConfigError(f"{name} = {value!r}: this blueprint has no [{section}] table")
