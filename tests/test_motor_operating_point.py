@@ -105,7 +105,8 @@ def test_blueprints_without_a_motor_keep_their_constant_efficiency():
     comp = _bound(d)
     for load in (0.7, 1.0, 1.5):
         u = _usage(d, load * d.hover_thrust_per_rotor_n)
-        assert _steady(comp, u) == pytest.approx(_shaft(comp, d, u) / (0.68 * 0.95), rel=1e-12)
+        assert _steady(comp, u) == pytest.approx(_shaft(comp, d, u) / (comp.motor_efficiency * comp.esc_efficiency),
+                                             rel=1e-12)
 
 
 def test_a_user_motor_efficiency_on_a_datasheet_blueprint_wins(tmp_path):

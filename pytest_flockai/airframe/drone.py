@@ -278,6 +278,17 @@ def drone(name_or_path: str | Path, **overrides) -> Drone:
     return d
 
 
+#: override names of the pack voltage (on a datasheet blueprint it sets the motor model)
+PACK_VOLTAGE_KEYS = ("battery_v", "voltage_v", "battery__voltage_v")
+
+
+def derived_from_datasheet(key: str) -> bool:
+    """Whether override ``key`` is one a ``[datasheet]`` derivation depends on (its own
+    fields, the pack voltage): on such a drone it takes effect only through ``drone()``."""
+    field = key[len("datasheet__"):] if key.startswith("datasheet__") else key
+    return field in Datasheet.FIELDS or key in PACK_VOLTAGE_KEYS
+
+
 def _datasheet_overrides(data: dict, overrides: dict):
     """(blueprint dict, remaining overrides): the overrides a [datasheet] derivation depends
     on (its own fields; the pack voltage, which sets the motor model) written into the
@@ -288,8 +299,7 @@ def _datasheet_overrides(data: dict, overrides: dict):
         field = key[len("datasheet__"):] if key.startswith("datasheet__") else key
         if field in Datasheet.FIELDS and (field == key or key.startswith("datasheet__")):
             data["datasheet"][field] = value
-        elif key in ("battery_v", "voltage_v", "battery__voltage_v") and isinstance(
-                data.get("battery"), dict):
+        elif key in PACK_VOLTAGE_KEYS and isinstance(data.get("battery"), dict):
             data["battery"]["voltage_v"] = value
         elif key.startswith("datasheet__"):
             raise ConfigError(f"drone(): unknown override {key!r}{close_matches(field, Datasheet.FIELDS)}; "

@@ -72,7 +72,6 @@ class RotorDrag(Clocked):
         self.st, self.act, self.xfrc = state, act, xfrc
         self.c = h_coefficient(rot.blade_drag, rot.diameter_m, rot.thrust_coeff, rho)
         self.hubs = hubs(drone)
-        self.force = (0.0, 0.0, 0.0)                   # world frame, last tick (N)
         xfrc[:] = 0.0
 
     def step(self, t: float) -> None:
@@ -101,8 +100,7 @@ class RotorDrag(Clocked):
             my += h * hx
             mz += x * hy - y * hx
         xf = self.xfrc
-        self.force = (r00 * fx + r01 * fy, r10 * fx + r11 * fy, r20 * fx + r21 * fy)
-        xf[0], xf[1], xf[2] = self.force
+        xf[0], xf[1], xf[2] = r00 * fx + r01 * fy, r10 * fx + r11 * fy, r20 * fx + r21 * fy
         xf[3] = r00 * mx + r01 * my + r02 * mz
         xf[4] = r10 * mx + r11 * my + r12 * mz
         xf[5] = r20 * mx + r21 * my + r22 * mz

@@ -16,7 +16,7 @@ import numpy as np
 
 from .._io import atomic_write
 from . import key as _key
-from .entry import CorruptEntry, read_entry, seal, unseal
+from .entry import read_entry, seal, unseal
 
 MAGIC = b"pytest-flockai-memo/1\n"
 
@@ -48,9 +48,7 @@ class MemoStore:
                     value = unpack(_plain(*unseal(data, key, MAGIC)))
                     self.counts["hit"] += 1
                     return value
-            except CorruptEntry:
-                status = "replaced"
-            except Exception:           # a sealed entry unpack() cannot use: not trusted
+            except Exception:           # corrupt, or sealed but unusable by unpack(): not trusted
                 status = "replaced"
         value = compute()
         self.counts[status if self._put(key, pack, value) else "computed"] += 1

@@ -106,7 +106,6 @@ class FlightCache:
             key = _key.flight_key(mission)
         except _key.Uncacheable as exc:
             return Lookup("bypass", reason=str(exc))
-        status = "flown"
         if self.reads:
             try:
                 res = self.get(key, result_type)
@@ -115,7 +114,7 @@ class FlightCache:
             if res is not None:
                 res.cache = {"status": "hit", "key": key, "reason": None}
                 return Lookup("hit", key, result=res, cache=self)
-        return Lookup(status, key, cache=self)
+        return Lookup("flown", key, cache=self)
 
     def get(self, key: str, result_type=FlightResult) -> FlightResult | None:
         """The entry of ``key``, None when there is none; CorruptEntry when it is unusable."""

@@ -22,8 +22,8 @@ simulated timeline:
   sends ``result_bytes`` back down. Latency = capture to result back on the drone.
   One request is in flight at a time (a synchronous client, like the paper's): while it
   is, the task is busy. In a fleet (``share``) the uplink waits for the shared channel
-  and the inference for the shared ground device. ``latency="measured"`` times the
-  model on the host and never takes a memoised (``pytest_flockai.memo``) answer.
+  and the inference for the shared ground device. In flight the model always runs, never
+  a memoised answer (the flight is cached whole; ``latency="measured"`` times the model).
 
 SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and
 alerts (``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight.
@@ -244,7 +244,7 @@ class TaskRunner:
         pred = err = None
         t0 = time.perf_counter()
         try:
-            with memo.remembering(None if measured else memo.active()):
+            with memo.remembering(None):    # see the module docstring
                 pred = model(frame)
         except Exception as e:  # the flight goes on
             err = f"{type(e).__name__}: {e}"

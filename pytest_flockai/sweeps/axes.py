@@ -25,7 +25,7 @@ import copy
 import math
 from numbers import Integral, Real
 
-from ..airframe.drone import resolve_override
+from ..airframe.drone import derived_from_datasheet, resolve_override
 from ..errors import ConfigError, close_matches
 from ..mission.plan import check_until, resolve
 from ..world.wind import Wind
@@ -68,6 +68,11 @@ def apply(base, values: dict):
             m.until = check_until(value)
         elif name in ("wind_mps", "wind_dir_deg"):
             _number(name, value)
+        elif m.drone.datasheet is not None and derived_from_datasheet(name):
+            raise ConfigError(f"{name} = {value!r}: {m.drone.source} derives its rotors, motors "
+                              f"and drag from [datasheet] values, and setting {name} on the built "
+                              f"drone would not derive them again; allowed: sweep it as "
+                              f"separate bases, fa.drone(..., {name}=...) each")
         else:
             section, field = resolve_override(name)
             target = m.drone if section is None else getattr(m.drone, section)

@@ -198,10 +198,6 @@ def _fly_and_status(base, values: dict) -> tuple[dict, str | None]:
     return row, (getattr(result, "cache", None) or {}).get("status")
 
 
-def fly_one(base, values: dict) -> dict:
-    return _fly(base, values)[0]
-
-
 def _fly(base, values: dict):
     try:
         result = _axes.apply(base, values).run()

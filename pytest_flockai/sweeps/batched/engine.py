@@ -42,7 +42,7 @@ _END = {name: i for i, name in enumerate(P.END_REASONS)}
 
 
 def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
-    """One row dict per variant, in the plan's order (as ``runner.fly_one``)."""
+    """One row dict per variant, in the plan's order (as ``runner._fly``)."""
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
     for i, values in enumerate(plan):

@@ -23,7 +23,6 @@ def rows(s, nums, tops, book_dt) -> list[dict]:
         if end == "diverged":
             row["error"] = (f"SimulationError: simulation diverged at t = {t:.3f} s (position "
                             f"or velocity not finite) in the batched (MJX) flight")
-            row["end_reason"] = "diverged"
         row.update(_flight(s, b, book_dt))
         row.update(_energy(s, b, num, tops, t))
         n_hb = float(s["hb_drained"][b])
