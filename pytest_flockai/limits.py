@@ -44,6 +44,17 @@ MAX_EXTENT_M = 100_000.0
 #: m/s: the strongest mean wind. The strongest gust ever measured at the surface is
 #: 113.3 m/s (WMO Archive of Weather and Climate Extremes, Barrow Island, 1996)
 MAX_WIND_MPS = 113.0
+#: bytes: the largest flight-cache entry file read (a bigger one is refused unread, as
+#: is anything but a regular file); a flight at MAX_TELEMETRY_ROWS packs to ~100 MiB
+MAX_CACHE_ENTRY_BYTES = 512 * 2**20
+#: bytes: the most a cache entry may unpack to, summed over its arrays, checked on the
+#: sizes the entry declares before anything is decompressed (a "zip bomb" is refused)
+MAX_CACHE_UNPACKED_BYTES = 1024 * 2**20
+#: bytes: the flight cache's size on disk; past it, the least recently used entries are
+#: removed after a write (``flockai cache prune`` does the same by hand)
+MAX_CACHE_BYTES = 2 * 2**30
+#: nesting depth of a JSON report, baseline or history record (deeper is refused)
+MAX_JSON_DEPTH = 64
 
 
 def check_at_most(field: str, value: float, limit_name: str, *, where: str = "",

@@ -12,7 +12,9 @@ settings: pads, area, swath, offload)::
 The pytest plugin opens one per test under pytest's cache directory
 (``--flockai-cache``). A result read from the cache compares equal to the one
 flown (KPIs, telemetry, events, probe samples); ``result.cache`` says where it
-came from (``{"status": "hit" | "stored" | "flown" | "bypass" | "replaced", ...}``).
+came from (``{"status": "hit" | "stored" | "flown" | "bypass" | "replaced" | "verified",
+...}``). Entries are authenticated with an HMAC (``auth.py``: ``FLOCKAI_CACHE_KEY``)
+and read within limits (``entry.py``); docs/how-to/ci-cache.md has the threat model.
 """
 
 from __future__ import annotations
@@ -24,7 +26,9 @@ from .. import memo as _memo
 from ..errors import ConfigError
 from .key import Uncacheable, cacheable, flight_key, memo_key
 from .memo import MemoStore
-from .store import MODES, CacheWarning, CorruptEntry, FlightCache, Lookup
+from .auth import CacheKey, default_key
+from .entry import NotAuthentic
+from .store import MODES, CacheMismatch, CacheWarning, CorruptEntry, FlightCache, Lookup
 
 _ACTIVE: ContextVar[FlightCache | None] = ContextVar("pytest_flockai_flight_cache", default=None)
 
@@ -58,5 +62,6 @@ def lookup(mission, result_type=None) -> Lookup | None:
     return cache.lookup(mission) if result_type is None else cache.lookup(mission, result_type)
 
 
-__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MODES", "MemoStore",
+__all__ = ["CacheKey", "CacheMismatch", "CacheWarning", "CorruptEntry", "NotAuthentic",
+           "default_key", "FlightCache", "Lookup", "MODES", "MemoStore",
            "Uncacheable", "active", "cacheable", "caching", "flight_key", "lookup", "memo_key"]
