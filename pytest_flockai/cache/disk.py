@@ -67,6 +67,20 @@ def _files(folder: Path):
     return out
 
 
+def clear_for_write(path: Path) -> None:
+    """Remove whatever is at an entry's path unless it is a regular file (a FIFO, a
+    device node, a link planted there): the new entry is renamed into its place."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return
+    if not stat.S_ISREG(st.st_mode):
+        if stat.S_ISDIR(st.st_mode):
+            os.rmdir(path)                        # an empty one; else the write fails
+        else:
+            os.unlink(path)
+
+
 def touch(path: Path) -> None:
     """Mark an entry used now (its mtime; a read-only cache folder is left as it is)."""
     try:
@@ -109,4 +123,4 @@ def info(directory) -> dict:
             "newest_use": found[-1].mtime if found else None}
 
 
-__all__ = ["Entry", "LOW_WATER", "info", "prune", "scan", "touch"]
+__all__ = ["Entry", "LOW_WATER", "clear_for_write", "info", "prune", "scan", "touch"]

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .._io import atomic_write
+from . import disk as _disk
 from . import key as _key
 from .entry import read_entry, seal, unseal
 
@@ -65,6 +66,7 @@ class MemoStore:
         p = self.path(key)
         try:
             p.parent.mkdir(parents=True, exist_ok=True)
+            _disk.clear_for_write(p)
             atomic_write(p, lambda fh: fh.write(blob), text=False)
         except OSError as exc:
             self.cache.write_failed(exc)

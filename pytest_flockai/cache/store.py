@@ -190,6 +190,7 @@ class FlightCache:
             blob = encode(key, result, self.key)
             p = self.path(key)
             p.parent.mkdir(parents=True, exist_ok=True)
+            _disk.clear_for_write(p)
             atomic_write(p, lambda fh: fh.write(blob), text=False)
         except OSError as exc:
             self.write_failed(exc)
