@@ -135,7 +135,7 @@ def main(argv=None) -> int:
         _say(a.cmd, str(exc) if isinstance(exc, FlockAIError) else
              f"{type(exc).__name__}: {exc}")
         return USAGE
-    except Exception as exc:                # a bug: one line, never a traceback
+    except Exception as exc:  # noqa: BLE001 (a bug: one line, never a traceback)
         _say(a.cmd, f"internal error ({type(exc).__name__}: {exc}); please report it")
         return INTERNAL
 

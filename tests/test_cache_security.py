@@ -17,8 +17,13 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai import limits
-from pytest_flockai.cache import (CacheMismatch, FlightCache, NotAuthentic, caching,
-                                  default_key)
+from pytest_flockai.cache import (
+    CacheMismatch,
+    FlightCache,
+    NotAuthentic,
+    caching,
+    default_key,
+)
 from pytest_flockai.cache.entry import CorruptEntry, load_npz, seal, unseal
 from pytest_flockai.cache.store import entries
 

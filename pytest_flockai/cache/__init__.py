@@ -24,10 +24,10 @@ from contextvars import ContextVar
 
 from .. import memo as _memo
 from ..errors import ConfigError
-from .key import Uncacheable, cacheable, flight_key, memo_key
-from .memo import MemoStore
 from .auth import CacheKey, default_key
 from .entry import NotAuthentic
+from .key import Uncacheable, cacheable, flight_key, memo_key
+from .memo import MemoStore
 from .store import MODES, CacheMismatch, CacheWarning, CorruptEntry, FlightCache, Lookup
 
 _ACTIVE: ContextVar[FlightCache | None] = ContextVar("pytest_flockai_flight_cache", default=None)
@@ -62,6 +62,22 @@ def lookup(mission, result_type=None) -> Lookup | None:
     return cache.lookup(mission) if result_type is None else cache.lookup(mission, result_type)
 
 
-__all__ = ["CacheKey", "CacheMismatch", "CacheWarning", "CorruptEntry", "NotAuthentic",
-           "default_key", "FlightCache", "Lookup", "MODES", "MemoStore",
-           "Uncacheable", "active", "cacheable", "caching", "flight_key", "lookup", "memo_key"]
+__all__ = [
+    "MODES",
+    "CacheKey",
+    "CacheMismatch",
+    "CacheWarning",
+    "CorruptEntry",
+    "FlightCache",
+    "Lookup",
+    "MemoStore",
+    "NotAuthentic",
+    "Uncacheable",
+    "active",
+    "cacheable",
+    "caching",
+    "default_key",
+    "flight_key",
+    "lookup",
+    "memo_key",
+]

@@ -122,4 +122,4 @@ def _read(path: Path) -> bytes | None:
     return data or None
 
 
-__all__ = ["CacheKey", "ENV_KEY", "ENV_KEY_FILE", "default_key", "from_secret", "key_file"]
+__all__ = ["ENV_KEY", "ENV_KEY_FILE", "CacheKey", "default_key", "from_secret", "key_file"]

@@ -35,8 +35,7 @@ def scan(directory) -> list[Entry]:
     out: list[Entry] = []
     for root in (Path(directory), Path(directory) / "memo"):
         for sub in _dirs(root):
-            for e in _files(sub):
-                out.append(e)
+            out.extend(_files(sub))
     out.sort(key=lambda e: (e.mtime, str(e.path)))
     return out
 
@@ -89,15 +88,16 @@ def touch(path: Path) -> None:
         pass
 
 
-def prune(directory, max_bytes: int, *, older_than_s: float | None = None) -> tuple[int, int]:
+def prune(directory, max_bytes: int, *, older_than_s: float | None = None,
+          low_water: float = LOW_WATER) -> tuple[int, int]:
     """Remove entries unused for ``older_than_s``, then the least recently used until
-    the folder holds at most ``LOW_WATER * max_bytes`` (nothing when it holds at most
+    the folder holds at most ``low_water * max_bytes`` (nothing when it holds at most
     ``max_bytes``); returns (entries removed, bytes freed)."""
     found = scan(directory)
     total = sum(e.size for e in found)
     removed, freed = 0, 0
     now = time.time()
-    target = total if total <= max_bytes else int(LOW_WATER * max_bytes)
+    target = total if total <= max_bytes else int(low_water * max_bytes)
     for e in found:
         old = older_than_s is not None and now - e.mtime > older_than_s
         if not old and total - freed <= target:
@@ -123,4 +123,4 @@ def info(directory) -> dict:
             "newest_use": found[-1].mtime if found else None}
 
 
-__all__ = ["Entry", "LOW_WATER", "clear_for_write", "info", "prune", "scan", "touch"]
+__all__ = ["LOW_WATER", "Entry", "clear_for_write", "info", "prune", "scan", "touch"]

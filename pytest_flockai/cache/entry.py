@@ -110,7 +110,7 @@ def unseal(data: bytes, key: str, secret: CacheKey, magic: bytes = MAGIC) -> tup
         return json.loads(arrays.pop("header").tobytes().decode()), arrays
     except CorruptEntry:
         raise
-    except Exception as exc:   # an authentic but malformed payload: still never trusted
+    except Exception as exc:  # noqa: BLE001 (authentic but malformed: never trusted)
         raise CorruptEntry(f"malformed payload ({type(exc).__name__}: {exc})") from None
 
 
@@ -130,7 +130,7 @@ def load_npz(payload: bytes) -> dict:
         for info in infos:
             with zf.open(info) as fh:
                 raw = fh.read(info.file_size + 1)
-            name = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
+            name = info.filename.removesuffix(".npy")
             out[name] = _array(raw, info.filename)
         return out
 
@@ -155,4 +155,4 @@ def _array(raw: bytes, name: str) -> np.ndarray:
     return arr.reshape(shape[::-1]).T.copy() if fortran else arr.reshape(shape).copy()
 
 
-__all__ = ["CorruptEntry", "MAGIC", "NotAuthentic", "load_npz", "read_entry", "seal", "unseal"]
+__all__ = ["MAGIC", "CorruptEntry", "NotAuthentic", "load_npz", "read_entry", "seal", "unseal"]

@@ -221,7 +221,7 @@ class FlightCache:
         with self._lock:
             self._usage = None
             return _disk.prune(self.directory, self.limit if max_bytes is None else max_bytes,
-                               older_than_s=older_than_s)
+                               older_than_s=older_than_s, low_water=1.0)
 
     def write_failed(self, exc: OSError) -> None:
         """Stop writing for the rest of the run; warn the first time."""

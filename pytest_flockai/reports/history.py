@@ -18,7 +18,6 @@ matplotlib).
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import os
 import re
 import subprocess
