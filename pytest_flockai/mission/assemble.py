@@ -14,7 +14,7 @@ from ..clock import Clocked
 from ..comm.traffic import Heartbeats, Traffic
 from ..control.controller import CascadedController
 from ..control.estimator import NavEstimator
-from ..control.stages import StageMachine
+from ..control.stages import StageMachine, top_speed
 from ..control.steps import Control, Navigation
 from ..energy.factory import flight_energy_model
 from ..energy.integrator import EnergyIntegrator
@@ -100,7 +100,8 @@ class Run:
         accel = min(2.5, 0.25 * (tw - 1.0) * G, 1.5 * self.controller.k_vel)
         self.stages = StageMachine(st, copy.deepcopy(plan.pilot), self.events, d, accel=accel,
                                    climb_speed=plan.climb_speed, descent_speed=plan.descent_speed,
-                                   return_home=plan.return_home)
+                                   return_home=plan.return_home,
+                                   top_speed=top_speed(drone, plan.atmosphere.density))
         recorder = DatasetRecorder(plan.dataset_period_s) if plan.dataset_dir is not None else None
         seeds = seed_sequence(plan.seed, "tasks").spawn(len(plan.tasks)) if plan.tasks else []
         self.scheduler = TaskScheduler(st, plan.tasks, seeds, self.suite, d, recorder=recorder,
