@@ -42,9 +42,9 @@ def merge_reports(paths) -> dict:
         if not isinstance(doc, dict) or doc.get("schema") != _report.SCHEMA:
             raise _report.ReportError(f"{str(p)!r} is not a {_report.SCHEMA} report "
                                       f"(schema = {doc.get('schema') if isinstance(doc, dict) else None!r})")
-        tests = doc.get("tests", [])
-        if not isinstance(tests, list) or not all(
-                isinstance(t, dict) and isinstance(t.get("nodeid"), str) for t in tests):
+        entries = doc.get("tests", [])
+        if not isinstance(entries, list) or not all(
+                isinstance(t, dict) and isinstance(t.get("nodeid"), str) for t in entries):
             raise _report.ReportError(f"report {str(p)!r}: 'tests' must be a list of test "
                                       f"entries, each with a string 'nodeid'")
         docs.append(doc)
@@ -52,7 +52,7 @@ def merge_reports(paths) -> dict:
     for doc in docs:
         for t in doc.get("tests", []):
             tests[t["nodeid"]] = t
-    exit_codes = [d.get("exitstatus") for d in docs if isinstance(d.get("exitstatus"), int)]
+    exit_codes = [int(d["exitstatus"]) for d in docs if isinstance(d.get("exitstatus"), int)]
     merged = _report.build_report(list(tests.values()),
                                   exitstatus=max(exit_codes) if exit_codes else 0,
                                   interrupted=any(d.get("interrupted") for d in docs),
