@@ -17,7 +17,8 @@ import copy
 import mujoco
 import numpy as np
 
-from ..airframe.model import add_drone, world_spec
+from ..airframe import model_cache
+from ..airframe.model import add_drone
 from ..airframe.rotor_drag import RotorDrag
 from ..clock import Clocked
 from ..comm.traffic import Heartbeats, Traffic
@@ -146,18 +147,21 @@ def place(plans, names=None, pads=None) -> list[Slot]:
 
 def flight_model(plans, prefixes, pads, suites, name=None) -> mujoco.MjModel:
     """The compiled model of a flight: the world of ``plans[0]`` (the drones share
-    it, its air and its physics step) and every drone on its pad with its sensors.
-    Arms and propellers only show in cameras and rays: they are left out when no
-    sensor of the flight looks (``add_drone(visual=False)``)."""
+    it, its air and its physics step) and every drone on its pad with its sensors,
+    compiled once per world and drones (``airframe.model_cache``). Arms and
+    propellers only show in cameras and rays: they are left out when no sensor of
+    the flight looks (``add_drone(visual=False)``)."""
     p0 = plans[0]
-    rho = p0.atmosphere.density
-    spec = world_spec(name or p0.drone.name, p0.world, physics_dt=p0.physics_dt, rho=rho)
     visual = any(not isinstance(sn, BLIND) for suite in suites for sn in suite.sensors)
-    for plan, prefix, pad, suite in zip(plans, prefixes, pads, suites):
-        add_drone(spec, plan.drone, rho=plan.atmosphere.density, prefix=prefix, pos=pad,
-                  visual=visual)
-        suite.add_to_spec(spec, f"{prefix}drone")
-    return spec.compile()
+
+    def add_drones(spec) -> None:
+        for plan, prefix, pad, suite in zip(plans, prefixes, pads, suites):
+            add_drone(spec, plan.drone, rho=plan.atmosphere.density, prefix=prefix, pos=pad,
+                      visual=visual)
+            suite.add_to_spec(spec, f"{prefix}drone")
+
+    return model_cache.compiled(name or p0.drone.name, p0.world, add_drones,
+                                physics_dt=p0.physics_dt, rho=p0.atmosphere.density)
 
 
 class Run:
