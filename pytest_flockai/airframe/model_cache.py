@@ -25,7 +25,7 @@ import threading
 from collections import OrderedDict
 from typing import Callable
 
-import mujoco
+from .._mujoco import mujoco
 
 from ..physics import RHO_SEA_LEVEL
 from .model import world_spec

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import copy
 
-import mujoco
+from .._mujoco import mujoco
 import numpy as np
 
 from ..airframe import model_cache

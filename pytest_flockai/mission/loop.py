@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-import mujoco
+from .._mujoco import mujoco
 
 from ..control.stages import DONE, STAGES, TAKEOFF
 from ..errors import SimulationError

@@ -34,7 +34,7 @@ import hashlib
 import os
 from numbers import Integral, Real
 
-import mujoco
+from .._mujoco import mujoco
 import numpy as np
 
 from .. import _check, limits
