@@ -23,7 +23,7 @@ from pathlib import Path
 from . import limits
 from . import report as _report
 from .airframe import blueprints
-from .cache import FlightCache
+from . import cache as _cache
 from .errors import ConfigError, FlockAIError
 from .reports import commands as _commands
 
@@ -107,7 +107,7 @@ def _cache_cmd(a) -> int:
     if not d.is_dir():
         raise ConfigError(f"cache folder {str(d)!r} does not exist (pytest makes it under "
                           f"its cache_dir: {DEFAULT_CACHE})")
-    cache = FlightCache(d, "off")
+    cache = _cache.FlightCache(d, "off")
     if a.cache_cmd == "info":
         i = cache.info()
         print(_report.printable(

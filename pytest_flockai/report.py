@@ -70,7 +70,7 @@ from importlib import metadata
 from pathlib import Path
 
 from . import kpis as _kpis
-from . import limits, plots
+from . import limits
 from ._io import atomic_write, replace_from
 from .errors import ConfigError
 
@@ -350,6 +350,7 @@ def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
     name = safe_name(flight)
     atomic_write(folder / f"{name}.telemetry.csv", lambda fh: result.telemetry.to_csv(fh))
     write_json_atomic(folder / f"{name}.json", result.to_dict())
+    from . import plots           # lazy: numpy, and matplotlib (see tests/test_architecture.py)
     if plots.available():
         _picture(plots.energy_figure, result, folder / f"{name}.energy.png")
         _picture(plots.path_figure, result, folder / f"{name}.path.png")
