@@ -6,6 +6,9 @@ file is ever replaced: a folder, a device (``/dev/full``), a FIFO or a socket at
 ``path`` is refused, as is a missing folder; any failure (a full disk, a
 read-only folder) raises ``WriteError`` naming ``path`` (never the temporary
 file), and leaves the old file as it was and no temporary file behind.
+
+Also two helpers for what is read and printed: ``json_depth`` (nesting, counted
+without recursion) and ``printable`` (control characters escaped for a terminal).
 """
 
 from __future__ import annotations
@@ -92,3 +95,28 @@ def replace_from(tmp, path) -> Path:
             raise
         raise _failed(path, exc) from None
     return Path(path)
+
+
+def json_depth(data, stop: int = 1 << 30) -> int:
+    """How deeply lists and dicts nest in ``data`` (0 for a plain value), counted
+    without recursion and not past ``stop`` + 1."""
+    deepest, stack = 0, [(data, 1)]
+    while stack:
+        obj, d = stack.pop()
+        if isinstance(obj, dict):
+            obj = list(obj.values())
+        if isinstance(obj, list):
+            deepest = max(deepest, d)
+            if d <= stop:
+                stack.extend((v, d + 1) for v in obj if isinstance(v, (dict, list)))
+    return deepest
+
+
+_CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x00, 0x20), *range(0x7f, 0xa0)]}
+_CONTROL_KEEP_NL = {c: v for c, v in _CONTROL.items() if c != 0x0a}
+
+
+def printable(text, *, newlines: bool = False) -> str:
+    """``text`` with control characters (ANSI escapes, carriage returns, ...) shown as
+    ``\\xNN``, safe to print on a terminal; ``newlines`` keeps line breaks."""
+    return str(text).translate(_CONTROL_KEEP_NL if newlines else _CONTROL)

@@ -71,7 +71,7 @@ from pathlib import Path
 
 from . import kpis as _kpis
 from . import limits
-from ._io import atomic_write, replace_from
+from ._io import atomic_write, json_depth, printable, replace_from
 from .errors import ConfigError
 
 SCHEMA = "pytest-flockai/1"
@@ -177,37 +177,14 @@ def read_json(path, what: str):
         data = _TOO_DEEP
     except ValueError as exc:
         raise ReportError(f"{what} {str(path)!r} is not valid JSON: {exc}") from None
-    if data is _TOO_DEEP or json_depth(data) > limits.MAX_JSON_DEPTH:
+    limit = limits.MAX_JSON_DEPTH
+    if data is _TOO_DEEP or json_depth(data, limit) > limit:
         raise ReportError(f"{what} {str(path)!r} is nested deeper than "
                           f"pytest_flockai.limits.MAX_JSON_DEPTH = {limits.MAX_JSON_DEPTH}")
     return data
 
 
 _TOO_DEEP = object()
-
-
-def json_depth(data) -> int:
-    """How deeply lists and dicts nest in ``data`` (0 for a plain value); iterative."""
-    deepest, stack = 0, [(data, 1)]
-    while stack:
-        obj, d = stack.pop()
-        if isinstance(obj, dict):
-            obj = list(obj.values())
-        if isinstance(obj, list):
-            deepest = max(deepest, d)
-            if d <= limits.MAX_JSON_DEPTH:
-                stack.extend((v, d + 1) for v in obj if isinstance(v, (dict, list)))
-    return deepest
-
-
-_CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x00, 0x20), *range(0x7f, 0xa0)]}
-_CONTROL_KEEP_NL = {c: v for c, v in _CONTROL.items() if c != 0x0a}
-
-
-def printable(text, *, newlines: bool = False) -> str:
-    """``text`` with control characters (ANSI escapes, carriage returns, ...) shown as
-    ``\\xNN``, safe to print on a terminal; ``newlines`` keeps line breaks."""
-    return str(text).translate(_CONTROL_KEEP_NL if newlines else _CONTROL)
 
 
 def write_json_atomic(path: Path, data) -> None:
@@ -411,4 +388,5 @@ def table(headers: list[str], rows: list[list[str]], indent: str = "  ") -> str:
 
 __all__ = ["BASELINE_SCHEMA", "SCHEMA", "ReportError", "baseline_from_tests", "build_report",
            "check_writable", "environment", "format_kpi", "jsonable", "load_baseline",
-           "regressions", "safe_name", "table", "write_artifacts", "write_json_atomic"]
+           "printable", "read_json", "regressions", "safe_name", "table", "write_artifacts",
+           "write_json_atomic"]
