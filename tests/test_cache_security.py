@@ -276,3 +276,25 @@ def test_quick():
     res = pytester.runpytest("-p", "no:randomly", "--flockai-json=r.json")
     res.assert_outcomes(failed=1)
     res.stdout.fnmatch_lines(["*untrusted entry replaced (cache entry not authentic*"])
+
+
+def test_the_plugin_verify_mode_fails_a_test_whose_entry_differs(pytester):
+    pytester.makepyfile(test_v='''
+import pytest_flockai as fa
+
+def test_quick():
+    r = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=2.0)).run()
+    assert r.kpis["flight_time_s"] > 1.5
+''')
+    pytester.runpytest("-p", "no:randomly").assert_outcomes(passed=1)
+    folder = pytester.path / ".pytest_cache" / "d" / "flockai-flights"
+    (entry,) = entries(folder)
+    doctored = hover().run()
+    doctored.kpis["flight_time_s"] = 2.5              # sealed with the right key
+    FlightCache(folder).put(entry.stem, doctored)
+    res = pytester.runpytest("-p", "no:randomly", "--flockai-cache=verify",
+                             "--flockai-cache-verify=1")
+    res.assert_outcomes(failed=1)
+    res.stdout.fnmatch_lines(["*CacheMismatch: cache entry not authentic*flight_time_s*"])
+    bad = pytester.runpytest("--flockai-cache-verify=2")
+    assert bad.ret == 4 and "--flockai-cache-verify = '2'" in bad.stderr.str()
