@@ -15,9 +15,8 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 import mujoco
+import numpy as np
 
 import pytest_flockai as fa
 from pytest_flockai.sensors.camera import FrameRenderer

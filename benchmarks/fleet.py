@@ -60,7 +60,7 @@ def main(argv=None):
     _row("Mission", [_timed(lambda: single(a.minutes).run(), lambda r: r.sim_time_s)
                      for _ in range(a.repeat)], 1)
     for n in a.sizes:
-        _row(str(n), [_timed(lambda: fleet(n, a.minutes).run(),
+        _row(str(n), [_timed(lambda n=n: fleet(n, a.minutes).run(),
                              lambda r: r.kpis["fleet.makespan_s"], "fleet.coverage_fraction")
                       for _ in range(a.repeat)], n)
 

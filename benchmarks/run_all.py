@@ -24,11 +24,11 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(ROOT / "example_tests"))
 
-import camera as cam_bench          # noqa: E402
-import flight_core                  # noqa: E402
-import scenarios                    # noqa: E402
+import camera as cam_bench  # noqa: E402
+import flight_core  # noqa: E402
+import scenarios  # noqa: E402
 
-import pytest_flockai as fa         # noqa: E402
+import pytest_flockai as fa  # noqa: E402
 
 
 def machine() -> str:

@@ -7,7 +7,6 @@ paper did, and gates ``flight_time_s`` instead.
 """
 
 import pytest
-
 import scenarios
 
 

@@ -20,10 +20,10 @@ import argparse
 import sys
 from pathlib import Path
 
+from . import cache as _cache
 from . import limits
 from . import report as _report
 from .airframe import blueprints
-from . import cache as _cache
 from .errors import ConfigError, FlockAIError
 from .reports import commands as _commands
 

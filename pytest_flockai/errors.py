@@ -8,7 +8,7 @@ value and what is allowed, and is raised where the value enters.
 from __future__ import annotations
 
 import difflib
-from typing import Iterable
+from collections.abc import Iterable
 
 
 class FlockAIError(Exception):

@@ -34,12 +34,12 @@ from hypothesis import target as _target
 from hypothesis.control import currently_in_test_context
 
 from . import budgets as _budgets
-from .airframe.drone import G, drone as _drone
+from .airframe.drone import G
+from .airframe.drone import drone as _drone
 from .control import pilots as _pilots
 from .mission import Mission
 from .sensors.conditions import Conditions
 from .world.wind import Wind
-
 
 #: the phases that fit flights: no ``explain`` (it re-flies the failing example many times)
 FLIGHT_PHASES = (Phase.explicit, Phase.reuse, Phase.generate, Phase.target, Phase.shrink)

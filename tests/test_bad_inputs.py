@@ -11,7 +11,6 @@ One case per line: ``(id, call, (field, value))``. ``call(c)`` gets a context
 import json
 import math
 import os
-import shutil
 from fractions import Fraction
 from pathlib import Path
 

@@ -109,7 +109,7 @@ def test_a_mistyped_flight_key_in_the_baseline_is_reported(pytester, outside):
 
 def test_parametrized_ids_from_paths_are_relative_to_the_rootdir(pytester):
     pytester.makeini("[pytest]\n")
-    pytester.makepyfile(test_ids=f'''
+    pytester.makepyfile(test_ids='''
 import pathlib
 import pytest
 

@@ -164,8 +164,8 @@ def test_custom_dotted_kpi_after_registration_checks_the_unit():
 
 
 def test_percent_only_for_fractions_not_counts():
-    from pytest_flockai.budgets import parse
     from pytest_flockai import ConfigError
+    from pytest_flockai.budgets import parse
     assert parse("energy_share_proc", "< 25%").limit == 0.25
     assert parse("packets_out", "<= 100").limit == 100
     with pytest.raises(ConfigError, match="packets_out.*count"):

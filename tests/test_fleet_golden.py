@@ -6,9 +6,8 @@ energy breakdown. Same tolerance rule as tests/test_golden.py."""
 import json
 
 import pytest
-from test_golden import REL_TOL, diff
-
 from golden import fleet_scenarios as golden
+from test_golden import REL_TOL, diff
 
 RECORDED = json.loads(golden.GOLDEN.read_text())
 

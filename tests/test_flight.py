@@ -2,15 +2,14 @@
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
-import mujoco
-
 import pytest_flockai as fa
+from pytest_flockai import SimulationError
 from pytest_flockai.airframe.model import build_model
 from pytest_flockai.physics import RHO_SEA_LEVEL
-from pytest_flockai import SimulationError
 
 
 @pytest.fixture(scope="module")

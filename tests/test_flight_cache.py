@@ -14,8 +14,14 @@ import numpy as np
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai.cache import (CacheWarning, FlightCache, Uncacheable, cacheable, caching,
-                                  flight_key)
+from pytest_flockai.cache import (
+    CacheWarning,
+    FlightCache,
+    Uncacheable,
+    cacheable,
+    caching,
+    flight_key,
+)
 from pytest_flockai.cache import key as cache_key
 from pytest_flockai.cache.store import MAGIC, entries
 

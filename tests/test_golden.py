@@ -13,7 +13,6 @@ import math
 import os
 
 import pytest
-
 from golden import scenarios as golden
 
 RECORDED = json.loads(golden.GOLDEN.read_text())

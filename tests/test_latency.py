@@ -4,8 +4,12 @@ import numpy as np
 import pytest
 
 from pytest_flockai.compute.devices import device
-from pytest_flockai.compute.latency import (calibrate, measured_latency, modeled_latency,
-                                            scale_to_device)
+from pytest_flockai.compute.latency import (
+    calibrate,
+    measured_latency,
+    modeled_latency,
+    scale_to_device,
+)
 from pytest_flockai.errors import ConfigError
 
 

@@ -28,7 +28,10 @@ def test_two_shards_merge_into_the_full_report(pytester, tmp_path):
     assert main(["merge", str(out), str(a), str(b)]) == 0
     merged, whole = json.loads(out.read_text()), json.loads(full.read_text())
     assert merged["schema"] == whole["schema"] == "pytest-flockai/1"
-    kpis = lambda doc: {t["nodeid"]: [f["kpis"] for f in t["flights"]] for t in doc["tests"]}
+
+    def kpis(doc):
+        return {t["nodeid"]: [f["kpis"] for f in t["flights"]] for t in doc["tests"]}
+
     assert kpis(merged) == kpis(whole)
     assert merged["summary"]["tests"] == 2 and merged["summary"]["flights"] == 2
 

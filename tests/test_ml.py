@@ -7,16 +7,28 @@ import onnx
 import pytest
 from onnx import TensorProto, helper, numpy_helper
 
-from pytest_flockai.comm import Link, link
+from pytest_flockai.comm import Link
 from pytest_flockai.compute.devices import device
-from pytest_flockai.errors import ConfigError, FlockAIError
-from pytest_flockai.ml import (Counter, Detector, OnnxModel, OpenCVModel, PythonModel, Task,
-                               TaskRunner, count_macs, count_of, crowd_metrics)
+from pytest_flockai.errors import ConfigError
+from pytest_flockai.ml import (
+    Counter,
+    Detector,
+    OnnxModel,
+    OpenCVModel,
+    PythonModel,
+    Task,
+    TaskRunner,
+    count_macs,
+    count_of,
+    crowd_metrics,
+)
 from pytest_flockai.ml.jpeg import JPEG_MACS_PER_PIXEL, encode_jpeg
 
-
 # -- helpers: small ONNX graphs built by hand ------------------------------------------
-def _init(name, shape, value=None, rng=np.random.default_rng(0)):
+_RNG = np.random.default_rng(0)   # one stream shared by every _init call, in call order
+
+
+def _init(name, shape, value=None, rng=_RNG):
     a = (np.full(shape, value, np.float32) if value is not None
          else rng.standard_normal(shape).astype(np.float32))
     return numpy_helper.from_array(a, name)

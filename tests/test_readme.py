@@ -2,7 +2,6 @@
 reader would paste them; the plain test it defines is called too. The README stays an
 entry point: at most 15 KB, and every page it links to exists."""
 
-import os
 import re
 from pathlib import Path
 

@@ -158,7 +158,7 @@ def test_a_budget_limit_that_overflows_is_refused(text):
 def test_a_baseline_value_that_cannot_gate_is_refused(tmp_path, value):
     path = tmp_path / "b.json"
     path.write_text('{"schema": "pytest-flockai-baseline/1", "tests": {"t.py::test": '
-                    '{"flight": {"energy_total_j": %s}}}}' % value)
+                    f'{{"flight": {{"energy_total_j": {value}}}}}}}}}')
     with pytest.raises(report.ReportError, match=r"t.py::test flight 'flight' KPI "
                                                  r"'energy_total_j' = .* is not allowed; "
                                                  r"expected a finite number"):

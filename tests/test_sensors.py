@@ -10,9 +10,20 @@ import pytest_flockai as fa
 from pytest_flockai import ConfigError
 from pytest_flockai.airframe.model import build_spec
 from pytest_flockai.mission import seed_sequence
-from pytest_flockai.sensors import (GPS, IMU, Barometer, BatterySensor, Camera, Compass, CsvSensor,
-                                    FunctionSensor, Rangefinder, Sensor, SensorSuite,
-                                    TemperatureSensor)
+from pytest_flockai.sensors import (
+    GPS,
+    IMU,
+    Barometer,
+    BatterySensor,
+    Camera,
+    Compass,
+    CsvSensor,
+    FunctionSensor,
+    Rangefinder,
+    Sensor,
+    SensorSuite,
+    TemperatureSensor,
+)
 
 N = 4000
 

@@ -10,7 +10,7 @@ import pytest_flockai as fa
 from pytest_flockai import ConfigError
 from pytest_flockai.airframe.model import build_spec
 from pytest_flockai.world import urban as U
-from pytest_flockai.world.truth import occluded, visible_people, gimbal_pose
+from pytest_flockai.world.truth import gimbal_pose, occluded, visible_people
 
 
 @pytest.fixture(scope="module")

@@ -27,17 +27,17 @@ file of yours. Clear the cache then (``--flockai-cache-clear``).
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import enum
 import functools
-import ast
 import hashlib
 import inspect
 import json
-import textwrap
 import os
 import platform
 import sys
+import textwrap
 import types
 from importlib import metadata
 from pathlib import Path, PurePath

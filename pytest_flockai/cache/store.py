@@ -66,7 +66,7 @@ class Lookup:
     key: str | None = None
     reason: str | None = None
     result: FlightResult | None = None
-    cache: "FlightCache | None" = field(default=None, repr=False)
+    cache: FlightCache | None = field(default=None, repr=False)
     cached: FlightResult | None = field(default=None, repr=False)   # verify: the entry
 
     def to_dict(self) -> dict:

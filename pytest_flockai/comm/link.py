@@ -212,7 +212,7 @@ class Link:
                                description=f"{self.name}: Feeney-Nilsson linear model")
         raise ConfigError(f"model = {model!r} is not allowed; allowed: 'states', 'linear'")
 
-    def with_(self, **changes) -> "Link":
+    def with_(self, **changes) -> Link:
         """A copy with some fields changed (e.g. ``loss_floor=0.0`` in tests)."""
         return replace(self, **changes)
 

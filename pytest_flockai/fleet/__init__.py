@@ -12,8 +12,8 @@ drones); this package holds only what is fleet-specific:
 """
 
 from .areas import strips, survey
-from .offload import Offload
 from .fleet import MAX_DRONES, PAD_CLEARANCE_M, Fleet, FleetDrone
+from .offload import Offload
 from .result import FleetResult
 
 __all__ = ["MAX_DRONES", "PAD_CLEARANCE_M", "Fleet", "FleetDrone", "FleetResult", "Offload", "strips", "survey"]

@@ -18,7 +18,7 @@ from ..control.pilots import ZigZag
 from ..errors import ConfigError
 from ..world import World
 from . import pads as _pads
-from .fleet import PAD_CLEARANCE_M, MAX_DRONES
+from .fleet import MAX_DRONES, PAD_CLEARANCE_M
 
 
 def strips(area, n: int, spacing: float) -> list:

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import math
 
-from _pytest.junitxml import xml_key   # private: the LogXML of --junitxml, as pytest's fixtures use it
+# private: the LogXML of --junitxml, as pytest's fixtures use it
+from _pytest.junitxml import xml_key
 
 NOTE = ("pytest-flockai: KPIs are in --junitxml as suite properties flockai[<nodeid>].<kpi> "
         "(the JUnit schema allows no properties on a testcase)")

@@ -24,7 +24,7 @@ import os
 from pathlib import Path
 
 import pytest
-from _pytest.config import findpaths   # private: pytest has no public API for the rootdir
+from _pytest.config import findpaths  # private: pytest has no public API for the rootdir
 
 from .options import path_dests
 
