@@ -63,7 +63,7 @@ def atomic_write(path, write, *, text: bool = True) -> Path:
     except OSError as exc:
         raise _failed(path, exc) from None
     try:
-        with os.fdopen(fd, "w" if text else "wb", **({"encoding": "utf-8"} if text else {})) as fh:
+        with os.fdopen(fd, "w", encoding="utf-8") if text else os.fdopen(fd, "wb") as fh:
             os.fchmod(fh.fileno(), 0o666 & ~_umask())
             write(fh)
             fh.flush()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
+from typing import Any
 
 
 class FlockAIError(Exception):
@@ -21,6 +22,13 @@ class ConfigError(FlockAIError, ValueError):
 
 class SimulationError(FlockAIError, RuntimeError):
     """The simulation itself failed (diverged, produced NaN, ...)."""
+
+    # Set by the flight loop before the error leaves Mission.run / Fleet.run (annotations
+    # only: ``getattr(exc, "end_reason", "diverged")`` relies on them being absent before).
+    #: the partial result: a FlightResult, or a FleetResult for a fleet
+    result: Any
+    #: why the flight ended ("wall_time", ...), when it is not a divergence
+    end_reason: str
 
 
 class WriteError(FlockAIError, OSError):

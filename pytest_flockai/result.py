@@ -21,6 +21,7 @@ import re
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ._io import atomic_write
@@ -30,7 +31,7 @@ from .phases import PHASES, STAGES
 # The default C parser of pandas before 3.1 (2.1 and 3.0 measured) is off by an ulp on some
 # values, so those read with float_precision="round_trip"; 3.1 parses exactly by default and
 # deprecates the argument (Pandas4Warning).
-_PANDAS = tuple(int(x) for x in re.match(r"(\d+)\.(\d+)", pd.__version__).groups())
+_PANDAS = tuple(int(x) for x in re.findall(r"\d+", pd.__version__)[:2])
 _CSV_FLOATS = {"float_precision": "round_trip"} if _PANDAS < (3, 1) else {}
 
 FORMAT = "pytest-flockai-flight/1"
@@ -55,6 +56,9 @@ class FlightResult:
     - ``probe_errors``: failures of probes or subscribers (the flight went on)
     - ``cache``: where the flight cache got it (``pytest_flockai.cache``), or None
     """
+    #: (n, 3) positions of the world's people, set after the flight (absent on a result
+    #: built by hand: readers use ``getattr(result, "people", ...)``)
+    people: np.ndarray
 
     cache: dict | None = None
 
@@ -145,7 +149,7 @@ class FlightResult:
         return p
 
     @classmethod
-    def load(cls, path) -> "FlightResult":
+    def load(cls, path) -> FlightResult:
         """Read a saved result back; ConfigError naming the file for anything that does
         not check out (missing sidecar, truncated data, checksum or row count off)."""
         p = _path(path, "FlightResult.load")
@@ -191,7 +195,7 @@ class FlightResult:
             return False
         return all(self.probe_samples[k].equals(other.probe_samples[k]) for k in self.probe_samples)
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # unhashable: typeshed cannot say None here
 
     def __repr__(self):
         k = self.kpis

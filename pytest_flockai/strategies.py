@@ -27,6 +27,7 @@ draw the same examples).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from hypothesis import HealthCheck, Phase, settings
 from hypothesis import strategies as st
@@ -49,7 +50,7 @@ def flight_settings(max_examples: int = 10, **overrides) -> settings:
     """Hypothesis settings for tests that fly a mission per example (see the
     module docstring): derandomized, no deadline, no database, no explain phase,
     no too-slow health check. ``overrides`` go to ``hypothesis.settings``."""
-    kw = dict(max_examples=max_examples, deadline=None, derandomize=True, database=None,
+    kw: dict[str, Any] = dict(max_examples=max_examples, deadline=None, derandomize=True, database=None,
               phases=FLIGHT_PHASES, suppress_health_check=[HealthCheck.too_slow])
     kw.update(overrides)
     return settings(**kw)

@@ -72,7 +72,7 @@ def environment() -> dict:
 
 @functools.lru_cache(maxsize=1)
 def _environment() -> dict:
-    versions = {}
+    versions: dict[str, str | None] = {}
     for dist in ("pytest-flockai", "mujoco", "onnxruntime", "opencv-python-headless", "numpy",
                  "pycocotools"):                  # pycocotools: the detection KPIs
         try:
@@ -137,7 +137,7 @@ def file_digest(path) -> str:
 
 
 def _own(module: str | None) -> bool:
-    return bool(module) and (module == _PKG or module.startswith(_PKG + "."))
+    return module is not None and (module == _PKG or module.startswith(_PKG + "."))
 
 
 @functools.lru_cache(maxsize=1024)
@@ -287,7 +287,7 @@ class _Walker:
         return out
 
     def _object(self, obj, where: str):
-        cls = type(obj)
+        cls: type = type(obj)
         mod = cls.__module__ or ""
         if mod.split(".")[0] in _SKIP_MODULES:
             return {"skipped": f"{mod}.{cls.__qualname__}"}

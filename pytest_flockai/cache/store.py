@@ -30,6 +30,7 @@ import threading
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -82,7 +83,7 @@ class Lookup:
             if why:
                 raise CacheMismatch(f"cache entry not authentic: flown again by "
                                     f"--flockai-cache=verify, {why} (entry "
-                                    f"{self.cache.path(self.key) if self.cache else self.key})")
+                                    f"{self.cache.path(self.key) if self.cache and self.key else self.key})")
             return
         if self.cache is not None and self.key is not None:
             self.status = self.cache.put(self.key, result, replaced=self.status == "replaced")
@@ -267,7 +268,7 @@ def encode(key: str, result: FlightResult, secret=None) -> bytes:
 def decode(data: bytes, key: str, result_type=FlightResult, secret=None) -> FlightResult:
     header, arrays = unseal(data, key, secret or _auth.default_key())
     try:
-        out = _result(header, "", arrays, result_type)
+        out: Any = _result(header, "", arrays, result_type)   # a FleetResult with drones
         if "drones" in header:
             out.drones = {d["name"]: _result(d, f"d{i}_", arrays, FlightResult)
                           for i, d in enumerate(header["drones"])}

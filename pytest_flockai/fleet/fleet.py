@@ -23,9 +23,9 @@ from ..mission.assemble import Flight
 from ..mission.plan import check_tasks, resolve
 from ..recording import publish
 from ..world import World
+from . import pads as _pads
 from . import result
 from .offload import Offload, OffloadStep, share_ground
-from . import pads as _pads
 
 #: m: two pads closer than this are "one pad" (a drone's footprint is < 1 m)
 PAD_CLEARANCE_M = 2.0
@@ -154,7 +154,7 @@ class Fleet:
     def __repr__(self):
         return f"Fleet({[fd.name for fd in self.drones]!r})"
 
-    def run(self) -> "result.FleetResult":
+    def run(self) -> result.FleetResult:
         found = _cache.lookup(self, result.FleetResult)     # the flight cache, if one is open
         if found is not None and found.result is not None:
             publish(found.result, self)
@@ -221,7 +221,7 @@ def _check_remote(drones, offload) -> list:
                           f"{remote[0][1].name!r}) together are not supported; allowed: one "
                           f"of them (the remote tasks queue on the fleet's ground station)")
     for field in ("link", "ground_device", "ground_station"):
-        seen = {}
+        seen: dict[object, str] = {}
         for name, tk in remote:
             v = getattr(tk, field)
             key = getattr(v, "name", None) or tuple(v)

@@ -85,7 +85,7 @@ class OffloadStep:
         n = len(runs)
         # the channel(s) and the ground device: the queues the remote tasks use too
         self.ground = SharedGround(spec.shared_link)
-        self.latency = [[] for _ in range(n)]
+        self.latency: list[list[float]] = [[] for _ in range(n)]
 
     def step(self, t: float, members) -> None:
         """Send this period's frames of the drones flying their plan (``members``:

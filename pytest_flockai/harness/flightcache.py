@@ -144,7 +144,7 @@ def summary_line(flights: list[dict], off_reason: str | None = None) -> str | No
     """One line: how many flights came from the cache, were flown and stored, bypassed."""
     if off_reason is not None:
         return f"flockai cache: off ({off_reason})" if flights else None
-    unique = {}
+    unique: dict[object, dict] = {}
     for f in flights:   # a session fixture's flight is listed by every test that uses it
         c = f.get("cache") or {}
         unique[c.get("key") or id(f)] = f
@@ -157,9 +157,9 @@ def summary_line(flights: list[dict], off_reason: str | None = None) -> str | No
              "stored": "flown and stored", "flown": "flown, not stored",
              "replaced": "flown, untrusted entry replaced", "bypass": "not cacheable"}
     parts = [f"{statuses[k]} {w}" for k, w in words.items() if statuses.get(k)]
-    reasons = sorted({(f.get("cache") or {}).get("reason") for f in flights
-                      if (f.get("cache") or {}).get("status") in ("bypass", "replaced")})
-    reasons = [r for r in reasons if r]
+    caches = [f.get("cache") or {} for f in flights]
+    reasons = sorted({c["reason"] for c in caches
+                      if c.get("status") in ("bypass", "replaced") and c.get("reason")})
     shown = "; ".join(r if len(r) <= 120 else r[:117] + "..." for r in reasons[:3])
     more = f"; and {len(reasons) - 3} more (flights[].cache in --flockai-json)" \
         if len(reasons) > 3 else ""

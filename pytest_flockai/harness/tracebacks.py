@@ -49,7 +49,8 @@ def _repaired_tb(tb):
 def repair(exc: BaseException) -> BaseException:
     """``exc`` (and the exceptions it chains to) with every traceback entry given a
     line number; entries that had one are kept as they were."""
-    todo, seen = [exc], set()
+    todo: list[BaseException | None] = [exc]
+    seen: set[int] = set()
     while todo:
         e = todo.pop()
         if e is None or id(e) in seen:

@@ -29,6 +29,8 @@ def book_period(ctrl_dt: float) -> float:
 
 
 class FlightBook(Clocked):
+    period_s: float     # 50 Hz in whole control ticks: never None here
+
     def __init__(self, state, events, ctrl_dt: float):
         self.st, self.events = state, events
         self.period_s = book_period(ctrl_dt)

@@ -19,6 +19,8 @@ from ..errors import SimulationError
 
 
 class EndConditions(Clocked):
+    period_s: float     # the energy integrator's period: never None here
+
     def __init__(self, state, events, stages, *, t_end: float, dt: float, timed: bool,
                  use_reserve: bool, reserve_j: float, energy_hz: float):
         self.st, self.events, self.stages = state, events, stages

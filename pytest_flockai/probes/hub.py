@@ -114,7 +114,7 @@ class ProbeHub:
         self.probes = [p for p in probes if p.enabled]
         self._next = [p.period_s for p in self.probes]   # first sample one period in
         self.next_due = min(self._next) if self._next else math.inf
-        self.samples = {p.name: ([], []) for p in self.probes}
+        self.samples: dict[str, tuple[list, list]] = {p.name: ([], []) for p in self.probes}
         self.errors: list[dict] = []
         self._err_count = {p.name: 0 for p in self.probes}
         self.subscribers = list(subscribers)

@@ -34,7 +34,7 @@ class TelemetryRecorder:
         self.meter, self.data, self.suite, self.estimator = meter, data, suite, estimator
         polled = ([sn.name for sn in suite.sensors if not getattr(sn, "on_demand", False)]
                   if suite is not None else [])
-        self._sensor_hist = {n: [] for n in polled} if polled else None
+        self._sensor_hist: dict[str, list] | None = {n: [] for n in polled} if polled else None
         self._est_hist: list = []
         self.columns = list(BASE_COLS) + [f"thrust_{i}" for i in range(n_rotors)] + \
             [f"energy_{k}_j" for k in ("motors", "proc", "comm")] + ["battery_v", "battery_a"]
