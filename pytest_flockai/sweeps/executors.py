@@ -28,9 +28,9 @@ from __future__ import annotations
 import multiprocessing
 import re
 import signal
+from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, Executor, wait
 from contextlib import contextmanager
-from typing import Callable
 
 from ..errors import ConfigError
 from ..recording import recording

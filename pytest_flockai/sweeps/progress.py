@@ -10,7 +10,7 @@ of the variants actually flown.
 ``progress=None`` (the default) shows the bar when the standard error is a
 terminal and the sweep has run for ``DELAY_S`` (short sweeps stay quiet),
 unless the environment variable ``FLOCKAI_PROGRESS`` is ``0``;
-``progress=True`` always shows it, ``False`` never.
+``progress=True`` always shows it (from the start), ``False`` never.
 """
 
 from __future__ import annotations
@@ -59,18 +59,17 @@ def expected_s(base_until, values: dict) -> float | None:
 class Progress:
     """The bar of one sweep (no bar at all when not ``shown``)."""
 
-    def __init__(self, expected: dict, shown: bool, *, done_s: float = 0.0, done: int = 0):
+    def __init__(self, expected: dict, shown: bool, *, delay_s: float = DELAY_S, done: int = 0):
         self.expected = dict(expected)        # index -> s (None: unknown) of the variants to go
         self.flown_s: list[float] = []
         self.done, self.total = done, done + len(self.expected)
         self.bar = None
         if shown and self.expected:
             self.bar = tqdm(total=self._total_s(0.0), initial=0.0, unit="drone-s",
-                            desc="sweep", delay=DELAY_S, file=sys.stderr, dynamic_ncols=True,
+                            desc="sweep", delay=delay_s, file=sys.stderr, dynamic_ncols=True,
                             bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} "
                                        "drone-s [{elapsed}<{remaining}, {rate_fmt}{postfix}]")
             self.bar.set_postfix_str(self._count(), refresh=False)
-        self.cached_s = done_s
 
     def _total_s(self, flown: float) -> float | None:
         known = [s for s in self.expected.values() if s is not None]
@@ -87,7 +86,8 @@ class Progress:
         """Variant ``index`` finished after ``sim_time_s`` s of simulated time."""
         self.expected.pop(index, None)
         self.done += 1
-        s = float(sim_time_s) if isinstance(sim_time_s, Real) and sim_time_s == sim_time_s else 0.0
+        s = float(sim_time_s) if isinstance(sim_time_s, Real) else 0.0
+        s = s if math.isfinite(s) else 0.0
         self.flown_s.append(s)
         if self.bar is None:
             return

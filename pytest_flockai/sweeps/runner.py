@@ -178,7 +178,8 @@ def fly(base, plan: list[dict], workers: int, *, executor=None, backend="process
     todo = [i for i in range(len(plan)) if i not in done]
     base_until = base.until
     bar = _progress.Progress({i: _progress.expected_s(base_until, plan[i]) for i in todo},
-                             _progress.wanted(progress), done=len(done))
+                             _progress.wanted(progress), done=len(done),
+                             delay_s=0.0 if progress else _progress.DELAY_S)
 
     def sink(i: int, outcome: Outcome) -> None:
         done[i] = outcome

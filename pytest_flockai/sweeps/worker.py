@@ -26,8 +26,9 @@ import math
 import os
 import pickle
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 from .. import cache as _cache
 from ..errors import ConfigError, FlockAIError
@@ -65,7 +66,7 @@ class Job:
     main_names: tuple = ()
     fly_batched: Callable | None = None
 
-    def without_blob(self) -> "Job":
+    def without_blob(self) -> Job:
         return Job(self.digest, None, self.where, self.backend, self.device, self.main_names,
                    self.fly_batched)
 
@@ -78,9 +79,9 @@ class _MainFinder(pickle.Pickler):
         self.main_names: set = set()
 
     def reducer_override(self, obj):
-        if isinstance(obj, type) or callable(obj):
-            if getattr(obj, "__module__", None) in ("__main__", "__mp_main__"):
-                self.main_names.add(getattr(obj, "__qualname__", repr(obj)))
+        if (isinstance(obj, type) or callable(obj)) \
+                and getattr(obj, "__module__", None) in ("__main__", "__mp_main__"):
+            self.main_names.add(getattr(obj, "__qualname__", repr(obj)))
         return NotImplemented
 
 
