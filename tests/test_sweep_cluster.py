@@ -108,8 +108,10 @@ def test_a_sweep_through_the_cluster_equals_one_worker_row_for_row(cluster):
         one = fa.sweep(_base(), workers=1, **AXES)
         by_address = fa.sweep(_base(), executor=cluster.address, **AXES)
         by_client = fa.sweep(_base(), executor=cluster.client, batch_size=3, **AXES)
+        by_executor = fa.sweep(_base(), executor=cluster.client.get_executor(), **AXES)
     pd.testing.assert_frame_equal(by_address, one)
     pd.testing.assert_frame_equal(by_client, one)
+    pd.testing.assert_frame_equal(by_executor, one)
     assert len(one) == 8 and one["error"].isna().all()
     assert by_address.attrs["executor"] == cluster.address
     # both workers flew: each ran tasks of this module's sweeps

@@ -129,6 +129,34 @@ def test_an_interrupt_returns_the_rows_finished_so_far():
     assert df["energy_total_j"][0] == _alone(0.0)["energy_total_j"]
 
 
+def test_an_interrupted_marked_sweep_fails_keeps_its_rows_and_stops_the_run(pytester):
+    pytester.makepyfile("""
+        import pytest
+        import pytest_flockai as fa
+        from sweep_faults import InterruptOn
+
+        @pytest.fixture
+        def mission():
+            return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(1.0, 1.0),
+                              components=[InterruptOn(0.002)])
+
+        @pytest.mark.flockai_sweep(payload_kg=[0.0, 0.002, 0.004], workers=1)
+        def test_x(flockai_sweep):
+            pass
+
+        def test_never_run():
+            pass
+    """)
+    result = pytester.runpytest("-p", "no:cacheprovider", "--flockai-json=r.json")
+    assert result.ret == pytest.ExitCode.INTERRUPTED
+    result.assert_outcomes(failed=1, warnings=1)
+    result.stdout.fnmatch_lines(["*payload_kg=0.002*interrupted*", "*sweep of*was interrupted*"])
+    (entry,) = json.loads((pytester.path / "r.json").read_text())["tests"]
+    assert [r["end_reason"] for r in entry["sweep"]["rows"]] == ["landed", "interrupted",
+                                                                  "interrupted"]
+    assert entry["sweep"]["interrupted"] is True
+
+
 def test_ctrl_c_during_a_pool_sweep_returns_the_finished_rows(tmp_path):
     """SIGINT to a script whose sweep waits on its pool: the rows so far come back."""
     marks = tmp_path / "marks"

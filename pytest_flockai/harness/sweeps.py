@@ -13,8 +13,8 @@ picture goes to the HTML reports.
 variants of every marked sweep to the Dask scheduler at ``ADDRESS``: one
 ``distributed.Client`` per pytest process (the ``flockai_sweep_executor``
 fixture, session-scoped), connected at the first sweep and closed at the end.
-A sweep interrupted by Ctrl-C keeps its finished rows for the reports and stops
-the run.
+A sweep interrupted by Ctrl-C fails its test with the rows finished so far (the
+others ``interrupted``), which go to the reports, and stops the run after it.
 """
 
 from __future__ import annotations
@@ -97,8 +97,9 @@ def flockai_sweep(request, mission, flockai_sweep_executor):
         pytest.fail(f"pytest-flockai: bad @pytest.mark.{MARKER} on {request.node.nodeid}: {exc}",
                     pytrace=False)
     st.sweep = df
-    if df.attrs.get("interrupted"):
-        raise KeyboardInterrupt    # the rows so far are in the reports; the run stops
+    if df.attrs.get("interrupted"):     # the test fails with the rows so far; the run stops
+        request.session.shouldstop = (f"pytest-flockai: the sweep of {request.node.nodeid} was "
+                                      f"interrupted; its finished rows are in the reports")
     return df
 
 

@@ -91,17 +91,23 @@ def describe_executor(executor) -> str | None:
 
 @contextmanager
 def opened(executor):
-    """The ``concurrent.futures.Executor`` behind ``executor`` for one sweep."""
+    """(the ``concurrent.futures.Executor`` behind ``executor`` for one sweep, its
+    Dask client or None)."""
     if isinstance(executor, Executor):
-        yield executor
+        # distributed's ClientExecutor keeps its client as _client (no public name)
+        yield executor, getattr(executor, "_client", None) if _is_dask(executor) else None
     elif isinstance(executor, str):
         client = connect(executor)
         try:
-            yield client.get_executor()
+            yield client.get_executor(), client
         finally:
             client.close()
     else:
-        yield executor.get_executor()
+        yield executor.get_executor(), executor
+
+
+def _is_dask(executor) -> bool:
+    return type(executor).__module__.split(".")[0] == "distributed"
 
 
 # -- the sweep's own pools ------------------------------------------------------------------------
@@ -201,13 +207,19 @@ def _terminate(pool) -> None:
 
 
 # -- any executor -----------------------------------------------------------------------------------
-def fly_on(executor: Executor, job, plan: list, todo: list, sink: Sink, batch_size: int) -> None:
-    """Fly ``todo`` on ``executor`` in batches, each result taken as it finishes."""
+def fly_on(executor: Executor, job, plan: list, todo: list, sink: Sink, batch_size: int,
+           client=None) -> None:
+    """Fly ``todo`` on ``executor`` in batches, each result taken as it finishes. With
+    a Dask ``client`` the base goes to the workers once (``scatter``), not with
+    every task."""
     pending: dict = {}
+    blob = None
+    if client is not None:
+        blob, job = client.scatter(job.blob, broadcast=True, hash=False), job.without_blob()
 
     def submit(ids: list, retried: bool) -> None:
         try:
-            f = executor.submit(_worker.run_batch, job, [(i, plan[i]) for i in ids])
+            f = executor.submit(_worker.run_batch, job, [(i, plan[i]) for i in ids], blob)
         except (BrokenExecutor, RuntimeError) as exc:    # broken, or shut down
             for i in ids:
                 sink(i, _worker.failed(plan[i], f"not flown: {_worker.describe(exc)[0]}"))

@@ -214,8 +214,8 @@ def _dispatch(base, plan, todo, sink, workers, executor, backend, device, batch_
         _executors.fly_own(job, plan, todo, sink, min(workers, len(todo)), _spawn_pool)
         return
     size = batch_size or (1 if backend == "process" else BATCHED_BATCH)
-    with _executors.opened(executor) as ex:
-        _executors.fly_on(ex, job, plan, todo, sink, size)
+    with _executors.opened(executor) as (ex, client):
+        _executors.fly_on(ex, job, plan, todo, sink, size, client)
 
 
 def _spawn_pool(size: int, ctx, initargs: tuple) -> ProcessPoolExecutor:

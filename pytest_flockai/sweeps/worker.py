@@ -140,10 +140,12 @@ def unloadable_text(exc: BaseException, main_names: tuple) -> str:
             "run, or use workers=1")
 
 
-def run_batch(job: Job, batch: list) -> list | Unloadable:
-    """Fly ``batch`` (pairs ``(index, values)``) in this process: ``[(index, Outcome)]``."""
-    base = _BASES.get(job.digest) if job.blob is None else _load(job.blob, job.digest,
-                                                                 job.main_names)
+def run_batch(job: Job, batch: list, blob: bytes | None = None) -> list | Unloadable:
+    """Fly ``batch`` (pairs ``(index, values)``) in this process: ``[(index, Outcome)]``.
+    The base comes with the job, as ``blob`` (a Dask scatter), or from the pool's
+    initializer."""
+    blob = job.blob if blob is None else blob
+    base = _BASES.get(job.digest) if blob is None else _load(blob, job.digest, job.main_names)
     if base is None:
         return Unloadable(f"sweep: a worker process lost the base mission {job.digest[:12]}")
     if isinstance(base, Unloadable):
