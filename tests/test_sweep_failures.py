@@ -18,6 +18,7 @@ from sweep_faults import ExitOn, InterruptOn, RaiseOn
 import pytest_flockai as fa
 from pytest_flockai.cache import caching
 from pytest_flockai.errors import ConfigError
+from pytest_flockai.sweeps import executors
 from pytest_flockai.sweeps.runner import SweepInterrupted
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -221,3 +222,23 @@ def test_same_seed_same_rows_with_a_pool_of_the_callers():
     with caching(None), ProcessPoolExecutor(2) as pool:
         pd.testing.assert_frame_equal(fa.sweep(_base(), executor=pool, **kw),
                                       fa.sweep(_base(), workers=1, **kw))
+
+
+def test_a_bad_sweep_executor_option_stops_pytest_naming_it(pytester):
+    pytester.makepyfile("def test_x():\n    pass\n")
+    bad = pytester.runpytest("--flockai-sweep-executor=not an address")
+    assert bad.ret == pytest.ExitCode.USAGE_ERROR
+    bad.stderr.fnmatch_lines(["*--flockai-sweep-executor = 'not an address' is not allowed*"
+                              "scheduler address*"])
+    pytester.makeini("[pytest]\nflockai_sweep_executor = tcp:/nowhere\n")
+    bad = pytester.runpytest()
+    assert bad.ret == pytest.ExitCode.USAGE_ERROR
+    bad.stderr.fnmatch_lines(["*flockai_sweep_executor (ini) = 'tcp:/nowhere' is not allowed*"])
+
+
+def test_an_address_where_no_scheduler_answers_is_a_config_error_naming_it(monkeypatch):
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT_S", 1.0)
+    with pytest.raises(ConfigError) as exc:
+        fa.sweep(_base(), payload_kg=[0.0, 0.002], executor="tcp://127.0.0.1:9")
+    assert "executor = 'tcp://127.0.0.1:9': no Dask scheduler answered there" in str(exc.value)

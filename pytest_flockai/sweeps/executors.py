@@ -113,7 +113,7 @@ def _is_dask(executor) -> bool:
 # -- the sweep's own pools ------------------------------------------------------------------------
 def fly_own(job, plan: list, todo: list, sink: Sink, workers: int, pool_factory) -> None:
     """Fly ``todo`` on fresh spawned pools until every variant has a row."""
-    queue, alone = list(todo), []
+    queue, alone = list(todo), list[int]()
     while queue or alone:
         if alone:
             ids, size = [alone.pop(0)], 1

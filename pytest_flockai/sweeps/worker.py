@@ -180,6 +180,8 @@ def _batched(job: Job, base, batch: list) -> list:
     """A batch through the batched backend; a failure of the batch is every row's error."""
     plan = [values for _, values in batch]
     try:
+        if job.fly_batched is None:
+            raise ConfigError(f"sweep: backend = {job.backend!r} came without its batched path")
         rows = job.fly_batched(base, plan, job.device)
     except Exception as exc:            # noqa: BLE001 - the batch's rows carry it
         error, trace = describe(exc)
