@@ -199,7 +199,7 @@ def test_the_progress_bar_counts_drone_seconds_and_variants(capsys):
     with caching(None):
         df = fa.sweep(_base(), payload_kg=PAYLOADS, until=[2.0], workers=1, progress=True)
     err = capsys.readouterr().err
-    assert "drone-s" in err and "3/3 variants" in err and "6/6" in err
+    assert "6.00/6.00 drone-s" in err and "3/3 variants" in err and "100%" in err
     with caching(None):
         fa.sweep(_base(), payload_kg=PAYLOADS, until=[2.0], workers=1)   # stderr is no terminal
     assert capsys.readouterr().err == "" and len(df) == 3
@@ -228,8 +228,8 @@ def test_a_bad_sweep_executor_option_stops_pytest_naming_it(pytester):
     pytester.makepyfile("def test_x():\n    pass\n")
     bad = pytester.runpytest("--flockai-sweep-executor=not an address")
     assert bad.ret == pytest.ExitCode.USAGE_ERROR
-    bad.stderr.fnmatch_lines(["*--flockai-sweep-executor = 'not an address' is not allowed*"
-                              "scheduler address*"])
+    bad.stderr.fnmatch_lines([("*--flockai-sweep-executor = 'not an address' is not allowed*"
+                               "scheduler address*")])
     pytester.makeini("[pytest]\nflockai_sweep_executor = tcp:/nowhere\n")
     bad = pytester.runpytest()
     assert bad.ret == pytest.ExitCode.USAGE_ERROR

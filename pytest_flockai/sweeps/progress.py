@@ -66,8 +66,9 @@ class Progress:
         self.bar = None
         if shown and self.expected:
             self.bar = tqdm(total=self._total_s(0.0), initial=0.0, unit="drone-s",
-                            desc="sweep", delay=delay_s, file=sys.stderr, dynamic_ncols=True,
-                            bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} "
+                            unit_scale=True, desc="sweep", delay=delay_s, file=sys.stderr,
+                            dynamic_ncols=True,
+                            bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} "
                                        "drone-s [{elapsed}<{remaining}, {rate_fmt}{postfix}]")
             self.bar.set_postfix_str(self._count(), refresh=False)
 
