@@ -203,6 +203,11 @@ def test_the_progress_bar_counts_drone_seconds_and_variants(capsys):
     with caching(None):
         fa.sweep(_base(), payload_kg=PAYLOADS, until=[2.0], workers=1)   # stderr is no terminal
     assert capsys.readouterr().err == "" and len(df) == 3
+    with caching(None):                 # flown until landed: the total is known after one lands
+        landed = fa.sweep(_base(), payload_kg=PAYLOADS, workers=1, progress=True)
+    err = capsys.readouterr().err
+    total = f"{landed['sim_time_s'].sum():.1f}/{landed['sim_time_s'].sum():.1f} drone-s"
+    assert "0.00/? drone-s" in err and total in err and "3/3 variants" in err
 
 
 @pytest.mark.parametrize("kwargs, words", [
