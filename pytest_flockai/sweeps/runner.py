@@ -83,8 +83,9 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
 
     ``executor``: where the variants fly instead of this machine's processes
     (any ``concurrent.futures.Executor``, a ``distributed.Client`` or a Dask
-    scheduler address; see ``executors.py``), ``batch_size`` variants per task
-    (default: 1 with ``backend="process"``, else ``BATCHED_BATCH``). A variant
+    scheduler address; see ``executors.py``; ``workers`` is then unused),
+    ``batch_size`` variants per task (default: 1 with ``backend="process"``,
+    else ``BATCHED_BATCH``). A variant
     that raises or kills its worker is a row with its ``error``; an interrupt
     (Ctrl-C) returns the rows finished so far, the others ``interrupted``
     (``df.attrs["interrupted"]``). ``progress``: a bar of drone-seconds done and

@@ -95,7 +95,8 @@ def pickled(base) -> tuple[bytes, tuple]:
     try:
         finder.dump(base)
     except (pickle.PicklingError, TypeError, AttributeError) as exc:
-        raise ConfigError(f"sweep: workers > 1 send the base mission to other processes, but "
+        raise ConfigError(f"sweep: workers > 1 (and executors) send the base mission to other "
+                          f"processes, but "
                           f"it cannot be pickled ({type(exc).__name__}: {exc}); define your "
                           f"components, probes and pilots at module level, or use "
                           f"workers=1") from None
