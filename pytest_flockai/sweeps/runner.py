@@ -143,8 +143,9 @@ def _check_backend(backend, base, device) -> None:
     _batched.check(base)
 
 
-def _fly_batched(base, plan, device) -> list[dict]:
-    """The variants in one JAX batch (the backend's modules import JAX: loaded here)."""
+def _fly_batched(base, plan, device, physics="mjx") -> list[dict]:
+    """The variants in one JAX batch (the backend's modules import JAX: loaded here);
+    ``physics``: the batched backend (only "mjx" so far)."""
     try:
         from .batched import engine
     except ImportError as exc:

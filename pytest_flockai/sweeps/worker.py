@@ -183,7 +183,7 @@ def _batched(job: Job, base, batch: list) -> list:
     try:
         if job.fly_batched is None:
             raise ConfigError(f"sweep: backend = {job.backend!r} came without its batched path")
-        rows = job.fly_batched(base, plan, job.device)
+        rows = job.fly_batched(base, plan, job.device, job.backend)
     except Exception as exc:            # noqa: BLE001 - the batch's rows carry it
         error, trace = describe(exc)
         return [(i, Outcome(row_of(values, None, error), None, trace)) for i, values in batch]
