@@ -18,17 +18,21 @@ from .. import cache as _cache
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
-from ..mission import Mission
+from ..mission import Mission, loop
+from ..mission.assemble import Flight
 from ..mission.plan import check_tasks, resolve
 from ..recording import publish
 from ..world import World
-from . import assemble, loop, result
-from .offload import Offload, OffloadStep
+from . import result
+from .offload import Offload, OffloadStep, share_ground
+from . import pads as _pads
 
 #: m: two pads closer than this are "one pad" (a drone's footprint is < 1 m)
 PAD_CLEARANCE_M = 2.0
 #: at most this many drones in one fleet (the loop's cost grows with N)
 MAX_DRONES = 64
+#: drone names that would collide with the fleet's own KPI prefixes
+RESERVED_NAMES = ("fleet", "ground", "link")
 
 
 class FleetDrone:
@@ -41,6 +45,10 @@ class FleetDrone:
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "./ "):
             raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; expected a non-empty "
                               f"str without '.', '/' or spaces (it prefixes the drone's KPIs)")
+        if name.lower() in RESERVED_NAMES:
+            raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; it is the prefix of "
+                              f"the fleet's own KPIs ({', '.join(RESERVED_NAMES)}: "
+                              f"fleet.energy_total_j, link.*, ground.*); choose another name")
         if not isinstance(drone, Drone):
             raise ConfigError(f"FleetDrone {name!r}: drone = {drone!r} is not a Drone; use "
                               f"fa.drone(name)")
@@ -105,6 +113,7 @@ class Fleet:
         _check_unique(drones)
         if world is not None and not isinstance(world, World):
             raise ConfigError(f"Fleet: world = {world!r} is not allowed; expected None or a fa.World")
+        _check_pads(drones, world)
         if offload is not None and not isinstance(offload, Offload):
             raise ConfigError(f"Fleet: offload = {offload!r} is not allowed; expected None or "
                               f"fa.fleet.Offload(...)")
@@ -152,21 +161,21 @@ class Fleet:
             return found.result
         wall0 = _time.perf_counter()
         plans = self._plans()
-        names = [fd.name for fd in self.drones]
-        model, data, runs = assemble.build(plans, self.missions, names,
-                                           [fd.pad for fd in self.drones], self.world,
-                                           lambda m: m.probes)
+        flight = Flight(plans, self.missions, [fd.name for fd in self.drones],
+                        [fd.pad for fd in self.drones])
+        runs = flight.runs
         off = OffloadStep(self.offload, runs) if self.offload is not None else None
-        ground = assemble.share_ground(runs, self.shared_link) if self.remote else None
+        sep = result.Separation()
+        ground = share_ground(runs, self.shared_link) if self.remote else None
         try:
-            stats = loop.fly(model, data, runs, plans[0].substeps, off)
+            loop.fly(flight, [st for st in (off, sep) if st is not None])
         except SimulationError as exc:
             exc.result = result.build(self, runs, {"min_separation_m": math.inf},
                                       _time.perf_counter() - wall0)
             publish(exc.result, self)
             raise
-        stats["offload"] = off
-        stats["ground"] = ground
+        stats = {"min_separation_m": sep.min_m, "t_end": [r.t_end for r in runs],
+                 "offload": off, "ground": ground}
         res = result.build(self, runs, stats, _time.perf_counter() - wall0)
         if found is not None and found.status != "off":
             found.store(res)
@@ -190,6 +199,17 @@ def _check_unique(drones) -> None:
                     f"Fleet: drones[{i}].pad = {tuple(a.pad)} ({a.name!r}) is {gap:.2f} m from "
                     f"drones[{j}].pad = {tuple(b.pad)} ({b.name!r}); two drones at one pad; "
                     f"allowed: pads at least {PAD_CLEARANCE_M:g} m apart")
+
+
+def _check_pads(drones, world) -> None:
+    """A pad inside a building or against its wall: the drone could not take off."""
+    obs = _pads.obstacles(world)
+    for fd in drones:
+        why = _pads.problem(obs, fd.pad)
+        if why is not None:
+            raise ConfigError(f"Fleet: drone {fd.name!r} pad = ({fd.pad[0]:g}, {fd.pad[1]:g}) is "
+                              f"{why}; a drone cannot take off there: allowed: a pad on free "
+                              f"ground (fa.fleet.survey(..., world=world) picks free pads)")
 
 
 def _check_remote(drones, offload) -> list:

@@ -159,11 +159,15 @@ def run_batch(job: Job, batch: list, blob: bytes | None = None) -> list | Unload
 
 
 def _open_cache(where):
+    """The caller's flight cache in this worker: ``(directory, mode)``, and the caller's
+    key for the sweep's own pool (a cluster's workers use their own default key)."""
     if where is None:
         return None
-    if where not in _CACHES:
-        _CACHES[where] = _cache.FlightCache(*where)
-    return _CACHES[where]
+    directory, mode, *key = where
+    if (directory, mode) not in _CACHES:
+        _CACHES[(directory, mode)] = _cache.FlightCache(directory, mode,
+                                                        key=key[0] if key else None)
+    return _CACHES[(directory, mode)]
 
 
 def _marked(i: int, base, values: dict) -> Outcome:
