@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from sweep_faults import MarkAndWait
+from sweep_faults import MarkAndWait, RaiseOn
 
 import pytest_flockai as fa
 from pytest_flockai.cache import FlightCache, caching
@@ -117,6 +117,16 @@ def test_a_sweep_through_the_cluster_equals_one_worker_row_for_row(cluster):
     # both workers flew: each ran tasks of this module's sweeps
     ran = cluster.client.run(lambda: len(sys.modules["pytest_flockai.sweeps.worker"]._BASES))
     assert len(ran) == 2 and all(n >= 1 for n in ran.values())
+
+
+def test_an_exception_in_a_variant_on_the_cluster_is_the_same_row_as_here(cluster):
+    cluster.ensure_workers(2)
+    base = _base(components=[RaiseOn(0.004)])
+    here = fa.sweep(base, payload_kg=[0.0, 0.004, 0.008], workers=1)
+    there = fa.sweep(base, payload_kg=[0.0, 0.004, 0.008], executor=cluster.address)
+    pd.testing.assert_frame_equal(there, here)
+    assert list(there["error"]) == [None, "ZeroDivisionError: division by zero", None]
+    assert "1 / 0" in there.attrs["tracebacks"][1]
 
 
 def test_the_flight_cache_in_a_shared_folder_is_written_by_the_workers(cluster, tmp_path):

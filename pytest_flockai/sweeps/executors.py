@@ -16,8 +16,10 @@
   client is opened for the sweep and closed after it). Variants go in batches
   of ``batch_size`` per task; results come back as each task finishes. A task
   that fails without an answer (Dask's ``KilledWorker`` after a variant killed
-  its workers ``allowed-failures`` times, a broken pool of yours) has its
-  variants flown again one per task once, then each is a row with the error.
+  its workers ``allowed-failures`` times) has its variants flown again one per
+  task once, then each is a row with the error. A pool of yours that breaks
+  cannot be restarted by the sweep: every variant not back is a row
+  ``"worker died: BrokenProcessPool: ..."``.
 
 Every path returns the rows finished when it is interrupted (``KeyboardInterrupt``):
 the caller marks the others ``interrupted``.
