@@ -55,7 +55,7 @@ SAME_LAYER = {
     ("result", "_io"), ("result", "errors"), ("result", "phases"),
     ("ml", "control"),
     ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
-    ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
+    ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
     ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
     ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),
     ("report", "plots"), ("reports", "report"), ("strategies", "budgets"), ("sweeps", "budgets"),
