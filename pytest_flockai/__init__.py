@@ -22,7 +22,7 @@ from .recording import recording
 
 __version__ = "0.1.0"
 
-if TYPE_CHECKING:          # for type checkers and the API reference (mkdocstrings) only
+if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type checkers and docs
     from . import comm, fleet, ml, probes, sensors
     from .airframe import Drone, blueprints, drone
     from .compute import devices
