@@ -6,10 +6,10 @@ finds the imaging condition breaking a recall budget and shrinks it."""
 import os
 
 import pytest
+import scenarios
 from hypothesis import Phase, given, settings
 
 import pytest_flockai as fa
-import scenarios
 from pytest_flockai import plots, report
 from pytest_flockai import strategies as fst
 from pytest_flockai.budgets import check

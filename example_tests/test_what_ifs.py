@@ -4,14 +4,13 @@ payload, wind (a hypothesis fuzz), a custom probe and a custom energy component.
 import math
 
 import pytest
+import scenarios
 from hypothesis import given, settings
 
 import pytest_flockai as fa
 from pytest_flockai import strategies as fst
 from pytest_flockai.budgets import check
 from pytest_flockai.cache import cacheable
-
-import scenarios
 
 SHORT = dict(until=90.0)          # a 90 s slice of the survey is enough to project endurance
 

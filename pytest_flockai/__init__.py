@@ -24,7 +24,9 @@ __version__ = "0.1.0"
 
 if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type checkers and docs
     from . import comm, fleet, ml, probes, sensors
-    from .airframe import Drone, blueprints, drone
+
+    # from .airframe.drone: airframe/ has submodules named drone and blueprints too
+    from .airframe.drone import Drone, blueprints, drone
     from .compute import devices
     from .control import pilots
     from .energy import EnergyModel

@@ -39,7 +39,7 @@ def configure(config) -> None:
     if address is None or getattr(config.option, "help", False):
         return
     what = "flockai_sweep_executor (ini)" if from_ini else "--flockai-sweep-executor"
-    from ..sweeps import executors     # lazy: only a run that asks for a cluster loads the core
+    from ..sweeps import executors  # lazy: only a run that asks for a cluster loads the core
     try:
         executors.check_address(address, what)
     except ConfigError as exc:
@@ -53,7 +53,7 @@ def flockai_sweep_executor(pytestconfig):
     if address is None:
         yield None
         return
-    from ..sweeps import executors     # lazy: only a run that asks for a cluster loads the core
+    from ..sweeps import executors  # lazy: only a run that asks for a cluster loads the core
     try:
         client = executors.connect(address)
     except ConfigError as exc:
@@ -92,7 +92,7 @@ def flockai_sweep(request, mission, flockai_sweep_executor):
     kwargs = dict(mark.kwargs)
     if flockai_sweep_executor is not None:
         kwargs.setdefault("executor", flockai_sweep_executor)
-    from ..sweeps import runner        # lazy: the core loads on first use
+    from ..sweeps import runner  # lazy: the core loads on first use
     try:
         df = runner.sweep(mission, budgets=budgets or None, **kwargs)
     except ConfigError as exc:
@@ -116,7 +116,7 @@ def check(item, st) -> str | None:
                            f"sweep checks its budgets on every variant; flight = {named[0]!r} is "
                            f"not allowed with @pytest.mark.{MARKER}")
     budgets = [x.budget for x in st.markers.budgets if x.flight is None]
-    from ..sweeps import envelope      # lazy: a sweep flew, so it is loaded already
+    from ..sweeps import envelope  # lazy: a sweep flew, so it is loaded already
     st.verdicts, broken, errors = [], [], []
     for _, row in df.iterrows():
         name = envelope.label(row, axes)
@@ -156,7 +156,7 @@ def write_envelope(item, st, artifacts) -> None:
     axes = df.attrs.get("axes", [])
     kpi = next((x.budget.kpi for x in st.markers.budgets), "flight_time_s")
     x, y = (axes + axes)[:2] if axes else ("", "")
-    from ..sweeps import envelope      # lazy: a sweep flew, so it is loaded already
+    from ..sweeps import envelope  # lazy: a sweep flew, so it is loaded already
     try:
         folder = Path(artifacts) / _report.safe_name(item.nodeid)   # the flights' folder
         folder.mkdir(parents=True, exist_ok=True)
