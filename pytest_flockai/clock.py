@@ -41,6 +41,7 @@ class Clocked:
         self._t_next = 0.0
 
     def step(self, t: float) -> None:  # pragma: no cover - interface
+        """Do this component's work at simulated time ``t`` (s); called when due."""
         raise NotImplementedError
 
     def advance_clock(self) -> None:
@@ -53,4 +54,5 @@ class Clocked:
         """Called once when the flight ends (also the final partial interval)."""
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario (type and period)."""
         return {"type": type(self).__name__, "period_s": self.period_s}

@@ -11,6 +11,8 @@ from enum import IntEnum
 
 
 class Stage(IntEnum):
+    """What the drone is commanded to do (the stage machine)."""
+
     TAKEOFF = 0
     PILOT = 1
     RETURN = 2
@@ -19,6 +21,8 @@ class Stage(IntEnum):
 
 
 class Phase(IntEnum):
+    """What the drone is doing (the flight book; the paper's Table 1 time metrics)."""
+
     TAKEOFF = 0
     HOVER = 1
     MOVE = 2

@@ -119,7 +119,8 @@ def link_quality() -> st.SearchStrategy[dict]:
                                   "packet_loss": st.floats(0.0, 0.3)})
 
 
-def pilot_areas(max_side: float = 300.0, min_side: float = 20.0, max_offset: float = 200.0):
+def pilot_areas(max_side: float = 300.0, min_side: float = 20.0,
+                max_offset: float = 200.0) -> st.SearchStrategy[tuple]:
     """Survey boxes ((x0, y0), (x1, y1)) for ZigZag pilots."""
     def build(x0, y0, w, h):
         return ((x0, y0), (x0 + w, y0 + h))
@@ -128,12 +129,15 @@ def pilot_areas(max_side: float = 300.0, min_side: float = 20.0, max_offset: flo
 
 
 def zigzags(max_side: float = 200.0) -> st.SearchStrategy[_pilots.ZigZag]:
+    """ZigZag survey pilots: an area (``pilot_areas``), altitude 10-60 m, line
+    spacing 10-40 m and speed 3-12 m/s."""
     return st.builds(lambda area, alt, spacing, speed: _pilots.ZigZag(area, alt, spacing, speed),
                      pilot_areas(max_side=max_side), st.floats(10.0, 60.0), st.floats(10.0, 40.0),
                      st.floats(3.0, 12.0))
 
 
 def hovers(max_duration: float = 60.0) -> st.SearchStrategy[_pilots.Hover]:
+    """Hover pilots: altitude 2-50 m for 1 s to ``max_duration`` s."""
     return st.builds(lambda alt, dur: _pilots.Hover(alt, dur), st.floats(2.0, 50.0),
                      st.floats(1.0, max_duration))
 

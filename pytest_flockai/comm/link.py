@@ -61,6 +61,7 @@ class Transfer:
     rate_bps: float = 0.0   # PHY rate used
 
     def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict."""
         return asdict(self)
 
 
@@ -120,6 +121,8 @@ class Link:
 
     # -- radio ---------------------------------------------------------------
     def rx_power_dbm(self, distance_m: float) -> float:
+        """Received power (dBm) at ``distance_m``: log-distance path loss from the
+        free-space loss at ``ref_distance_m`` (closer than that counts as that)."""
         lam = C_LIGHT / self.frequency_hz
         d0 = self.ref_distance_m
         fspl0 = 20.0 * math.log10(4.0 * math.pi * d0 / lam)
@@ -144,6 +147,8 @@ class Link:
         return r * (self.down_rate_scale if direction == "down" else 1.0)
 
     def loss_probability(self, distance_m: float) -> float:
+        """Probability that one packet is lost at ``distance_m``: ``loss_floor`` plus a
+        term growing as the margin shrinks, at most 0.95."""
         m = self.margin_db(distance_m)
         if not math.isfinite(m):
             return self.loss_floor
@@ -217,6 +222,7 @@ class Link:
         return replace(self, **changes)
 
     def to_dict(self) -> dict:
+        """The profile as a JSON-ready dict (without ``notes``)."""
         d = asdict(self)
         d["rates"] = [list(r) for r in self.rates]
         d.pop("notes", None)

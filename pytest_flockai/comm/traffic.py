@@ -18,20 +18,24 @@ ACK_BYTES = 64
 
 
 class Traffic:
+    """Bytes and packets of one drone's radio: pending (drained once per energy
+    interval) and the drained totals."""
+
     __slots__ = ("tx_b", "tx_p", "rx_b", "rx_p", "bytes_out", "bytes_in", "packets_out",
                  "packets_in")
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.tx_b = self.tx_p = self.rx_b = self.rx_p = 0              # pending
         self.bytes_out = self.bytes_in = self.packets_out = self.packets_in = 0   # drained totals
 
-    def add(self, tx_b, tx_p, rx_b, rx_p) -> None:
+    def add(self, tx_b: int, tx_p: int, rx_b: int, rx_p: int) -> None:
+        """Count bytes and packets sent (tx) and received (rx)."""
         self.tx_b += tx_b
         self.tx_p += tx_p
         self.rx_b += rx_b
         self.rx_p += rx_p
 
-    def drain(self):
+    def drain(self) -> tuple[int, int, int, int]:
         """(tx bytes, tx packets, rx bytes, rx packets) pending; adds them to the totals."""
         out = (self.tx_b, self.tx_p, self.rx_b, self.rx_p)
         self.bytes_out += out[0]
@@ -43,7 +47,10 @@ class Traffic:
 
 
 class Heartbeats(Clocked):
-    def __init__(self, traffic: Traffic, radio):
+    """The health-check heartbeat: ``heartbeat_bytes`` up and an acknowledgement
+    down every ``heartbeat_period_s`` of the blueprint's radio."""
+
+    def __init__(self, traffic: Traffic, radio) -> None:
         self.traffic = traffic
         self.period_s = radio.heartbeat_period_s
         self.bytes = int(radio.heartbeat_bytes)
@@ -51,6 +58,7 @@ class Heartbeats(Clocked):
         self.next_due = -CLOCK_EPS
 
     def step(self, t: float) -> None:
+        """Send one heartbeat and receive its acknowledgement."""
         self.advance_clock()
         tr = self.traffic
         tr.tx_b += self.bytes

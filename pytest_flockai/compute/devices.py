@@ -14,6 +14,9 @@ from ..errors import ConfigError, close_matches
 
 @dataclass(frozen=True)
 class Device:
+    """A computer a task runs on: idle and active power (W, at the board's input),
+    effective ML throughput (MAC/s), per-inference overhead (s) and memory (MB)."""
+
     name: str
     idle_w: float
     active_w: float
@@ -23,6 +26,7 @@ class Device:
     source: str
 
     def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict."""
         return asdict(self)
 
 
@@ -56,6 +60,7 @@ def devices() -> list[str]:
 
 
 def device(name: str) -> Device:
+    """The profile named ``name`` (``devices()`` lists them); ConfigError otherwise."""
     try:
         return DEVICES[name]
     except KeyError:

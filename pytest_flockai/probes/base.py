@@ -33,6 +33,10 @@ KINDS = ("gauge", "counter", "timer", "ratio")
 
 @dataclass(frozen=True)
 class Metric:
+    """One quantity a probe measures: a snake_case ``name``, its ``unit``, which way
+    is ``better`` ("higher", "lower" or None) and its ``kind`` (gauge, counter,
+    timer or ratio)."""
+
     name: str
     unit: str = "1"
     description: str = ""
@@ -81,6 +85,7 @@ class Probe:
         """Called once before the flight (optional)."""
 
     def collect(self, view) -> dict:  # pragma: no cover - interface
+        """One sample: metric name -> value, read from ``view`` (a ``RunView``)."""
         raise NotImplementedError(f"probe {self.name!r} must implement collect(view) -> dict")
 
     def column(self, metric: str) -> str:
@@ -88,6 +93,7 @@ class Probe:
         return metric if self.builtin else f"{self.name}.{metric}"
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"name": self.name, "type": type(self).__name__, "period_s": self.period_s,
                 "enabled": self.enabled, "metrics": list(self._metric_names)}
 
@@ -105,5 +111,6 @@ class FunctionProbe(Probe):
         self._fn = fn
         super().__init__(period_s=period_s, enabled=enabled, name=name)
 
-    def collect(self, view):
+    def collect(self, view) -> dict:
+        """``fn(view)``: metric name -> value."""
         return self._fn(view)

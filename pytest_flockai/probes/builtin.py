@@ -11,15 +11,17 @@ from .. import kpis as _kpis
 from .base import Metric, Probe
 
 
-def _metrics(*names, kind="gauge"):
+def _metrics(*names: str, kind: str = "gauge") -> tuple[Metric, ...]:
     out = []
     for n in names:
-        k = _kpis.get(n)
+        k = _kpis.REGISTRY[n]       # built-in names only: in the table
         out.append(Metric(n, k.unit, k.description, k.better, kind))
     return tuple(out)
 
 
 class FlightProbe(Probe):
+    """The flight book: time per phase, distance, top speed, tracking error, crash."""
+
     name = "flight"
     builtin = True
     metrics = (_metrics("flight_time_s", "takeoff_time_s", "hover_time_s", "move_time_s",
@@ -27,7 +29,7 @@ class FlightProbe(Probe):
                + _metrics("distance_m", kind="counter")
                + _metrics("max_speed_mps", "tracking_error_max_m", "crashed"))
 
-    def collect(self, v):
+    def collect(self, v) -> dict:
         pt = v.phase_time
         return {"flight_time_s": pt[0] + pt[1] + pt[2] + pt[3] + pt[4], "takeoff_time_s": pt[0],
                 "hover_time_s": pt[1], "move_time_s": pt[2], "accel_time_s": pt[3],
@@ -36,6 +38,9 @@ class FlightProbe(Probe):
 
 
 class EnergyProbe(Probe):
+    """The energy meter: energy per component and its shares, mean power, battery
+    remaining and the endurance projected from the energy used so far."""
+
     name = "energy"
     builtin = True
     metrics = (_metrics("energy_total_j", "energy_motors_j", "energy_proc_j", "energy_comm_j",
@@ -44,7 +49,7 @@ class EnergyProbe(Probe):
                           "battery_remaining", kind="ratio")
                + _metrics("mean_power_w", "endurance_s", "battery_v_min"))
 
-    def collect(self, v):
+    def collect(self, v) -> dict:
         tops = v.energy_by_top()
         e_tot = sum(tops.values())
         e_m, e_p, e_c = tops.get("motors", 0.0), tops.get("proc", 0.0), tops.get("comm", 0.0)
@@ -70,18 +75,20 @@ class ComputeProbe(Probe):
     metrics = (_metrics("cpu_utilization", "mem_utilization", kind="ratio")
                + _metrics("cpu_time_s", "io_time_s", kind="timer"))
 
-    def collect(self, v):
+    def collect(self, v) -> dict:
         t = v.t
         return {"cpu_utilization": v.cpu_time_s / t if t > 0 else 0.0, "cpu_time_s": v.cpu_time_s,
                 "io_time_s": v.io_time_s, "mem_utilization": v.mem_utilization}
 
 
 class CommProbe(Probe):
+    """The radio: kilobytes and packets sent and received."""
+
     name = "comm"
     builtin = True
     metrics = _metrics("kbytes_in", "kbytes_out", "packets_in", "packets_out", kind="counter")
 
-    def collect(self, v):
+    def collect(self, v) -> dict:
         return {"kbytes_in": v.bytes_in / 1000.0, "kbytes_out": v.bytes_out / 1000.0,
                 "packets_in": float(v.packets_in), "packets_out": float(v.packets_out)}
 
@@ -105,7 +112,7 @@ class MLProbe(Probe):
     builtin = True
     metrics = ML_METRICS
 
-    def collect(self, v):
+    def collect(self, v) -> dict:
         return _finite(v.task_kpis, self._metric_names)
 
 
@@ -114,10 +121,10 @@ class TaskProbe(Probe):
 
     metrics = ML_METRICS + _metrics("cpu_time_s", kind="timer")
 
-    def __init__(self, task_name: str, **kw):
+    def __init__(self, task_name: str, **kw) -> None:
         super().__init__(name=task_name, **kw)
 
-    def collect(self, v):
+    def collect(self, v) -> dict:
         return _finite(v.task_kpis_by_task.get(self.name, {}), self._metric_names)
 
 

@@ -63,10 +63,12 @@ class RunView:
         return self._meter.loss_j
 
     def energy_by_top(self) -> dict:
+        """Energy so far (J) per top-level component (motors, proc, comm...)."""
         return self._meter.totals_by_top()
 
     @property
     def energy_breakdown(self) -> dict:
+        """Energy so far (J) per component and sub-component."""
         return self._meter.breakdown()
 
 
@@ -110,7 +112,10 @@ def _builtin_metric_names():
 
 
 class ProbeHub:
-    def __init__(self, probes: list[Probe], subscribers=()):
+    """Samples the enabled probes of one flight, each on its own period; a probe or
+    subscriber that fails is recorded in ``errors`` and the flight goes on."""
+
+    def __init__(self, probes: list[Probe], subscribers=()) -> None:
         self.probes = [p for p in probes if p.enabled]
         self._next = [p.period_s for p in self.probes]   # first sample one period in
         self.next_due = min(self._next) if self._next else math.inf
@@ -120,7 +125,8 @@ class ProbeHub:
         self.subscribers = list(subscribers)
         self.final: dict[str, dict] = {}
 
-    def bind(self, view):
+    def bind(self, view) -> None:
+        """Call every probe's ``bind(view)`` once before the flight."""
         for p in list(self.probes):
             try:
                 p.bind(view)
@@ -128,6 +134,7 @@ class ProbeHub:
                 self._fail(p, 0.0, exc)
 
     def sample(self, t: float, view, *, force: bool = False) -> None:
+        """Collect the probes due at ``t`` (every probe when ``force``)."""
         nxt = self._next
         for i, p in enumerate(self.probes):
             if force or t >= nxt[i] - 1e-9:
@@ -185,6 +192,7 @@ class ProbeHub:
 
     # -- results ------------------------------------------------------------
     def kpis(self) -> dict:
+        """KPI name -> value from each probe's last sample."""
         out = {}
         for p in self.probes:
             vals = self.final.get(p.name)
@@ -199,6 +207,7 @@ class ProbeHub:
         return out
 
     def frames(self) -> dict[str, pd.DataFrame]:
+        """One DataFrame of samples per probe, indexed by simulated time."""
         out = {}
         for p in self.probes:
             ts, rows = self.samples[p.name]
