@@ -1,19 +1,27 @@
-"""Small argument validators: each raises ConfigError naming field and value."""
+"""Small argument validators: each raises ConfigError naming field and value.
+
+``value`` is typed ``Any``: it is what the user passed, checked here.
+"""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from numbers import Real
+from typing import Any, TypeVar
 
 from .errors import ConfigError, close_matches
+
+T = TypeVar("T")
 
 
 def _where(where: str) -> str:
     return f"{where}: " if where else ""
 
 
-def number(field: str, value, *, where: str = "", minimum=None, maximum=None,
-           min_inclusive=True, max_inclusive=True) -> float:
+def number(field: str, value: Any, *, where: str = "", minimum: float | None = None,
+           maximum: float | None = None, min_inclusive: bool = True,
+           max_inclusive: bool = True) -> float:
     """A finite real number within optional bounds, returned as float."""
     if isinstance(value, bool) or not isinstance(value, Real):
         raise ConfigError(f"{_where(where)}{field} = {value!r} is not a number; "
@@ -38,20 +46,26 @@ def number(field: str, value, *, where: str = "", minimum=None, maximum=None,
     return v
 
 
-def positive(field: str, value, *, where: str = "") -> float:
+def positive(field: str, value: Any, *, where: str = "") -> float:
+    """A finite number > 0, as float."""
     return number(field, value, where=where, minimum=0.0, min_inclusive=False)
 
 
-def non_negative(field: str, value, *, where: str = "") -> float:
+def non_negative(field: str, value: Any, *, where: str = "") -> float:
+    """A finite number >= 0, as float."""
     return number(field, value, where=where, minimum=0.0)
 
 
-def fraction(field: str, value, *, where: str = "", allow_zero=True, allow_one=True) -> float:
+def fraction(field: str, value: Any, *, where: str = "", allow_zero: bool = True,
+             allow_one: bool = True) -> float:
+    """A number in [0, 1] (ends excluded when not allowed), as float."""
     return number(field, value, where=where, minimum=0.0, maximum=1.0,
                   min_inclusive=allow_zero, max_inclusive=allow_one)
 
 
-def vector(field: str, value, n: int, *, where: str = "", positive_entries=False) -> tuple:
+def vector(field: str, value: Any, n: int, *, where: str = "",
+           positive_entries: bool = False) -> tuple[float, ...]:
+    """A sequence of ``n`` finite numbers (each > 0 with ``positive_entries``)."""
     try:
         items = tuple(value)
     except TypeError:
@@ -64,7 +78,8 @@ def vector(field: str, value, n: int, *, where: str = "", positive_entries=False
     return tuple(check(f"{field}[{i}]", x, where=where) for i, x in enumerate(items))
 
 
-def choice(field: str, value, allowed, *, where: str = ""):
+def choice(field: str, value: T, allowed: Collection, *, where: str = "") -> T:
+    """``value`` itself when it is one of ``allowed``."""
     if value not in allowed:
         raise ConfigError(f"{_where(where)}{field} = {value!r} is not allowed; "
                           f"allowed: {', '.join(map(repr, allowed))}"
@@ -72,7 +87,7 @@ def choice(field: str, value, allowed, *, where: str = ""):
     return value
 
 
-def area(value, *, where: str) -> tuple:
+def area(value: Any, *, where: str) -> tuple[float, float, float, float]:
     """A box ((x0, y0), (x1, y1)) of finite numbers with both sides longer than 0,
     returned as floats (x0, y0, x1, y1) in the order given."""
     try:

@@ -16,7 +16,9 @@ from __future__ import annotations
 import os
 import stat
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import IO, Any
 
 from .errors import WriteError
 
@@ -28,13 +30,13 @@ def _umask() -> int:
     return mask
 
 
-def _failed(path, exc: OSError) -> WriteError:
+def _failed(path: str | os.PathLike, exc: OSError) -> WriteError:
     err = WriteError(f"cannot write {str(path)!r}: {exc.strerror or exc}")
     err.errno = exc.errno
     return err
 
 
-def check_target(path) -> Path:
+def check_target(path: str | os.PathLike) -> Path:
     """``path`` as a Path; WriteError unless a regular file may be put there (its
     folder exists; nothing but a regular file, or a link to one, is there now)."""
     path = Path(path)
@@ -55,7 +57,8 @@ def check_target(path) -> Path:
     return path
 
 
-def atomic_write(path, write, *, text: bool = True) -> Path:
+def atomic_write(path: str | os.PathLike, write: Callable[[IO[Any]], object], *,
+                 text: bool = True) -> Path:
     """Call ``write(fh)`` on a temporary file next to ``path``, then ``os.replace`` it."""
     path = check_target(path)
     try:
@@ -80,7 +83,7 @@ def atomic_write(path, write, *, text: bool = True) -> Path:
     return path
 
 
-def replace_from(tmp, path) -> Path:
+def replace_from(tmp: str | os.PathLike, path: str | os.PathLike) -> Path:
     """Move a finished temporary file ``tmp`` over ``path`` (checked like
     ``atomic_write``); ``tmp`` is removed when that fails."""
     try:
@@ -97,7 +100,7 @@ def replace_from(tmp, path) -> Path:
     return Path(path)
 
 
-def json_depth(data, stop: int = 1 << 30) -> int:
+def json_depth(data: object, stop: int = 1 << 30) -> int:
     """How deeply lists and dicts nest in ``data`` (0 for a plain value), counted
     without recursion and not past ``stop`` + 1."""
     deepest, stack = 0, [(data, 1)]
@@ -116,7 +119,7 @@ _CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x00, 0x20), *range(0x7f, 0xa0)]}
 _CONTROL_KEEP_NL = {c: v for c, v in _CONTROL.items() if c != 0x0a}
 
 
-def printable(text, *, newlines: bool = False) -> str:
+def printable(text: object, *, newlines: bool = False) -> str:
     """``text`` with control characters (ANSI escapes, carriage returns, ...) shown as
     ``\\xNN``, safe to print on a terminal; ``newlines`` keeps line breaks."""
     return str(text).translate(_CONTROL_KEEP_NL if newlines else _CONTROL)

@@ -16,17 +16,22 @@ back through ``unpack``. Only computations whose result is a pure function of
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
+from typing import Any, TypeVar
+
+T = TypeVar("T")
 
 _STORE: ContextVar = ContextVar("pytest_flockai_memo", default=None)
 
 
-def _same(value):
+def _same(value: T) -> T:
     return value
 
 
-def recall(kind: str, inputs, compute, *, pack=None, unpack=None):
+def recall(kind: str, inputs: object, compute: Callable[[], T], *,
+           pack: Callable[[T], Any] | None = None, unpack: Callable[[Any], T] | None = None) -> T:
     """``compute()``, or what the store of this context kept for ``kind`` and ``inputs``."""
     store = _STORE.get()
     if store is None:
@@ -35,7 +40,7 @@ def recall(kind: str, inputs, compute, *, pack=None, unpack=None):
 
 
 @contextmanager
-def remembering(store):
+def remembering(store: Any) -> Iterator[Any]:
     """Use ``store`` (an object with ``recall(kind, inputs, compute, pack, unpack)``,
     or None: compute everything) inside the block."""
     token = _STORE.set(store)
@@ -45,7 +50,8 @@ def remembering(store):
         _STORE.reset(token)
 
 
-def active():
+def active() -> Any:
+    """The memo store of this context, or None."""
     return _STORE.get()
 
 

@@ -25,13 +25,19 @@ which builds its ``FlightCache`` when a flight or a memoised computation first a
 
 from __future__ import annotations
 
+import os
 import sys
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 from importlib import import_module as _import_module
+from typing import TYPE_CHECKING, Any
 
 from .. import memo as _memo
 from ..errors import ConfigError
+
+if TYPE_CHECKING:      # loaded on first use (see _LAZY)
+    from .store import FlightCache, Lookup
 
 MODES = ("off", "read", "write", "readwrite", "verify")
 #: the share of hits ``verify`` flies again unless told
@@ -51,31 +57,33 @@ class Deferred:
     (its store, NumPy and pandas loaded) when a flight or a memoised computation of
     the context first asks; a context that asks nothing loads nothing."""
 
-    def __init__(self, directory, mode: str = "readwrite", **options):
+    def __init__(self, directory: str | os.PathLike, mode: str = "readwrite",
+                 **options: Any) -> None:
         if mode not in MODES:
             raise ConfigError(f"FlightCache: mode = {mode!r} is not allowed; allowed: "
                               f"{', '.join(MODES)}")
         self.directory, self.mode, self.options = directory, mode, options
-        self._cache = None
+        self._cache: FlightCache | None = None
 
-    def open(self):
+    def open(self) -> FlightCache:
         """The ``FlightCache`` (built on the first call, with the options given)."""
         if self._cache is None:
             self._cache = __getattr__("FlightCache")(self.directory, self.mode, **self.options)
         return self._cache
 
-    def recall(self, kind, inputs, compute, pack, unpack):
+    def recall(self, kind: str, inputs: object, compute: Callable[[], Any],
+               pack: Callable[[Any], Any], unpack: Callable[[Any], Any]) -> Any:
         """The memo store's ``recall`` (``pytest_flockai.memo``), through the opened cache."""
         return self.open().memo.recall(kind, inputs, compute, pack, unpack)
 
 
-def _is_flight_cache(cache) -> bool:
+def _is_flight_cache(cache: object) -> bool:
     store = sys.modules.get(f"{__name__}.store")      # never loaded: no FlightCache exists
     return store is not None and isinstance(cache, store.FlightCache)
 
 
 @contextmanager
-def caching(cache):
+def caching(cache: FlightCache | Deferred | None) -> Iterator[FlightCache | Deferred | None]:
     """Use ``cache`` (a ``FlightCache``, a ``Deferred`` one, or None: no cache) for
     every ``Mission.run()`` and ``Fleet.run()`` inside the block, and its memo store
     for the memoised computations (``pytest_flockai.memo``: rendered views,
@@ -92,13 +100,13 @@ def caching(cache):
         _ACTIVE.reset(token)
 
 
-def active():
+def active() -> FlightCache | None:
     """The ``FlightCache`` of this context (a deferred one opened now), or None."""
     cache = _ACTIVE.get()
     return cache.open() if isinstance(cache, Deferred) else cache
 
 
-def lookup(mission, result_type=None):
+def lookup(mission: object, result_type: type | None = None) -> Lookup | None:
     """The current cache's answer for ``mission`` (None when no cache is open); a
     ``Fleet`` passes its ``result_type`` (FleetResult)."""
     cache = active()

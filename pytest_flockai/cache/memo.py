@@ -10,7 +10,9 @@ rewritten. ``counts`` says what happened, per status.
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -19,20 +21,27 @@ from . import disk as _disk
 from . import key as _key
 from .entry import read_entry, seal, unseal
 
+if TYPE_CHECKING:
+    from .store import FlightCache
+
 MAGIC = b"pytest-flockai-memo/1\n"
 
 
 class MemoStore:
     """``recall`` for ``pytest_flockai.memo``, kept in ``cache``'s directory and mode."""
 
-    def __init__(self, cache):
+    def __init__(self, cache: FlightCache) -> None:
         self.cache = cache
         self.counts: Counter = Counter()
 
     def path(self, key: str) -> Path:
+        """The file of the entry ``key``."""
         return self.cache.directory / "memo" / key[:2] / f"{key}.memo"
 
-    def recall(self, kind: str, inputs, compute, pack, unpack):
+    def recall(self, kind: str, inputs: object, compute: Callable[[], Any],
+               pack: Callable[[Any], Any], unpack: Callable[[Any], Any]) -> Any:
+        """``compute()``, or the value kept for ``kind`` and ``inputs`` (then counted
+        as a hit); a fresh value is stored when the cache's mode writes."""
         cache = self.cache
         if cache.mode == "off":
             return compute()

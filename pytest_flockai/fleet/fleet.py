@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time as _time
+from typing import cast
 
 from .. import _check
 from .. import cache as _cache
@@ -158,7 +159,7 @@ class Fleet:
         found = _cache.lookup(self, result.FleetResult)     # the flight cache, if one is open
         if found is not None and found.result is not None:
             publish(found.result, self)
-            return found.result
+            return cast(result.FleetResult, found.result)    # decoded as the type asked for
         wall0 = _time.perf_counter()
         plans = self._plans()
         flight = Flight(plans, self.missions, [fd.name for fd in self.drones],
