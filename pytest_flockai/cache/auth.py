@@ -50,7 +50,7 @@ class CacheKey:
             h.update(p)
         return h.hexdigest()
 
-    def verify(self, mac, *parts: bytes) -> bool:
+    def verify(self, mac: object, *parts: bytes) -> bool:
         """True when ``mac`` is this key's HMAC of ``parts`` (constant-time compare)."""
         return isinstance(mac, str) and hmac.compare_digest(mac, self.mac(*parts))
 
@@ -67,7 +67,7 @@ def key_file() -> Path:
     return Path(base) / "pytest-flockai" / "cache-key"
 
 
-def from_secret(secret) -> CacheKey:
+def from_secret(secret: object) -> CacheKey:
     """A key given in code (``FlightCache(dir, key=b"...")``)."""
     if isinstance(secret, CacheKey):
         return secret

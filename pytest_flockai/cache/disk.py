@@ -24,12 +24,14 @@ _SUFFIXES = (".flight", ".memo")
 
 @dataclass
 class Entry:
+    """One entry file: its path, size (bytes) and last use (mtime, s)."""
+
     path: Path
     size: int
     mtime: float
 
 
-def scan(directory) -> list[Entry]:
+def scan(directory: str | os.PathLike) -> list[Entry]:
     """Every entry file under ``directory`` (flights in ``xx/``, memo values in
     ``memo/xx/``), oldest use first."""
     out: list[Entry] = []
@@ -88,7 +90,7 @@ def touch(path: Path) -> None:
         pass
 
 
-def prune(directory, max_bytes: int, *, older_than_s: float | None = None,
+def prune(directory: str | os.PathLike, max_bytes: int, *, older_than_s: float | None = None,
           low_water: float = LOW_WATER) -> tuple[int, int]:
     """Remove entries unused for ``older_than_s``, then the least recently used until
     the folder holds at most ``low_water * max_bytes`` (nothing when it holds at most
@@ -113,7 +115,7 @@ def prune(directory, max_bytes: int, *, older_than_s: float | None = None,
     return removed, freed
 
 
-def info(directory) -> dict:
+def info(directory: str | os.PathLike) -> dict:
     """Entries, bytes, and the oldest and newest use, of a cache folder."""
     found = scan(directory)
     flights = [e for e in found if e.path.suffix == ".flight"]

@@ -67,7 +67,8 @@ def read_entry(p: Path) -> bytes | None:
     return data
 
 
-def seal(key: str, arrays: dict, header, secret: CacheKey, magic: bytes = MAGIC) -> bytes:
+def seal(key: str, arrays: dict, header: object, secret: CacheKey,
+         magic: bytes = MAGIC) -> bytes:
     """``magic``, a JSON line (key, size, SHA-256 and HMAC of the payload), the payload:
     an .npz of ``arrays`` and ``header`` (JSON)."""
     arrays = dict(arrays)

@@ -41,8 +41,11 @@ import textwrap
 import types
 from importlib import metadata
 from pathlib import Path, PurePath
+from typing import Any, TypeVar
 
 import numpy as np
+
+T = TypeVar("T")
 
 _PKG = "pytest_flockai"
 _PKG_DIR = Path(__file__).resolve().parent.parent
@@ -95,7 +98,7 @@ def source_hash() -> str:
     return h.hexdigest()
 
 
-def flight_key(mission, env: dict | None = None) -> str:
+def flight_key(mission: object, env: dict | None = None) -> str:
     """The hex key of ``mission`` (a Mission, or a Fleet: its drones' missions and
     its own settings); raises Uncacheable when it cannot be keyed."""
     for m in getattr(mission, "missions", None) or [mission]:
@@ -112,7 +115,7 @@ def flight_key(mission, env: dict | None = None) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def memo_key(kind: str, inputs, env: dict | None = None) -> str:
+def memo_key(kind: str, inputs: object, env: dict | None = None) -> str:
     """The hex key of a memoised computation (``pytest_flockai.memo``): its kind, its
     inputs walked as a flight's are, and the environment; raises Uncacheable."""
     doc = {"memo": kind, "inputs": _Walker().walk(inputs, kind),
@@ -130,7 +133,7 @@ def _file_digest(path: str, mtime_ns: int, size: int) -> str:
     return h.hexdigest()
 
 
-def file_digest(path) -> str:
+def file_digest(path: str | os.PathLike) -> str:
     """SHA-256 of a file's bytes (memoised on its mtime and size)."""
     st = os.stat(path)
     return _file_digest(os.fspath(path), st.st_mtime_ns, st.st_size)
@@ -162,12 +165,13 @@ def _defining_file(obj, where: str) -> str:
     return file_digest(fname)
 
 
-def cacheable(obj):
+def cacheable(obj: T) -> T:
     """Mark your function or class as safe to cache: its flights depend only on its
     code (the file that defines it is keyed), its state and its closure, and the
     test observes nothing it does besides what the flight returns. Returns ``obj``
     (use it as a decorator, or around a lambda)."""
-    obj.__flockai_cacheable__ = True
+    marked: Any = obj               # a function, a class or an instance: any object
+    marked.__flockai_cacheable__ = True
     return obj
 
 

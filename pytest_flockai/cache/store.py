@@ -25,6 +25,7 @@ again and compared with the entry; a mismatch raises ``CacheMismatch``.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import threading
 import warnings
@@ -93,8 +94,9 @@ class Lookup:
 class FlightCache:
     """Completed flights under ``directory``, keyed by ``key.flight_key``."""
 
-    def __init__(self, directory, mode: str = "readwrite", *, key=None,
-                 max_bytes: int | None = None, verify_fraction: float = VERIFY_FRACTION):
+    def __init__(self, directory: str | os.PathLike, mode: str = "readwrite", *,
+                 key: bytes | str | _auth.CacheKey | None = None, max_bytes: int | None = None,
+                 verify_fraction: float = VERIFY_FRACTION) -> None:
         if mode not in MODES:
             raise ConfigError(f"flight cache: mode = {mode!r} is not allowed; allowed: "
                               f"{', '.join(MODES)}")
@@ -114,14 +116,16 @@ class FlightCache:
         self._usage: int | None = None              # bytes on disk, as last counted
         self.write_error: str | None = None        # set once a write failed (warned once)
         self._lock = threading.Lock()               # guards write_error only, never a flight
-        self._memo = None
+        self._memo: _memo_store.MemoStore | None = None
 
     @property
     def reads(self) -> bool:
+        """Whether this mode reads entries."""
         return self.mode in ("read", "readwrite", "verify")
 
     @property
     def writes(self) -> bool:
+        """Whether this mode writes entries (and no write has failed yet)."""
         return self.mode in ("write", "readwrite", "verify") and self.write_error is None
 
     @property
@@ -134,13 +138,14 @@ class FlightCache:
         return self.mode == "verify" and int(key[:8], 16) < self.verify_fraction * 2**32
 
     @property
-    def memo(self):
+    def memo(self) -> _memo_store.MemoStore:
         """The memo store beside the flights (``pytest_flockai.cache.memo``)."""
         if self._memo is None:
             self._memo = _memo_store.MemoStore(self)
         return self._memo
 
     def path(self, key: str) -> Path:
+        """The file of the entry ``key``."""
         return self.directory / key[:2] / f"{key}.flight"
 
     def clear(self) -> None:
@@ -148,7 +153,7 @@ class FlightCache:
         shutil.rmtree(self.directory, ignore_errors=True)
 
     # -- lookups --------------------------------------------------------------------------
-    def lookup(self, mission, result_type=FlightResult) -> Lookup:
+    def lookup(self, mission: object, result_type: type[FlightResult] = FlightResult) -> Lookup:
         """The cached result of ``mission`` (a Mission, or a Fleet with ``result_type``
         FleetResult) with status "hit", or a Lookup to store it with."""
         if self.mode == "off":
@@ -169,7 +174,8 @@ class FlightCache:
                 return Lookup("hit", key, result=res, cache=self)
         return Lookup("flown", key, cache=self)
 
-    def get(self, key: str, result_type=FlightResult) -> FlightResult | None:
+    def get(self, key: str,
+            result_type: type[FlightResult] = FlightResult) -> FlightResult | None:
         """The entry of ``key``, None when there is none; CorruptEntry when it is unusable
         (``NotAuthentic`` when it was not sealed with this cache's key)."""
         p = self.path(key)
@@ -213,7 +219,8 @@ class FlightCache:
         return {**_disk.info(self.directory), "limit_bytes": self.limit,
                 "key_source": self.key.source}
 
-    def prune(self, max_bytes: int | None = None, older_than_s: float | None = None):
+    def prune(self, max_bytes: int | None = None,
+              older_than_s: float | None = None) -> tuple[int, int]:
         """Evict down to ``max_bytes`` (default: the limit) and entries unused for
         ``older_than_s``; returns (entries removed, bytes freed)."""
         with self._lock:
@@ -254,7 +261,7 @@ def _same(a, b) -> bool:
     return a == b
 
 
-def encode(key: str, result: FlightResult, secret=None) -> bytes:
+def encode(key: str, result: FlightResult, secret: _auth.CacheKey | None = None) -> bytes:
     """A flight's entry; a fleet's (a result with ``drones``) holds each drone's too."""
     arrays: dict = {}
     header = _arrays(result, "", arrays)
@@ -265,7 +272,11 @@ def encode(key: str, result: FlightResult, secret=None) -> bytes:
     return seal(key, arrays, header, secret or _auth.default_key())
 
 
-def decode(data: bytes, key: str, result_type=FlightResult, secret=None) -> FlightResult:
+def decode(data: bytes, key: str, result_type: type[FlightResult] = FlightResult,
+           secret: _auth.CacheKey | None = None) -> FlightResult:
+    """The result sealed in an entry (``result_type``: FleetResult for a fleet's,
+    with each drone's result in ``drones``); ``NotAuthentic`` or ``ValueError`` when
+    it cannot be used."""
     header, arrays = unseal(data, key, secret or _auth.default_key())
     try:
         out: Any = _result(header, "", arrays, result_type)   # a FleetResult with drones
@@ -325,7 +336,7 @@ def _arrays(r: FlightResult, prefix: str, arrays: dict) -> dict:
     return header
 
 
-def _result(h: dict, prefix: str, arrays: dict, result_type) -> FlightResult:
+def _result(h: dict, prefix: str, arrays: dict, result_type: type[FlightResult]) -> FlightResult:
     samples = {p["name"]: _frame(p, f"{prefix}p{j}_", arrays) for j, p in enumerate(h["probes"])}
     out = result_type(h["kpis"], _frame(h["telemetry"], f"{prefix}t_", arrays), h["events"],
                       h["scenario"], h["energy_breakdown"], h["end_reason"], h["wall_time_s"],
@@ -335,7 +346,7 @@ def _result(h: dict, prefix: str, arrays: dict, result_type) -> FlightResult:
     return out
 
 
-def entries(directory) -> list[Path]:
+def entries(directory: str | os.PathLike) -> list[Path]:
     """The entry files under a cache directory."""
     d = Path(directory)
     return sorted(d.glob("*/*.flight")) if d.is_dir() else []
