@@ -56,7 +56,9 @@ MAX_DETS = (10, 100, 1000)
 class FrameRecord:
     """One frame a task scored: its truth objects, what the model found (None:
     the inference failed or the frame was dropped), the drone's altitude and the
-    frame size; ``prediction`` is the raw model output (custom evaluators)."""
+    frame size; ``prediction`` is the raw model output (custom evaluators);
+    ``file``: the replayed image (None: rendered); ``blur_px``: the frame's motion
+    blur length; ``t``: the capture time."""
 
     index: int
     truth: object                  # world.truth.Objects
@@ -65,6 +67,9 @@ class FrameRecord:
     width: int
     height: int
     prediction: object = None
+    file: str | None = None
+    blur_px: float = 0.0
+    t: float = math.nan
 
 
 def _band(lo, hi, unit):

@@ -130,6 +130,12 @@ class TaskRunner:
     def due(self, t: float) -> bool:
         return t >= self._next_frame_t - 1e-9
 
+    def skip(self, t: float) -> None:
+        """No frame at t (a replay is over): wait for the next sample time, no inference."""
+        if t >= self._next_frame_t - 1e-9:
+            k = math.floor((t - self._t0) / self.task.period_s + 1e-9)
+            self._next_frame_t = self._t0 + (k + 1) * self.task.period_s
+
     def on_frame(self, t: float, frame, truth=None, drone_pos=(0.0, 0.0, 0.0)) -> None:
         """A frame from the task's sensor at time t. Frames before ``next_frame_t``
         are ignored, so the loop may pass every sensor frame."""
@@ -141,7 +147,7 @@ class TaskRunner:
         self._next_frame_t = self._t0 + (k + 1) * task.period_s
         idx = self.frames
         self.frames += 1
-        tc = self.scorer.frame(idx, frame, truth, drone_pos)
+        tc = self.scorer.frame(idx, frame, truth, drone_pos, t)
         if self._free_at > t + 1e-12:      # this task's model is still busy
             if task.on_busy == "drop":
                 self.frames_dropped += 1

@@ -47,6 +47,9 @@ class DatasetRecorder:
     def due(self, t: float) -> bool:
         return t >= self.next_frame_t - CLOCK_EPS
 
+    def skip(self, t: float) -> None:
+        self.on_frame(t, None, None, None)
+
     def on_frame(self, t, frame, truth, pos):
         if frame is not None:
             self.records.append((t, frame, truth))
@@ -89,6 +92,9 @@ class TaskScheduler(Clocked):
                 cache[name] = self._read(name, t)
                 self.capture_pos[round(t, 6)] = pos
             value, truth = cache[name]
+            if value is None and getattr(self.suite[name], "ended", False):
+                c.skip(t)           # a replay without loop is over: no frame, no inference
+                continue
             c.on_frame(t, value, truth, pos)
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
 
