@@ -7,7 +7,10 @@
 - ``Task`` and ``TaskRunner``: what runs where, executed on the simulated clock;
 - ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
   into one shape; ``evaluation``: COCO detection metrics and classification;
-- ``count_macs``: MACs and parameters of an ONNX graph.
+- ``count_macs``: MACs and parameters of an ONNX graph;
+- ``evaluate_dataset``: a task's model over a labelled folder, each image once,
+  offline; ``analyse``: PR curves, per-class AP, confusion matrix, F1-best
+  threshold from COCOeval's arrays.
 """
 
 from .macs import MacReport, count_macs
@@ -15,12 +18,15 @@ from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord
+from .analysis import analyse, write_coco_pair
+from .dataset_eval import DatasetEvaluation, evaluate_dataset
 from .jpeg import decode_jpeg, encode_jpeg
 from .runner import DeviceClock, InferenceEvent, TaskRunner
 from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
-__all__ = ["Classifier", "Clusterer", "Counter", "Detections", "Detector", "DeviceClock",
+__all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detections", "Detector",
+           "DeviceClock", "analyse", "evaluate_dataset", "write_coco_pair",
            "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
            "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]

@@ -116,9 +116,11 @@ class Scorer:
         recs = [self.records[k] for k in sorted(self.records)
                 if self.records[k].prediction is not None or self.records[k].detections is not None]
         if callable(t.evaluate):
-            return {str(k): float(v) for k, v in (t.evaluate(recs) or {}).items()}
-        if t.evaluate == "detection":
-            return detection_kpis(recs, t.classes, score_threshold=t.score_threshold,
-                                  min_visible=t.min_visible)
-        return classification_kpis(recs, t.classes, score_threshold=t.score_threshold,
-                                   min_visible=t.min_visible, where=f"task {t.name!r}")
+            out = {str(k): float(v) for k, v in (t.evaluate(recs) or {}).items()}
+        elif t.evaluate == "detection":
+            out = detection_kpis(recs, t.classes, score_threshold=t.score_threshold,
+                                 min_visible=t.min_visible)
+        else:
+            out = classification_kpis(recs, t.classes, score_threshold=t.score_threshold,
+                                      min_visible=t.min_visible, where=f"task {t.name!r}")
+        return {**out, "images_scored": float(len(recs))} if recs else out

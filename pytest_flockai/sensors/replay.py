@@ -2,11 +2,11 @@
 
 ``ReplayCamera(path, rate_hz=1.0, loop=True)`` has the camera's interface
 (``read(t, data) -> frame``, ``last_frame``, ``last_truth``, ``on_demand``):
-frame k of the recording is the one shown for simulated times
-``t_start + k / rate_hz <= t < t_start + (k + 1) / rate_hz`` (the stated rate,
-whatever the video's own frame rate), where ``t_start`` is the first read: the
-first tick of the task that reads it, so the first image is the first one a task
-scores, whenever the task starts (after take-off). A task with
+the recording starts at the first read (``t_start``: the first tick of the task
+that reads it, whenever the task starts after take-off): frame 0 is shown from
+then until the next whole frame period of the mission clock (``j / rate_hz``),
+frame k for the k-th period after it (the stated rate, whatever the video's own
+frame rate). A task with
 ``period_s = 1 / rate_hz`` and ``loop=False`` scores every image exactly once, and
 after the last one the task stops taking frames (no inference, no failure). With ``loop`` the recording starts again after its
 last frame; without, ``read`` returns None after the end (``ended`` is True).
@@ -82,7 +82,7 @@ class ReplayCamera(Sensor):
             cap.release()
             self.n_frames = n if n > 0 else None     # unknown: found at the end
         else:
-            raise ConfigError(f"{w}: path = {p!r}: no such folder, data.yaml or video file")
+            raise ConfigError(f"{w}: path = {p!r}: no such folder or video file (nor an Ultralytics data.yaml)")
         if self.width <= 0 or self.height <= 0:
             raise ConfigError(f"{w}: path = {p!r} has resolution {self.width}x{self.height}; "
                               f"expected width and height > 0")
@@ -118,11 +118,10 @@ class ReplayCamera(Sensor):
         self.t_start = None
 
     def frame_index(self, t: float) -> int | None:
-        """Index of the recording's frame shown at time t (None: after the end, no loop).
-        The recording starts at the first read (``t_start``: the first tick of the task
-        that reads it), so a task that starts after take-off sees frame 0 first."""
-        t0 = self.t_start if self.t_start is not None else 0.0
-        k = int(math.floor((t - t0) * self.rate_hz + FRAME_TOL))
+        """Index of the recording's frame shown at time t (None: after the end, no
+        loop); frame 0 at the first read (see the module docstring)."""
+        k0 = 0 if self.t_start is None else math.floor(self.t_start * self.rate_hz + FRAME_TOL)
+        k = int(math.floor(t * self.rate_hz + FRAME_TOL)) - k0
         k = max(k, 0)
         n = self.n_frames
         if n is None:
