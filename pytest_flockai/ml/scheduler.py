@@ -74,7 +74,7 @@ class TaskScheduler(Clocked):
         self.consumers = self.runners + ([recorder] if recorder is not None else [])
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
         self.cpu_time_s = 0.0
-        self.in_view: list = []          # (t, people in view) at every frame read
+        self.in_view: list = []          # (t, people in view, blur px) at every frame read
         self.capture_pos: dict = {}      # t -> drone (x, y, z) at captures
 
     def step(self, t: float) -> None:
@@ -104,7 +104,8 @@ class TaskScheduler(Clocked):
         value = self.suite.read(name, t, self.data)
         truth = getattr(self.suite[name], "last_truth", None)
         if truth is not None:
-            self.in_view.append((t, truth.count))
+            du, dv = getattr(truth, "blur_px", (0.0, 0.0))
+            self.in_view.append((t, truth.count, math.hypot(du, dv)))
         return value, truth
 
     def take_usage(self, t: float):
@@ -149,7 +150,9 @@ class TaskScheduler(Clocked):
         return out
 
     def inference_events(self) -> list[dict]:
-        """Every inference as an event dict, with the drone's position at capture."""
+        """Every inference as an event dict, with the drone's position and the frame's
+        motion blur length (``blur_px``) at capture."""
+        self._blur = {round(t, 6): b for t, _, b in self.in_view}
         out = []
         for r in self.runners:
             thr = r.task.crowd_threshold
@@ -159,6 +162,9 @@ class TaskScheduler(Clocked):
                 pos = self.capture_pos.get(round(float(e.t_capture), 6))
                 if pos is not None:
                     d["x"], d["y"], d["z"] = pos
+                blur = self._blur.get(round(float(e.t_capture), 6))
+                if blur is not None:
+                    d["blur_px"] = blur
                 d["detected"] = bool(e.ok and e.count is not None and e.count >= thr)
                 out.append(d)
         return out

@@ -32,7 +32,9 @@ import numpy as np
 from ..errors import ConfigError
 from ..world.truth import Objects, Truth
 from .annotations import load_annotations, orphan_labels
-from .base import Sensor
+from . import replay_conditions as _conditions
+from .. import _check
+from .base import DroneBody, Sensor
 from .classnames import person_index
 from .labelsets import IMAGE_EXT, find_labelset
 
@@ -45,10 +47,14 @@ class ReplayCamera(Sensor):
     on_demand = True
 
     def __init__(self, path, rate_hz: float = 1.0, loop: bool = True, *, name: str = "camera",
-                 power_w: float = 0.9, annotations="auto", classes=None, split=None):
+                 power_w: float = 0.9, annotations="auto", classes=None, split=None,
+                 conditions=None, fov_deg: float = 51.0, body_name: str = "drone"):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w)
         self._cv2 = cv2
         w = f"ReplayCamera {name!r}"
+        self.conditions = _conditions.check(conditions, w)
+        self.fov_deg = _check.number("fov_deg", fov_deg, where=w, minimum=1.0, maximum=179.0)
+        self.body_name, self._body = body_name, None
         p = os.fspath(path)
         self.path, self.loop = p, bool(loop)
         self.files = None
@@ -90,6 +96,7 @@ class ReplayCamera(Sensor):
         self.frames = 0
         self.ended = False
         self.t_start = None     # the first read: the recording's frame 0
+        self.last_blur_px = (0.0, 0.0)
         self._k = -1            # index of the cached frame
         self._pos = 0           # next frame the video capture will decode
 
@@ -112,6 +119,8 @@ class ReplayCamera(Sensor):
 
     def bind(self, model, data, rng):
         super().bind(model, data, rng)
+        if self.conditions is not None and model is not None:
+            self._body = DroneBody(model, self.body_name, f"ReplayCamera {self.name!r}").id
         self.last_frame = self.last_truth = self.last_t = self.last_file = None
         self.frames = 0
         self.ended = False
@@ -147,11 +156,14 @@ class ReplayCamera(Sensor):
             self.ended = True
             self.last_frame, self.last_t, self.last_truth = None, float(t), None
             return None
-        self.last_frame, self.last_t = frame, float(t)
-        self.last_file = self.files[k] if self.files is not None else None
         self.last_truth = None
         if self._truth is not None and k < len(self._truth):
             self.last_truth = self._truth[k]
+        if self.conditions is not None and self._body is not None and data is not None:
+            frame, self.last_blur_px = _conditions.condition(
+                frame, self.conditions, self.rng, data, self._body, self.fov_deg, self.last_truth)
+        self.last_frame, self.last_t = frame, float(t)
+        self.last_file = self.files[k] if self.files is not None else None
         self.frames += 1
         return frame
 
@@ -200,7 +212,9 @@ class ReplayCamera(Sensor):
 
     def to_dict(self):
         return {**super().to_dict(), "path": self.path, "loop": self.loop,
-                "frames": self.n_frames, "width": self.width, "height": self.height}
+                "frames": self.n_frames, "width": self.width, "height": self.height,
+                **({"conditions": self.conditions.to_dict(), "fov_deg": self.fov_deg}
+                   if self.conditions is not None else {})}
 
     def __repr__(self):
         return f"ReplayCamera({self.path!r}, rate_hz={self.rate_hz:g}, loop={self.loop})"
@@ -228,7 +242,8 @@ def _load_truth(path, where):
             rows = json.load(f)["frames"]
         return [Truth(float(r.get("t", 0.0)), np.array(r["indices"], dtype=int),
                       np.array(r["pixels"], dtype=float).reshape(-1, 2),
-                      np.array(r.get("cam_pos", (np.nan,) * 3), dtype=float)) for r in rows]
+                      np.array(r.get("cam_pos", (np.nan,) * 3), dtype=float),
+                      blur_px=tuple(r.get("blur_px", (0.0, 0.0)))) for r in rows]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise ConfigError(f"{where}: {path!r} is not a truth file written by export_dataset: "
                           f"{exc}") from None
