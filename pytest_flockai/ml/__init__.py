@@ -10,7 +10,8 @@
 - ``count_macs``: MACs and parameters of an ONNX graph;
 - ``evaluate_dataset``: a task's model over a labelled folder, each image once,
   offline; ``analyse``: PR curves, per-class AP, confusion matrix, F1-best
-  threshold from COCOeval's arrays.
+  threshold from COCOeval's arrays;
+- ``shipped("detector")``: the models shipped in the package.
 """
 
 from .macs import MacReport, count_macs
@@ -20,13 +21,15 @@ from .detections import Detections, parse_detections
 from .evaluation import FrameRecord
 from .analysis import analyse, write_coco_pair
 from .dataset_eval import DatasetEvaluation, evaluate_dataset
+from .shipped import SHIPPED, shipped, shipped_path
 from .jpeg import decode_jpeg, encode_jpeg
 from .runner import DeviceClock, InferenceEvent, TaskRunner
 from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
 __all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detections", "Detector",
-           "DeviceClock", "analyse", "evaluate_dataset", "write_coco_pair",
+           "DeviceClock", "SHIPPED", "analyse", "evaluate_dataset", "shipped", "shipped_path",
+           "write_coco_pair",
            "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
            "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]
