@@ -19,6 +19,7 @@ from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import PILOT, RETURN
 from .metrics import percentile
 from .runner import DeviceClock, TaskRunner
+from .task_energy import task_energy_kpis
 
 #: MB: estimate of Raspberry Pi OS Lite + flight software resident set
 OS_MEMORY_MB = 250.0
@@ -76,6 +77,8 @@ class TaskScheduler(Clocked):
         self.cpu_time_s = 0.0
         self.in_view: list = []          # (t, people in view, blur px) at every frame read
         self.capture_pos: dict = {}      # t -> drone (x, y, z) at captures
+        #: per task: [busy s, tx bytes, tx packets, rx bytes, rx packets] charged to the energy
+        self.charged = [[0.0, 0, 0, 0, 0] for _ in self.runners]
 
     def step(self, t: float) -> None:
         stage = self.st.stage
@@ -113,9 +116,15 @@ class TaskScheduler(Clocked):
         since the last call, after advancing each task to t."""
         busy = 0.0
         tb = tp = rb = rp = 0
-        for r in self.runners:
+        for r, ch in zip(self.runners, self.charged):
             r.advance(t)
             b, a1, a2, a3, a4 = r.take_usage()
+            if b or a1 or a3:
+                ch[0] += b
+                ch[1] += a1
+                ch[2] += a2
+                ch[3] += a3
+                ch[4] += a4
             busy += b
             tb += a1
             tp += a2
@@ -137,6 +146,12 @@ class TaskScheduler(Clocked):
                 "frames_dropped": sum(k["frames_dropped"] for k in by.values()),
                 "inference_failures": sum(k["inference_failures"] for k in by.values())}
         return comb, by
+
+    def energy_kpis(self, meter) -> dict:
+        """``<task>.energy_j`` and its parts, and ``energy_untasked_j`` (``task_energy``)."""
+        if not self.runners:
+            return {}
+        return task_energy_kpis([r.task.name for r in self.runners], self.charged, meter)
 
     def evaluation_kpis(self) -> dict:
         """The accuracy KPIs of the detection, classification and custom tasks, as
