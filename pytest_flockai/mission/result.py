@@ -39,6 +39,7 @@ def build(run, mission, wall_s: float, t_final: float, end_reason: str) -> Fligh
         export_dataset(sched.recorder.records, plan.dataset_dir)
     res = FlightResult(kpis, tel, events, scen, run.meter.breakdown(), end_reason, wall_s,
                        probe_samples=frames, probe_errors=list(run.hub.errors))
+    res.ml_gallery = sched.galleries()          # the detection tasks' worst frames, drawn
     w = plan.world
     res.people = np.asarray(w.people) if w is not None and hasattr(w, "people") else np.zeros((0, 3))
     return res

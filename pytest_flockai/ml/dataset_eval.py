@@ -23,6 +23,7 @@ from ..errors import ConfigError
 from ..sensors.replay import ReplayCamera
 from .analysis import analyse, write_coco_pair
 from .events import InferenceEvent
+from .gallery import worst_frames
 from .metrics import invalid_prediction
 from .scoring import Scorer
 from .task import Task
@@ -39,6 +40,10 @@ class DatasetEvaluation:
         """PR curves, per-class AP, confusion matrix and F1-best threshold (``ml.analysis``)."""
         return analyse(self.records, self.task.classes, min_visible=self.task.min_visible,
                        score_threshold=self.task.score_threshold)
+
+    def gallery(self, n: int = 6) -> list:
+        """The ``n`` images with the most mistakes, drawn (``ml.gallery.worst_frames``)."""
+        return worst_frames(self.records, self.task, n)
 
     def write_results(self, folder) -> dict:
         """``<task>.truth.json`` and ``<task>.results.json`` (COCO ground truth and

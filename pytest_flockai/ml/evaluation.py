@@ -71,6 +71,7 @@ class FrameRecord:
     file: str | None = None
     blur_px: float = 0.0
     t: float = math.nan
+    image: bytes | None = None       # a rendered frame as JPEG (the gallery draws it)
 
 
 def _band(lo, hi, unit):

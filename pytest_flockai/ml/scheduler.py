@@ -19,8 +19,11 @@ from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import PILOT, RETURN
 from .metrics import percentile
 from .runner import DeviceClock, TaskRunner
+from .gallery import worst_frames
 from .task_energy import task_energy_kpis
 
+#: frames a detection task's gallery shows
+GALLERY_FRAMES = 6
 #: MB: estimate of Raspberry Pi OS Lite + flight software resident set
 OS_MEMORY_MB = 250.0
 
@@ -152,6 +155,11 @@ class TaskScheduler(Clocked):
         if not self.runners:
             return {}
         return task_energy_kpis([r.task.name for r in self.runners], self.charged, meter)
+
+    def galleries(self, n: int = GALLERY_FRAMES) -> dict:
+        """{task: its worst frames drawn (``gallery.worst_frames``)} of the detection tasks."""
+        return {r.task.name: worst_frames(r.scorer.records.values(), r.task, n)
+                for r in self.runners if r.task.evaluate == "detection" and r.scorer.records}
 
     def evaluation_kpis(self) -> dict:
         """The accuracy KPIs of the detection, classification and custom tasks, as

@@ -19,7 +19,12 @@ from ..errors import ConfigError
 from ..sensors.classnames import to_task_classes
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord, classification_kpis, detection_kpis
+from .jpeg import encode_jpeg, is_image
 from .metrics import crowd_metrics, truth_count
+
+
+#: JPEG quality of the rendered frames a detection task keeps for its gallery
+GALLERY_JPEG_QUALITY = 85
 
 
 class Scorer:
@@ -47,6 +52,8 @@ class Scorer:
                                             int(shape[0]) if len(shape) else 0,
                                             file=getattr(truth, "file", None),
                                             blur_px=float(np.hypot(*blur)), t=float(t))
+            if tk.evaluate == "detection" and self.records[idx].file is None and is_image(frame):
+                self.records[idx].image = encode_jpeg(frame, GALLERY_JPEG_QUALITY)
         return tc
 
     def count(self, pred, idx, frame):
