@@ -57,7 +57,7 @@ def test_the_worst_frames_are_in_the_dashboard_with_boxes_on_the_right_objects(p
     dom = _browser("--dump-dom", out.resolve().as_uri())
     assert dom.returncode == 0, dom.stderr[-2000:]
     figs = re.findall(r'<figure id="pic-\w+" class="ml-frame" data-task="det" data-frame="(\d+)" '
-                      r'data-file="(f\d\d\.png)" data-scale="2"><img [^>]*src="data:image/png;'
+                      r'data-file="(f\d\d\.png)" data-scale="3"><img [^>]*src="data:image/png;'
                       r'base64,([^"]+)"', dom.stdout)
     assert len(figs) == 6                                     # the gallery's six worst frames
     assert "missed" in dom.stdout and "false positive" in dom.stdout
