@@ -122,3 +122,19 @@ def test_an_onnx_detector_built_with_onnx_helper_is_perfect_on_a_data_yaml_set(t
     k = fa.Mission(d, fa.pilots.Hover(10, 50), tasks=[task]).run().kpis
     assert k["images_scored"] == 40 and k["inference_failures"] == 0
     assert k["map50"] == pytest.approx(1.0) and k["recall"] == 1.0
+
+
+def test_a_model_comparison_puts_accuracy_next_to_latency_energy_and_endurance(tmp_path):
+    """The paper's Q4: the grid ONNX detector and a far costlier stand-in on the same frames."""
+    path, sc = make_set(tmp_path / "set", "yolo-images-labels", n=10)
+    grid = fa.ml.OnnxModel(_grid_detector(tmp_path / "grid.onnx"), name="grid")
+    costly = PythonModel(perfect_model(sc, keep=lambda i, k: k != 2), macs=3e9, name="costly")
+    hover = fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(10, 5)).run()
+    df = fa.ml.compare_models({"grid": grid, "costly": costly}, path, flight=hover,
+                              device="raspberry-pi-4", period_s=1.0, decode="auto")
+    g, c = (df.set_index("model").loc[n] for n in ("grid", "costly"))
+    assert g["map50"] == pytest.approx(1.0) and g["images_scored"] == c["images_scored"] == 10
+    assert c["recall"] == pytest.approx(2 / 3)                 # it never finds the vehicle
+    assert g["macs"] < 1e7 < c["macs"] and g["latency_s"] < c["latency_s"]
+    assert g["energy_per_inference_j"] < c["energy_per_inference_j"]
+    assert hover.kpis["endurance_s"] > g["endurance_s"] > c["endurance_s"]
