@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from labelled_sets import make_set
 
 import pytest_flockai as fa
 
@@ -38,4 +39,19 @@ def test_a_sweep_of_an_onnx_detection_task_on_two_workers_equals_one_worker_row_
     two = fa.sweep(_mission(), payload_kg=[0.0, 0.2], workers=2)
     assert one["error"].isna().all() and (one["inference_count"] > 0).all()
     assert "map50" in one.columns and one["map50"].notna().all()
+    pd.testing.assert_frame_equal(one.reset_index(drop=True), two.reset_index(drop=True))
+
+
+def test_a_sweep_of_a_replayed_labelled_folder_with_an_onnx_task_on_two_workers(tmp_path):
+    """A ReplayCamera (labels, conditions) travels to worker processes too."""
+    path, _ = make_set(tmp_path, "yolo-images-labels", n=4)
+    d = fa.drone("dji-mavic-2-pro")
+    d.add_sensor(fa.sensors.ReplayCamera(path, loop=False, name="eye",
+                                         conditions=fa.Conditions(exposure_s=0.005)))
+    task = fa.Task(fa.ml.shipped("detector"), sensor="eye", evaluate="detection", name="det",
+                   period_s=1.0)
+    m = fa.Mission(d, fa.pilots.Hover(10.0, 6.0), tasks=[task])
+    one = fa.sweep(m, payload_kg=[0.0, 0.2], workers=1)
+    two = fa.sweep(m, payload_kg=[0.0, 0.2], workers=2)
+    assert (one["images_scored"] == 4).all() and (one["inference_failures"] == 0).all()
     pd.testing.assert_frame_equal(one.reset_index(drop=True), two.reset_index(drop=True))

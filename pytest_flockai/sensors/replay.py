@@ -50,7 +50,6 @@ class ReplayCamera(Sensor):
                  power_w: float = 0.9, annotations="auto", classes=None, split=None,
                  conditions=None, fov_deg: float = 51.0, body_name: str = "drone"):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w)
-        self._cv2 = cv2
         w = f"ReplayCamera {name!r}"
         self.conditions = _conditions.check(conditions, w)
         self.fov_deg = _check.number("fov_deg", fov_deg, where=w, minimum=1.0, maximum=179.0)
@@ -170,18 +169,17 @@ class ReplayCamera(Sensor):
     # -- decoding -------------------------------------------------------------
     def _image(self, k):
         if k != self._k:
-            img = self._cv2.imread(self.files[k], self._cv2.IMREAD_COLOR)
+            img = cv2.imread(self.files[k], cv2.IMREAD_COLOR)
             if img is None:
                 raise ConfigError(f"ReplayCamera {self.name!r}: image {self.files[k]!r} cannot "
                                   f"be decoded")
-            self._frame = self._cv2.cvtColor(img, self._cv2.COLOR_BGR2RGB)
+            self._frame = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
             self._k = k
         return self._frame
 
     def _video_frame(self, k):
         if k == self._k:
             return self._frame
-        cv2 = self._cv2
         if self._cap is None or k < self._pos:
             if self._cap is not None:
                 self._cap.release()
