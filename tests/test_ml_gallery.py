@@ -12,7 +12,6 @@ import pytest
 from labelled_sets import make_set
 from test_ci_reports import BROWSER, _browser
 
-import pytest_flockai as fa
 from pytest_flockai.ml.gallery import COLOURS, SCALE
 
 BODY = '''
@@ -61,7 +60,7 @@ def test_the_worst_frames_are_in_the_dashboard_with_boxes_on_the_right_objects(p
                       r'base64,([^"]+)"', dom.stdout)
     assert len(figs) == 6                                     # the gallery's six worst frames
     assert "missed" in dom.stdout and "false positive" in dom.stdout
-    for frame, file, data in figs:
+    for _, file, data in figs:
         img = cv2.cvtColor(cv2.imdecode(np.frombuffer(base64.b64decode(data), np.uint8),
                                         cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
         boxes, _ = sc[int(file[1:3])]

@@ -17,9 +17,9 @@ import numpy as np
 
 from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import PILOT, RETURN
+from .gallery import worst_frames
 from .metrics import percentile
 from .runner import DeviceClock, TaskRunner
-from .gallery import worst_frames
 from .task_energy import task_energy_kpis
 
 #: frames a detection task's gallery shows

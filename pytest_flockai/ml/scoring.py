@@ -22,7 +22,6 @@ from .evaluation import FrameRecord, classification_kpis, detection_kpis
 from .jpeg import encode_jpeg, is_image
 from .metrics import crowd_metrics, truth_count
 
-
 #: JPEG quality of the rendered frames a detection task keeps for its gallery
 GALLERY_JPEG_QUALITY = 85
 

@@ -29,11 +29,11 @@ import os
 import cv2
 import numpy as np
 
+from .. import _check
 from ..errors import ConfigError
 from ..world.truth import Objects, Truth
-from .annotations import load_annotations, orphan_labels
 from . import replay_conditions as _conditions
-from .. import _check
+from .annotations import load_annotations, orphan_labels
 from .base import DroneBody, Sensor
 from .classnames import person_index
 from .labelsets import IMAGE_EXT, find_labelset

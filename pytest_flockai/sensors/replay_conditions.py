@@ -26,7 +26,8 @@ import numpy as np
 from ..errors import ConfigError
 from ..world.truth import focal_px, gimbal_pose
 from .camera import ground_distance
-from .conditions import Conditions, apply as apply_conditions, blur_vector
+from .conditions import Conditions, blur_vector
+from .conditions import apply as apply_conditions
 
 
 def check(cond, where: str):
