@@ -42,6 +42,9 @@ def compare_models(models: dict, path, *, flight=None, device="raspberry-pi-4",
         frame = _first_frame(ev)
         m = task.model
         macs = m.macs_for(frame) if hasattr(m, "macs_for") and frame is not None else m.macs
+        if macs is None:
+            raise ConfigError(f"compare_models: model {name!r} has macs = None; the modeled "
+                              f"latency needs its MAC count: give the model macs=...")
         lat = modeled_latency(float(macs), dev)
         e = lat * (dev.active_w - dev.idle_w)
         power = e / max(period_s, lat)

@@ -71,7 +71,8 @@ def evaluate_dataset(task: Task, path, *, annotations="auto", split=None, classe
     if cam.files is None or cam._truth is None:
         raise ConfigError(f"evaluate_dataset: {os.fspath(path)!r} has no labels to score "
                           f"against (COCO, YOLO or VisDrone-DET)")
-    scorer, failures = Scorer(task), []
+    scorer = Scorer(task)
+    failures: list = []
     for k in range(cam.n_frames):
         frame = cam.read(float(k))
         _score_one(task, scorer, k, frame, cam.last_truth, altitude_m, failures, cam.files[k])
