@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pytest
 from labelled_sets import make_set
 
 import pytest_flockai as fa
@@ -55,3 +56,20 @@ def test_a_sweep_of_a_replayed_labelled_folder_with_an_onnx_task_on_two_workers(
     two = fa.sweep(m, payload_kg=[0.0, 0.2], workers=2)
     assert (one["images_scored"] == 4).all() and (one["inference_failures"] == 0).all()
     pd.testing.assert_frame_equal(one.reset_index(drop=True), two.reset_index(drop=True))
+
+
+def test_a_fleet_with_onnx_detection_tasks_flies_copied_and_pickled_alike():
+    """Two drones, each with its own OnnxModel detection task (one remote on the shared
+    ground device): a deep copy and a pickled copy (what a worker process receives) fly
+    the same KPIs."""
+    def drone(name, pad, execution):
+        det = fa.ml.OnnxModel(MODELS / "detector.onnx", name="detector")
+        task = fa.Task(det, period_s=1.0, evaluate="detection", name="det", execution=execution)
+        return fa.FleetDrone(name, fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(20.0, 3.0),
+                             pad=pad, tasks=[task], seed=1)
+    fleet = fa.Fleet([drone("a", (-10, 0), "onboard"), drone("b", (10, 0), "remote")],
+                     world=fa.World.urban(**WORLD), until=12.0)
+    k = copy.deepcopy(fleet).run().kpis
+    assert k["a.det.inference_count"] > 0 and k["b.det.inference_count"] > 0
+    assert k["a.det.compute_energy_j"] > k["b.det.compute_energy_j"]
+    assert pickle.loads(pickle.dumps(fleet)).run().kpis == pytest.approx(k, nan_ok=True)
