@@ -1,7 +1,8 @@
-"""The worst frames of a detection task in the HTML dashboard, loaded in headless
-Chromium: the gallery is there, and its boxes sit on the right objects (green on
-the people the model found, orange on the vehicles it missed, red where it saw a
-person on the background)."""
+"""What a detection task got wrong, where a team looks: the worst frames in the HTML
+dashboard, loaded in headless Chromium (the gallery is there, and its boxes sit on the
+right objects: green on the people the model found, orange on the vehicles it missed,
+red where it saw a person on the background), and the task's COCO truth and results
+files among the flight's artifacts."""
 
 import base64
 import re
@@ -10,6 +11,8 @@ import cv2
 import numpy as np
 import pytest
 from labelled_sets import make_set
+from pycocotools.coco import COCO
+from pycocotools.cocoeval import COCOeval
 from test_ci_reports import BROWSER, _browser
 
 from pytest_flockai.ml.gallery import COLOURS, SCALE
@@ -69,3 +72,25 @@ def test_the_worst_frames_are_in_the_dashboard_with_boxes_on_the_right_objects(p
             want = COLOURS["tp"] if c == 0 else COLOURS["miss"]
             assert _at(img, x, y) == want and _at(img, x + w - 0.5, y + h - 0.5) == want
         assert _at(img, 2, 2) == COLOURS["fp"]
+
+
+def test_artifacts_hold_each_detection_tasks_coco_truth_and_results(pytester, tmp_path):
+    """--flockai-artifacts writes <flight>.<task>.truth.json and .results.json; pycocotools
+    loads them and scores what the flight reported."""
+    (tmp_path / "set").mkdir()
+    path, _ = make_set(tmp_path / "set", "yolo-flat", n=8)
+    pytester.makepyfile(test_gallery=BODY.replace("PATH", repr(str(path))).replace(
+        'assert r.kpis["images_scored"] == 8', 'print("MAP50", r.kpis["map50"])'))
+    res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "-s", "--flockai-artifacts",
+                                       str(pytester.path / "art"))
+    res.assert_outcomes(passed=1)
+    (truth,) = (pytester.path / "art").rglob("*.det.truth.json")
+    reported = float(re.search(r"MAP50 ([\d.]+)", res.stdout.str()).group(1))
+    gt = COCO(str(truth))
+    ev = COCOeval(gt, gt.loadRes(str(truth).replace(".truth.json", ".results.json")), "bbox")
+    ev.params.maxDets, ev.params.areaRng, ev.params.areaRngLbl = [10, 100, 1000], [[0, 1e10]], ["all"]
+    ev.evaluate()
+    ev.accumulate()
+    ev.summarize()
+    assert len(gt.imgs) == 8 and ev.stats[1] == pytest.approx(reported, abs=1e-9)
+    assert sorted(im["file_name"] for im in gt.imgs.values()) == [f"f{i:02d}.png" for i in range(8)]

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import PILOT, RETURN
+from .analysis import coco_pair
 from .gallery import worst_frames
 from .metrics import percentile
 from .runner import DeviceClock, TaskRunner
@@ -155,6 +156,12 @@ class TaskScheduler(Clocked):
         if not self.runners:
             return {}
         return task_energy_kpis([r.task.name for r in self.runners], self.charged, meter)
+
+    def coco_pairs(self) -> dict:
+        """{task: (COCO ground truth, COCO results)} of the detection tasks (``analysis``)."""
+        return {r.task.name: coco_pair(r.scorer.records.values(), r.task.classes,
+                                       min_visible=r.task.min_visible)
+                for r in self.runners if r.task.evaluate == "detection" and r.scorer.records}
 
     def galleries(self, n: int = GALLERY_FRAMES) -> dict:
         """{task: its worst frames drawn (``gallery.worst_frames``)} of the detection tasks."""
