@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from numbers import Real
 
 from . import kpis as _kpis
+from .recording import publish_verdicts
 from .errors import ConfigError, close_matches
 from .report import table as text_table
 
@@ -294,6 +295,7 @@ def evaluate(result, budgets: dict | None = None, **more) -> list[Verdict]:
             raise ConfigError(f"budget on {b.kpi!r}: the flight did not produce this KPI; it has "
                               f"{', '.join(sorted(kpis))}")
         out.append(b.verdict(kpis[b.kpi]))
+    publish_verdicts(result, out)      # the plugin keeps them with the test (the reports)
     return out
 
 

@@ -37,8 +37,9 @@ Numbers are SI (see ``kpis.py``; ``limit``, ``actual`` and ``margin`` too, the
 margin is positive inside the budget. Non-finite numbers are written as
 ``null``. ``budgets`` is empty when the test body failed before the check or
 the marker was bad (then ``error`` says why).
-The file lists the tests that flew at least one mission or carry a ``kpi``
-marker. It is written atomically (a temporary file in the same directory, then
+The file lists every test pytest ran, with pytest's outcome (a test that
+flew nothing has no flights; the budgets it checked itself with
+``budgets.check`` carry ``"source": "check"``). It is written atomically (a temporary file in the same directory, then
 ``os.replace``), at the end of the session, also when tests fail or the
 session is interrupted.
 
@@ -72,6 +73,7 @@ from . import kpis as _kpis
 from . import plots
 from ._io import atomic_write
 from .errors import ConfigError
+from .reports import scenario as _scenario
 
 SCHEMA = "pytest-flockai/1"
 BASELINE_SCHEMA = "pytest-flockai-baseline/1"
@@ -178,13 +180,17 @@ def build_report(tests: list[dict], *, exitstatus=0, interrupted=False, options=
 
 # -- baselines ---------------------------------------------------------------------------
 def baseline_from_tests(tests: list[dict]) -> dict:
-    """``{"schema": ..., "tests": {nodeid: {flight: kpis}}}`` for the tests that flew."""
-    out = {}
+    """``{"schema": ..., "tests": {nodeid: {flight: kpis}}, "scenarios": {nodeid:
+    {flight: summary}}}`` for the tests that flew (the scenario summaries let a
+    later compare say what changed: ``reports/scenario.py``)."""
+    out, scen = {}, {}
     for t in tests:
         flights = {f["name"]: dict(f["kpis"]) for f in t.get("flights", ())}
         if flights:
             out[t["nodeid"]] = flights
-    return {"schema": BASELINE_SCHEMA, "tests": out}
+            scen[t["nodeid"]] = {f["name"]: _scenario.summary(f.get("scenario"))
+                                 for f in t.get("flights", ())}
+    return {"schema": BASELINE_SCHEMA, "tests": out, "scenarios": scen}
 
 
 def load_baseline(path: Path) -> dict:
@@ -235,10 +241,11 @@ def load_baseline(path: Path) -> dict:
 
 
 def regressions(flights: dict, base: dict, max_regression_pct: float, *,
-                per_kpi: dict | None = None) -> list[dict]:
+                per_kpi: dict | None = None, abs_tol: dict | None = None) -> list[dict]:
     """KPIs of ``flights`` ({flight: kpis}) worse than ``base`` ({flight: kpis}) by
-    more than ``max_regression_pct`` percent (or ``per_kpi[kpi]`` percent), in
-    each KPI's ``better`` direction.
+    more than ``max_regression_pct`` percent (or ``per_kpi[kpi]`` percent) and
+    more than the KPI's absolute tolerance (``kpis.abs_tolerance``, or
+    ``abs_tol[kpi]``), in each KPI's ``better`` direction.
 
     KPIs without a better direction, missing on either side or non-finite are
     not compared."""
@@ -257,7 +264,8 @@ def regressions(flights: dict, base: dict, max_regression_pct: float, *,
             if not (math.isfinite(a) and math.isfinite(b)):
                 continue
             frac = per_kpi.get(kpi, max_regression_pct) / 100.0
-            tol = abs(b) * frac + 1e-9 * max(1.0, abs(b))
+            atol = (abs_tol or {}).get(kpi, _kpis.abs_tolerance(kpi))
+            tol = max(abs(b) * frac, atol, 1e-6 * max(abs(a), abs(b)))
             worse = a < b - tol if info.better == "higher" else a > b + tol
             if worse:
                 change = (a - b) / abs(b) * 100.0 if b != 0 else math.inf

@@ -112,9 +112,7 @@ class FlockSession:
         payload = getattr(report, "flockai", None)
         crashed = report.when not in ("setup", "call", "teardown")   # xdist: "???"
         entry = self.tests.get(report.nodeid)
-        if entry is None:
-            if payload is None and not crashed:
-                return
+        if entry is None:      # every test is in the reports, also one that flew nothing
             entry = self.tests[report.nodeid] = _entry(report.nodeid)
         if payload is not None:
             entry.update(payload)

@@ -16,7 +16,11 @@ def add_parsers(sub) -> None:
     c.add_argument("new", type=Path, help="the new run: a --flockai-json report or baseline")
     c.add_argument("--threshold", default="5%",
                    help="largest allowed regression, percent of the base value (default 5%%)")
-    c.add_argument("--all", action="store_true", help="show every KPI, also unchanged ones")
+    c.add_argument("--abs-tol", action="append", default=[], metavar="KPI=VALUE",
+                   help="absolute tolerance of a KPI (or KPI family) in its SI unit, over the "
+                        "registry's (kpis.abs_tolerance); repeatable, e.g. energy_total_j=5")
+    c.add_argument("--all", action="store_true", help="show every regression row and every "
+                                                      "changed KPI")
     c.add_argument("--json", type=Path, default=None, help="also write the deltas as JSON")
     h = sub.add_parser("history", help="a KPI across the runs kept by --flockai-history")
     h.add_argument("directory", type=Path)
@@ -42,13 +46,19 @@ def _compare_cmd(a) -> int:
               f"percentage >= 0, e.g. 5%", file=sys.stderr)
         return 2
     try:
-        cmp = _compare.compare_files(a.base, a.new, threshold)
+        abs_tol = _compare.parse_abs_tol(a.abs_tol)
+    except ValueError as exc:
+        print(f"flockai compare: --abs-tol: {exc}", file=sys.stderr)
+        return 2
+    try:
+        cmp = _compare.compare_files(a.base, a.new, threshold, abs_tol=abs_tol)
     except _report.ReportError as exc:
         print(f"flockai compare: {exc}", file=sys.stderr)
         return 2
     print(_compare.render(cmp, show_all=a.all))
     if a.json is not None:
-        _report.write_json_atomic(a.json, {"threshold_pct": threshold,
+        _report.write_json_atomic(a.json, {"threshold_pct": threshold, "abs_tol": abs_tol,
+                                           "causes": cmp.causes,
                                            "deltas": [d.to_dict() for d in cmp.deltas],
                                            "only_base": cmp.only_base, "only_new": cmp.only_new})
     return 1 if cmp.regressions else 0
