@@ -24,6 +24,7 @@ import pytest
 from .. import plots
 from .._io import atomic_write
 from .. import report as _report
+from ..reports import compare as _compare
 from ..reports import history as _history
 from ..reports import html as _html
 from ..reports import markdown as _markdown
@@ -129,8 +130,10 @@ class ReportsPlugin:
         doc = _report.build_report(entries, exitstatus=exitstatus, interrupted=interrupted,
                                    options={"baseline": str(flock.baseline_path)
                                             if flock is not None and flock.baseline_path else None})
+        base_scen = _compare.load_scenarios(flock.baseline_path) \
+            if flock is not None and flock.baseline_path else None
         if self.md is not None or self.step_summary:
-            text = _markdown.job_summary(doc)
+            text = _markdown.job_summary(doc, base_scenarios=base_scen)
             if self.md is not None:
                 atomic_write(self.md, lambda fh: fh.write(text))
                 self.written.append(f"Markdown summary written to {self.md}")
@@ -144,7 +147,8 @@ class ReportsPlugin:
         if self.html is not None:
             _html.write(self.html, doc, pictures=self.pictures,
                         baseline=flock.baseline if flock else None,
-                        threshold_pct=flock.max_regression if flock else 5.0)
+                        threshold_pct=flock.max_regression if flock else 5.0,
+                        base_scenarios=base_scen, abs_tol=flock.abs_tol if flock else None)
             self.written.append(f"HTML dashboard written to {self.html}")
         if self.history is not None:
             try:

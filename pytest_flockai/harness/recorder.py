@@ -180,6 +180,7 @@ class TestState:
         """Plain JSON data for the test report (travels through pytest-xdist)."""
         flights = [{"name": f.name, "end_reason": getattr(f.result, "end_reason", None),
                     "sim_time_s": f.result.scenario.get("sim_time_s"),
+                    "wall_time_s": getattr(f.result, "wall_time_s", None),
                     "scenario": f.result.scenario, "kpis": f.result.kpis,
                     "cache": getattr(f.result, "cache", None)} for f in self.flights]
         error = self.markers.error or ("\n".join(self.problems) or None)

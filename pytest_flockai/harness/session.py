@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from .. import report as _report
+from ..reports import compare as _compare
 from . import junit, signals, terminal
 from .options import DEFAULT_MAX_REGRESSION, MISSING_BASELINE, option, path_option
 
@@ -38,6 +39,7 @@ class FlockSession:
         self.max_regression = DEFAULT_MAX_REGRESSION
         self.baseline = None
         self.missing_baseline = "warn"
+        self.abs_tol: dict = {}
         self.started: dict[str, str | None] = {}   # nodeid -> None, or why it did not finish
         self.write_errors: list[str] = []
         self.held_signals: list[str] = []
@@ -51,6 +53,11 @@ class FlockSession:
             raise pytest.UsageError(f"--flockai-missing-baseline = {mb!r} is not allowed; "
                                     f"allowed: {', '.join(MISSING_BASELINE)}")
         self.missing_baseline = mb or "warn"
+        at, _ = option(config, "abs-tol")
+        try:
+            self.abs_tol = _compare.parse_abs_tol([at] if at else [])
+        except ValueError as exc:
+            raise pytest.UsageError(f"--flockai-abs-tol = {at!r}: {exc}") from None
         self._check_distinct()
         v, _ = option(config, "max-regression")
         try:

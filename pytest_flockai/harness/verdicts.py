@@ -68,8 +68,10 @@ def _baseline(item, st, session) -> None:
     reg = st.markers.max_regression
     if reg is not None and not isinstance(reg, tuple):
         limit = reg
+    abs_tol = {**getattr(session, "abs_tol", {}), **dict(st.markers.abs_tol)}
     st.regressions = _report.regressions({f.name: f.kpis for f in st.flights}, base,
-                                         limit, per_kpi=st.markers.per_kpi_regression)
+                                         limit, per_kpi=st.markers.per_kpi_regression,
+                                         abs_tol=abs_tol)
 
 
 def missing_text(nodeid, st, session) -> str:
