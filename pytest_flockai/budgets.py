@@ -296,6 +296,8 @@ def evaluate(result, budgets: dict | None = None, **more) -> list[Verdict]:
                               f"{', '.join(sorted(kpis))}")
         out.append(b.verdict(kpis[b.kpi]))
     publish_verdicts(result, out)      # the plugin keeps them with the test (the reports)
+    if not isinstance(result, Mapping):
+        result.verdicts = tuple(out)   # shown by the result's _repr_html_ in a notebook
     return out
 
 

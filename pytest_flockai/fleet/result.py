@@ -24,6 +24,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from .. import notebook as _notebook
 from ..mission import result as _single
 from ..result import FlightResult
 from .offload import ground_kpis
@@ -36,6 +37,10 @@ class FleetResult(FlightResult):
     """A ``FlightResult`` of the whole fleet; ``drones``: name -> that drone's FlightResult."""
 
     drones: dict
+
+    def _repr_html_(self) -> str:
+        """In a notebook: the fleet KPIs, one row and one path colour per drone."""
+        return _notebook.fleet_html(self)
 
     def __repr__(self):
         return (f"FleetResult({len(self.drones)} drones, end_reason={self.end_reason!r}, "

@@ -41,6 +41,7 @@ from ..errors import ConfigError, FlockAIError
 from ..mission import Mission
 from ..recording import recording
 from . import axes as _axes
+from .result import SweepResult
 from . import design
 from .batched import params as _batched
 
@@ -95,7 +96,7 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
                      "wall_s": wall, "backend": backend, "device": device,
                      "cache": dict(Counter(s for s in statuses if s is not None))})
-    return df
+    return SweepResult.of(df)
 
 
 def _check_backend(backend, base, device) -> None:
