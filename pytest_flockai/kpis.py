@@ -96,6 +96,8 @@ FAMILIES = {"map50": "per class", "precision": "per class", "recall": "per class
             "band (alt_<lo>_<hi>m) or box height (size_<band>px)"}
 
 REGISTRY: dict[str, KPI] = {r[0]: KPI(*r) for r in _ROWS}
+#: the built-in names (REGISTRY also holds the KPIs registered at run time)
+BUILTIN = frozenset(REGISTRY)
 
 #: Absolute tolerance by unit: a change of a KPI smaller than this is noise, never a
 #: regression, whatever the relative threshold (a 0.002 % CPU change is not news).

@@ -123,7 +123,7 @@ def family(kpi: str) -> str:
     """The KPI with a task's or a drone's prefix taken off (``det.recall`` ->
     ``recall``, ``drone-2.flight_time_s`` -> ``flight_time_s``); registered names
     (``fleet.makespan_s``) and family members (``recall.person``) stay."""
-    if _kpis.REGISTRY.get(kpi) is not None or "." not in kpi:
+    if kpi in _kpis.BUILTIN or "." not in kpi:
         return kpi
     head, rest = kpi.split(".", 1)
     if head in _kpis.FAMILIES:

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from .._io import atomic_write
 from . import summary as _s
 from .compare import compare as _compare
-from .compare import format_change
+from .compare import family, format_change
 from .html_assets import CSS, JS
 
 
@@ -64,6 +64,14 @@ def _short(v) -> str:
     return f"{float(n):.4g}" if n else "n/a"
 
 
+def _breakable(nodeid) -> str:
+    """A test id that wraps after its ``::``, ``/`` and ``[`` rather than inside a name."""
+    out = _e(nodeid)
+    for sep in ("::", "/", "["):
+        out = out.replace(sep, sep + "<wbr>")
+    return out
+
+
 def _cell(text, sort=None, cls: str = "") -> tuple:
     return (text, sort, cls)
 
@@ -75,8 +83,8 @@ def table(tid: str, headers: list[str], rows: list[tuple[list, str, str]]) -> st
     body = []
     for cells, cls, outcome in rows:
         tds = "".join(f'<td data-sort="{_e(s if s is not None else "")}"'
-                      f'{f" class={chr(34)}{c}{chr(34)}" if c else ""}>{_e(t)}</td>'
-                      for t, s, c in cells)
+                      f'{f" class={chr(34)}{c}{chr(34)}" if c else ""}>'
+                      f'{_breakable(t) if c == "id" else _e(t)}</td>' for t, s, c in cells)
         data = f' data-outcome="{_e(outcome)}"' if outcome else ""
         body.append(f'<tr class="{cls}"{data}>{tds}</tr>')
     return (f'<div class="scroll"><table id="{tid}" class="sortable"><thead><tr>{head}</tr>'
@@ -197,11 +205,13 @@ def tests(page: Page) -> str:
         bs = t.get("budgets") or []
         fl = t.get("flights") or []
         broken = sum(b.get("verdict") != "pass" for b in bs)
+        fams = {family(r["kpi"]) for r in t.get("regressions") or ()}
         rows.append(([_cell(o, None, f"v s-{o}"), _cell(t["nodeid"], None, "id"),
                       _cell(len(fl), len(fl)), _cell(f"{broken}/{len(bs)}" if bs else "-", broken),
-                      _cell(len(t.get("regressions") or ()), len(t.get("regressions") or ())),
+                      _cell(len(fams), len(fams)),
                       _cell(sum((f.get("cache") or {}).get("status") == "hit" for f in fl)),
-                      _cell((t.get("message") or t.get("error") or "")[:160], None, "wrap")],
+                      _cell((t.get("message") or t.get("error") or "").split("\n")[0][:160],
+                            None, "wrap")],
                      "bad" if o in _s.FAILING else "", o))
     if not rows:
         return _muted("No test ran.")

@@ -12,14 +12,14 @@ h1{font-size:22px;margin:4px 0}h2{font-size:18px;margin:26px 0 6px}h3{font-size:
 .band{display:flex;flex-wrap:wrap;gap:8px;margin:8px 0}
 .card{background:#fff;border:1px solid #ddd;border-radius:6px;padding:6px 12px;min-width:110px}
 .card b{display:block;font-size:20px}.card.bad b{color:#b3261e}.card.ok b{color:#176e2f}
-.card.warn b{color:#a35b00}.card small{color:#666}
+.card.warn b{color:#a35b00}.card small{color:#666;display:block;max-width:36em}
 .filters{margin:10px 0;display:flex;flex-wrap:wrap;gap:6px;align-items:center}
 .filters button{font:inherit;padding:3px 10px;border:1px solid #bbb;border-radius:14px;
   background:#fff;cursor:pointer}.filters button.on{background:#334;color:#fff;border-color:#334}
 .scroll{overflow-x:auto;max-width:100%}
 table{border-collapse:collapse;background:#fff;margin:6px 0;font-variant-numeric:tabular-nums}
 th,td{border:1px solid #ddd;padding:3px 7px;text-align:left;vertical-align:top}
-td{white-space:nowrap}td.id{white-space:normal;overflow-wrap:anywhere;min-width:14em;max-width:34em}
+td{white-space:nowrap}td.id{white-space:normal;overflow-wrap:break-word;max-width:30em}
 td.wrap{white-space:normal;min-width:12em;max-width:30em}
 th{background:#eef;cursor:pointer;user-select:none;white-space:nowrap}
 th.asc:after{content:" \\25B2"}th.desc:after{content:" \\25BC"}

@@ -138,14 +138,14 @@ def counts(doc: dict) -> str:
 def headline(doc: dict) -> str:
     """The one line of a run: pytest's counts, then the budgets and regressions."""
     broken, expected = broken_budgets(doc), expected_broken(doc)
-    regs = regressions(doc)
+    regs, _ = regression_groups(doc)
     cached = sum(r["cache"] == "hit" for r in flights(doc))
     extra = [f"{len(broken)} budget(s) broken" if broken else "every budget holds"
              if not expected else f"{len(expected)} budget(s) broken where expected (xfail)"]
     if broken and expected:
         extra.append(f"{len(expected)} more where expected (xfail)")
     if regs:
-        extra.append(f"{len(regs)} regression(s)")
+        extra.append(f"{len(regs)} regression(s) (KPI families)")
     if cached:
         extra.append(f"{cached} flight(s) from the cache")
     return f"{'passed' if ok(doc) else 'FAILED'}: {counts(doc)}; {'; '.join(extra)}"
