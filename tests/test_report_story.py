@@ -244,3 +244,23 @@ def test_the_dashboard_has_a_place_for_more_sections():
     finally:
         dash.SECTIONS[:] = [s for s in dash.SECTIONS if s[0] != "ML gallery"]
     assert "✅" in markdown.job_summary({"exitstatus": 0, "summary": {"tests": 0}, "tests": []})
+
+
+def test_the_scenario_summary_names_the_model_by_its_file_hash(tmp_path):
+    """What the flight cache key knows of a model (its file), the reports say too."""
+    import hashlib
+
+    import pytest_flockai as fa
+    from pytest_flockai.reports import scenario
+
+    src = fa.ml.OnnxModel("fixtures/models/crowd_cnn.onnx", name="cnn")
+    digest = hashlib.sha256(open(src.path, "rb").read()).hexdigest()
+    task = fa.Task(src, period_s=5.0, name="cnn", execution="onboard", device="raspberry-pi-4")
+    s = scenario.summary({"drone": {"name": "dji-mavic-2-pro", "device": "none"},
+                          "tasks": [task.to_dict()], "seed": 3,
+                          "conditions": {"visibility_m": 300.0, "severity": 0}})
+    assert s["model"] == f"cnn sha256:{digest[:8]} (onboard)"
+    assert s["seed"] == "3" and s["conditions"] == '{"visibility_m":300.0}'
+    other = dict(s, model="cnn sha256:00000000 (onboard)")
+    assert scenario.diff(s, other) == [f"model: cnn sha256:{digest[:8]} (onboard) -> "
+                                       f"cnn sha256:00000000 (onboard)"]
