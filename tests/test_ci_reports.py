@@ -153,8 +153,10 @@ def test_the_dashboard_is_one_self_contained_file(run_with_baseline):
     assert len(kpis) == 3
     assert [r[0] for r in page.tables["tests"][1:]] == ["failed", "failed"]
     titles = sorted(i["alt"] for i in page.images)
+    # the two hovers look the same from above: that picture is embedded once
     assert titles == ["flight: energy", "flight: energy", "flight: flight path",
-                      "flight: flight path", "robustness map"]
+                      "robustness map"]
+    assert text.count("same picture as test_flights.py::test_higher") == 1
     assert all(i["src"].startswith("data:image/png;base64,") for i in page.images)
 
 

@@ -33,6 +33,7 @@ tr.bad td{background:#fdf0ef}
 .pics img{width:100%;border:1px solid #ddd;background:#fff}
 .muted{color:#777}section.test{border-top:1px solid #ddd;padding-top:4px}
 .hidden{display:none}
+pre{background:#fff;border:1px solid #eee;padding:6px;overflow-x:auto;max-width:100%;font-size:12px}
 """
 
 JS = """
