@@ -44,7 +44,7 @@ MIN_SPAN_M = 4.0
 
 def _save(fig, path) -> Path:
     p = Path(path)
-    fig.savefig(p, dpi=110)
+    fig.savefig(p, dpi=110, bbox_inches="tight")
     _plt().close(fig)
     return p
 
@@ -69,7 +69,7 @@ def energy_fig(result):
     for i, s in enumerate(shares):
         ax0.text(i, 100 * s + 1, f"{100 * s:.1f}%", ha="center", fontsize=9)
     ax0.set_ylabel("share of E_total (%)")
-    ax0.set_title(f"E_total = {total / 1000:.1f} kJ")
+    ax0.set_title(f"E_total = {energy_text(total)}")
     ax0.set_ylim(0, 105)
     # sub-components of each group, as shares of that group (paper Fig. 7 style)
     y = 0
@@ -99,6 +99,14 @@ def energy_fig(result):
     return fig
 
 
+def energy_text(joules: float) -> str:
+    """``43.2 J``, ``3.82 kJ``, ``1.2 MJ``: never ``0.0 kJ`` for a small drone."""
+    for unit, f in (("MJ", 1e6), ("kJ", 1e3)):
+        if abs(joules) >= f:
+            return f"{joules / f:.3g} {unit}"
+    return f"{joules:.3g} J"
+
+
 def fleet_energy_fig(result):
     """A fleet's energy: per drone, motors / processing / communication in kJ, stacked."""
     plt = _plt()
@@ -112,7 +120,7 @@ def fleet_energy_fig(result):
     ax.set_ylabel("energy (kJ)")
     ax.legend(fontsize=8)
     total = result.kpis.get("fleet.energy_total_j", 1000 * float(bottom.sum()))
-    ax.set_title(f"fleet of {len(names)} drones: E_total = {total / 1000:.1f} kJ, makespan "
+    ax.set_title(f"fleet of {len(names)} drones: E_total = {energy_text(total)}, makespan "
                  f"{result.kpis.get('fleet.makespan_s', 0):.0f} s")
     ax.set_ylim(0, max(float(bottom.max()) * 1.12, 1e-3))
     fig.tight_layout()
@@ -161,7 +169,7 @@ def path_fig(result):
         for ph, c in _PHASE_COLOURS.items():
             sel = tel[tel.phase == ph]
             if len(sel):
-                ax.scatter(sel.x, sel.y, s=3, c=c, label=ph)
+                ax.scatter(sel.x, sel.y, s=6, c=c, label=ph, zorder=3)
     if "x" in tel and len(tel):
         xs += list(tel.x)
         ys += list(tel.y)
@@ -169,7 +177,11 @@ def path_fig(result):
     if det:
         ax.scatter([e["x"] for e in det], [e["y"] for e in det], marker="*", s=80, c="red",
                    label="detections")
-    ax.plot([0], [0], "k^", ms=9, label="home")
+    ax.plot([0], [0], "^", color="#bbbbbb", mec="k", ms=11, label="home", zorder=2)
+    if "x" in tel and len(tel) and max(np.ptp(tel.x), np.ptp(tel.y)) < 0.1:
+        ax.annotate(f"stayed within {100 * max(np.ptp(tel.x), np.ptp(tel.y)):.2g} cm "
+                    f"horizontally", (0.02, 0.02), xycoords="axes fraction", fontsize=8,
+                    color="#555555")
     _square_limits(ax, xs, ys)
     ax.set_xlabel("x east (m)")
     ax.set_ylabel("y north (m)")

@@ -40,6 +40,13 @@ def test_a_hover_is_drawn_on_axes_a_few_metres_wide(hover):
     assert x1 - x0 >= plots.MIN_SPAN_M and y1 - y0 == pytest.approx(x1 - x0)
     assert x0 < 0 < x1 and y0 < 0 < y1                               # home and the drone
     assert ax.get_title() == "flight path"
+    assert [t.get_text() for t in ax.texts][0].startswith("stayed within ")
+    hover_pts = [c for c in ax.collections if c.get_label() == "hover"]
+    assert hover_pts and hover_pts[0].get_zorder() > 2            # drawn over the home mark
+    plt.close(fig)
+    fig = plots.energy_fig(hover)
+    assert fig.axes[0].get_title().startswith("E_total = ") and \
+        fig.axes[0].get_title().endswith(" J")                    # not "0.0 kJ"
     plt.close(fig)
 
 

@@ -147,6 +147,10 @@ def test_swapping_the_computer_shows_the_scenario_change_first(pytester, monkeyp
                                        "--flockai-html", "d.html")
     res.assert_outcomes(failed=1)
     change = "computer: jetson-nano-10w -> raspberry-pi-4"
+    res.stdout.fnmatch_lines([f"*  scenario change: {change}",
+                              "*flight*KPI family*baseline*actual*change*better*",
+                              "*2 flights*inference_latency_p50_s (x4)*+*%*lower*"])
+    assert "det.inference_latency_p50_s" not in res.stdout.str()     # the twin is folded
     md = (pytester.path / "s.md").read_text()
     assert change in md and md.index(change) < md.index("### Regressions")
     c = cmp.compare_files(pytester.path / "base.json", pytester.path / "new.json", 0.5)

@@ -19,7 +19,7 @@ h1{font-size:22px;margin:4px 0}h2{font-size:18px;margin:26px 0 6px}h3{font-size:
 .scroll{overflow-x:auto;max-width:100%}
 table{border-collapse:collapse;background:#fff;margin:6px 0;font-variant-numeric:tabular-nums}
 th,td{border:1px solid #ddd;padding:3px 7px;text-align:left;vertical-align:top}
-td{white-space:nowrap}td.id{white-space:normal;overflow-wrap:break-word;max-width:30em}
+td{white-space:nowrap}td.id{white-space:normal;overflow-wrap:break-word;min-width:16em;max-width:30em}
 td.wrap{white-space:normal;min-width:12em;max-width:30em}
 th{background:#eef;cursor:pointer;user-select:none;white-space:nowrap}
 th.asc:after{content:" \\25B2"}th.desc:after{content:" \\25BC"}
