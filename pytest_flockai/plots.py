@@ -179,9 +179,9 @@ def path_fig(result):
                    label="detections")
     ax.plot([0], [0], "^", color="#bbbbbb", mec="k", ms=11, label="home", zorder=2)
     if "x" in tel and len(tel) and max(np.ptp(tel.x), np.ptp(tel.y)) < 0.1:
-        ax.annotate(f"stayed within {100 * max(np.ptp(tel.x), np.ptp(tel.y)):.2g} cm "
-                    f"horizontally", (0.02, 0.02), xycoords="axes fraction", fontsize=8,
-                    color="#555555")
+        cm = 100 * max(np.ptp(tel.x), np.ptp(tel.y))
+        ax.annotate(f"moved {'less than 1 cm' if cm < 1 else f'{cm:.2g} cm'} horizontally",
+                    (0.02, 0.02), xycoords="axes fraction", fontsize=8, color="#555555")
     _square_limits(ax, xs, ys)
     ax.set_xlabel("x east (m)")
     ax.set_ylabel("y north (m)")

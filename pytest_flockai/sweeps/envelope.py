@@ -92,15 +92,15 @@ def figure(df, x: str, y: str, kpi: str):
                 < np.nanmax(z):
             ax.contour(z, levels=[budget.limit / factor], colors="red", linewidths=1.5)
             ax.plot([], [], color="red", lw=1.5, label=f"budget {budget.text}")
-        if "ok" in df:
-            bad = df[~df["ok"].astype(bool)]
+        bad = df[~df["ok"].astype(bool)] if "ok" in df else df.iloc[:0]
+        if len(bad):
             cols, rows = list(grid.columns), list(grid.index)
             ax.scatter([cols.index(v) for v in bad[x]], [rows.index(v) for v in bad[y]],
                        marker="x", color="red", s=60, label="budget broken")
     else:
         im = ax.scatter(df[x], df[y], c=df[kpi] / factor, cmap="viridis", s=30)
-        if "ok" in df:
-            bad = df[~df["ok"].astype(bool)]
+        bad = df[~df["ok"].astype(bool)] if "ok" in df else df.iloc[:0]
+        if len(bad):
             ax.scatter(bad[x], bad[y], marker="x", color="red", s=60, label="budget broken")
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper right", fontsize=7)
