@@ -4,7 +4,7 @@ structure reads on its own. Nothing is fetched: the page is one file."""
 CSS = """
 *{box-sizing:border-box}
 body{font:14px/1.45 system-ui,sans-serif;margin:0 auto;padding:16px 20px;color:#222;
-  background:#fafafa;max-width:1600px}
+  background:#fafafa;max-width:1880px}
 h1{font-size:22px;margin:4px 0}h2{font-size:18px;margin:26px 0 6px}h3{font-size:15px;margin:14px 0 4px}
 #status{font-size:16px;font-weight:600;padding:8px 12px;border-radius:6px;margin:8px 0}
 #status.ok{background:#e3f4e6;color:#176e2f;border:1px solid #9fd3aa}
