@@ -40,9 +40,11 @@ SLOW_TESTS = {
     "test_same_dataframe_with_one_or_two_worker_processes",
     "test_remote_task_latency_grows_with_the_fleet_on_a_shared_link",
     "test_the_dashboard_in_a_headless_browser",
+    "test_the_example_suite_dashboard_at_1280_px",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
-BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser"}
+BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",
+                 "test_the_example_suite_dashboard_at_1280_px"}
 
 
 def pytest_collection_modifyitems(items):
