@@ -19,6 +19,7 @@ JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
          "outcome": "passed" | "failed" | "error" | "skipped" | "xfailed" | "xpassed",
          "error": null or "the flockai configuration error of this test",
          "flights": [{"name": "flight", "end_reason": "landed", "sim_time_s": 45.9,
+                      "wall_time_s": 0.21,        # host time of the flight, metadata only
                       "scenario": {...}, "kpis": {"flight_time_s": 45.96, ...},
                       "cache": {"status": "hit" | "stored" | "flown" | "replaced" | "bypass",
                                 "key": "<sha256>" or null, "reason": str or null}
@@ -26,7 +27,8 @@ JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
          "budgets": [{"flight": "flight", "kpi": "flight_time_s", "budget": ">= 24 min",
                       "op": ">=", "limit": 1440.0, "actual": 45.96, "margin": -1394.04,
                       "verdict": "pass" | "fail",
-                      "actual_text": "0.766 min", "margin_text": "-23.23 min"}],
+                      "actual_text": "0.766 min", "margin_text": "-23.23 min",
+                      "source": "check", "checked": 3}],   # only for budgets.check() calls
          "regressions": [{"flight": "flight", "kpi": "energy_total_j", "baseline": 100.0,
                           "actual": 110.0, "change_pct": 10.0, "better": "lower"}]}
       ]
@@ -46,7 +48,12 @@ session is interrupted.
 Baseline (``--flockai-save PATH``), schema ``"pytest-flockai-baseline/1"``::
 
     {"schema": "pytest-flockai-baseline/1",
-     "tests": {"<nodeid>": {"<flight>": {"<kpi>": value, ...}, ...}, ...}}
+     "tests": {"<nodeid>": {"<flight>": {"<kpi>": value, ...}, ...}, ...},
+     "scenarios": {"<nodeid>": {"<flight>": {"drone": ..., "computer": ..., ...}}}}
+
+``scenarios`` (``reports/scenario.summary``) lets a later comparison say what
+changed (``computer: jetson-nano-10w -> raspberry-pi-4``); older baselines
+without it still load.
 
 ``load_baseline`` also accepts a bare ``{nodeid: {flight: kpis}}`` mapping and
 a JSON report (``pytest-flockai/1``).
