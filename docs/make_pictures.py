@@ -162,6 +162,7 @@ def scenario_1b(img: Path) -> list[Path]:
     """The energy breakdown and the flight path of the paper's scenario 1-B."""
     sys.path.insert(0, str(ROOT / "example_tests"))
     import scenarios
+
     import pytest_flockai as fa
     from pytest_flockai import plots
     r = scenarios.mission("1-B", {"cnn": scenarios.cnn()}).run()

@@ -32,8 +32,8 @@ from dataclasses import dataclass
 from numbers import Real
 
 from . import kpis as _kpis
-from .recording import publish_verdicts
 from .errors import ConfigError, close_matches
+from .recording import publish_verdicts
 from .report import table as text_table
 
 OPERATORS = ("<", "<=", ">", ">=", "==")

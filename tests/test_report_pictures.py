@@ -13,8 +13,8 @@ from pytest_flockai.reports import history
 from pytest_flockai.sweeps import envelope
 
 matplotlib = pytest.importorskip("matplotlib")
-from matplotlib.contour import ContourSet  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.contour import ContourSet  # noqa: E402
 
 MAVIC = "dji-mavic-2-pro"
 

@@ -19,7 +19,7 @@ class SweepResult(pd.DataFrame):
         return pd.DataFrame
 
     @classmethod
-    def of(cls, df: pd.DataFrame) -> "SweepResult":
+    def of(cls, df: pd.DataFrame) -> SweepResult:
         """``df`` (and its attrs) as a SweepResult."""
         out = cls(df)
         out.attrs = dict(df.attrs)

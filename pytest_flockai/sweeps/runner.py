@@ -41,9 +41,9 @@ from ..errors import ConfigError, FlockAIError
 from ..mission import Mission
 from ..recording import recording
 from . import axes as _axes
-from .result import SweepResult
 from . import design
 from .batched import params as _batched
+from .result import SweepResult
 
 BACKENDS = ("process", "mjx")
 #: JAX platforms the mjx backend runs on (None: JAX's default device)
