@@ -79,7 +79,6 @@ from pathlib import Path
 from . import kpis as _kpis
 from ._io import atomic_write
 from .errors import ConfigError
-from .reports import scenario as _scenario
 
 SCHEMA = "pytest-flockai/1"
 BASELINE_SCHEMA = "pytest-flockai-baseline/1"
@@ -186,17 +185,14 @@ def build_report(tests: list[dict], *, exitstatus=0, interrupted=False, options=
 
 # -- baselines ---------------------------------------------------------------------------
 def baseline_from_tests(tests: list[dict]) -> dict:
-    """``{"schema": ..., "tests": {nodeid: {flight: kpis}}, "scenarios": {nodeid:
-    {flight: summary}}}`` for the tests that flew (the scenario summaries let a
-    later compare say what changed: ``reports/scenario.py``)."""
-    out, scen = {}, {}
+    """``{"schema": ..., "tests": {nodeid: {flight: kpis}}}`` for the tests that flew
+    (the plugin adds ``scenarios``, ``reports.scenario.of_report``)."""
+    out = {}
     for t in tests:
         flights = {f["name"]: dict(f["kpis"]) for f in t.get("flights", ())}
         if flights:
             out[t["nodeid"]] = flights
-            scen[t["nodeid"]] = {f["name"]: _scenario.summary(f.get("scenario"))
-                                 for f in t.get("flights", ())}
-    return {"schema": BASELINE_SCHEMA, "tests": out, "scenarios": scen}
+    return {"schema": BASELINE_SCHEMA, "tests": out}
 
 
 def load_baseline(path: Path) -> dict:

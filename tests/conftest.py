@@ -10,9 +10,25 @@ so the test files stay about what they check:
 - ``browser``: drives headless Chromium.
 """
 
+import importlib
+
 import pytest
 
 pytest_plugins = ["pytester"]
+
+# ``import pytest_flockai`` is lazy (PEP 562), so the first flight of a session may happen
+# inside a pytester in-process run; pytester then drops the modules that run imported, and the
+# next run imports numpy's C extension a second time ("cannot load module more than once per
+# process", or an abort). The C extensions the flights use are imported here, once, first.
+for _name in ("numpy", "pandas", "mujoco", "cv2", "onnxruntime", "matplotlib.pyplot",
+              "pytest_flockai.mission", "pytest_flockai.ml", "pytest_flockai.fleet",
+              "pytest_flockai.sweeps", "pytest_flockai.plots"):
+    try:
+        if _name == "matplotlib.pyplot":
+            importlib.import_module("matplotlib").use("Agg")
+        importlib.import_module(_name)
+    except ImportError:
+        pass
 
 #: whole files whose every test is slow
 SLOW_FILES = {"test_sweep_mjx.py", "test_interrupted_runs.py", "test_packaging.py",

@@ -51,7 +51,8 @@ LAZY_LOADS = {
 #: decision, so a new one fails until it is added here
 SAME_LAYER = {
     ("_check", "errors"), ("kpis", "errors"), ("limits", "errors"), ("recording", "errors"),
-    ("result", "_io"), ("result", "errors"), ("result", "phases"),
+    ("result", "_io"), ("result", "errors"), ("result", "phases"), ("result", "notebook"),
+    ("notebook", "kpis"),
     ("ml", "control"),
     ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
     ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),

@@ -19,6 +19,7 @@ import pytest
 
 from .. import report as _report
 from ..reports import compare as _compare
+from ..reports import scenario as _scenario
 from . import junit, signals, terminal
 from .options import DEFAULT_MAX_REGRESSION, MISSING_BASELINE, option, path_option
 
@@ -176,7 +177,9 @@ class FlockSession:
             self.config.hook.pytest_flockai_json_report(report=doc, config=self.config)
             self._write("JSON report", self.json_path, doc)
         if self.save_path is not None:
-            self._write("baseline", self.save_path, _report.baseline_from_tests(self.entries()))
+            base = _report.baseline_from_tests(self.entries())
+            base["scenarios"] = _scenario.of_report({"tests": self.entries()})   # for compare
+            self._write("baseline", self.save_path, base)
 
     def _write(self, what, path, doc) -> None:
         try:
