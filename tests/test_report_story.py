@@ -268,3 +268,54 @@ def test_the_scenario_summary_names_the_model_by_its_file_hash(tmp_path):
     other = dict(s, model="cnn sha256:00000000 (onboard)")
     assert scenario.diff(s, other) == [f"model: cnn sha256:{digest[:8]} (onboard) -> "
                                        f"cnn sha256:00000000 (onboard)"]
+
+
+GATE_SUITE = '''
+import pytest
+import pytest_flockai as fa
+
+HOVER = fa.pilots.Hover(altitude=1.0, duration=1.0)
+
+
+@pytest.mark.flockai(drone="crazyflie-2-1", pilot=HOVER)
+def test_plain(flight):
+    pass
+
+
+@pytest.mark.flockai(drone="crazyflie-2-1", pilot=HOVER, abs_tol={"energy_total_j": 1000})
+def test_tolerant(flight):
+    pass
+'''
+
+
+def test_abs_tolerance_on_the_command_line_and_per_test(pytester):
+    """A 3 % energy change at --flockai-max-regression 0: a regression, unless its absolute
+    tolerance (the test's marker, or --flockai-abs-tol) covers it."""
+    pytester.makepyfile(test_gate=GATE_SUITE)
+    args = ["-p", "no:cacheprovider", "--flockai-max-regression", "0"]
+    pytester.runpytest_inprocess(*args, "--flockai-save", "b.json").assert_outcomes(passed=2)
+    doc = json.loads((pytester.path / "b.json").read_text())
+    for t in doc["tests"].values():
+        t["flight"]["energy_total_j"] *= 0.97
+    (pytester.path / "b.json").write_text(json.dumps(doc))
+    res = pytester.runpytest_inprocess(*args, "--flockai-baseline", "b.json")
+    res.assert_outcomes(passed=1, failed=1)
+    res.stdout.fnmatch_lines(["FAILED test_gate.py::test_plain*"])
+    res = pytester.runpytest_inprocess(*args, "--flockai-baseline", "b.json",
+                                       "--flockai-abs-tol", "energy_total_j=1000")
+    res.assert_outcomes(passed=2)
+    res = pytester.runpytest_inprocess(*args, "--flockai-baseline", "b.json",
+                                       "--flockai-abs-tol", "energy_total_j")
+    assert res.ret == pytest.ExitCode.USAGE_ERROR
+    res.stderr.fnmatch_lines(["*--flockai-abs-tol = 'energy_total_j'*KPI=VALUE*"])
+
+
+def test_a_bad_abs_tol_marker_names_the_field():
+    from pytest_flockai.errors import ConfigError
+    from pytest_flockai.harness.markers import abs_tol_setting
+
+    assert abs_tol_setting({"energy_total_j": 5}) == (("energy_total_j", 5.0),)
+    with pytest.raises(ConfigError, match=r"abs_tol\['energy_total_j'\] = -1"):
+        abs_tol_setting({"energy_total_j": -1})
+    with pytest.raises(ConfigError, match="unknown KPI 'enrgy_total_j'"):
+        abs_tol_setting({"enrgy_total_j": 1})
