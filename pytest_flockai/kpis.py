@@ -18,6 +18,7 @@ class KPI:
     unit: str          # "s", "J", "W", "m", "m/s", "kB", "V", "fraction" (0..1), "count", "1" (custom, unitless)
     better: str | None
     description: str
+    abs_tol: float | None = None   # a change this small is noise (SI); None: the unit's default
 
 
 _ROWS = [
@@ -104,6 +105,30 @@ FAMILIES = {"map50": "per class", "precision": "per class", "recall": "per class
             "band (alt_<lo>_<hi>m) or box height (size_<band>px)"}
 
 REGISTRY: dict[str, KPI] = {r[0]: KPI(*r) for r in _ROWS}
+#: the built-in names (REGISTRY also holds the KPIs registered at run time)
+BUILTIN = frozenset(REGISTRY)
+
+#: Absolute tolerance by unit: a change of a KPI smaller than this is noise, never a
+#: regression, whatever the relative threshold (a 0.002 % CPU change is not news).
+#: Chosen below what any budget in the examples resolves: 1 ms, 10 mJ, 1 mW, 1 mm,
+#: 1 mV, 1 byte, 0.01 percentage point; counts are exact.
+UNIT_ABS_TOL = {"s": 1e-3, "J": 1e-2, "W": 1e-3, "m": 1e-3, "m/s": 1e-3, "kB": 1e-3,
+                "V": 1e-3, "fraction": 1e-4, "count": 0.0, "1": 0.0}
+#: KPIs whose tolerance is not their unit's: the battery's remaining share is read to 0.1 pp
+ABS_TOL = {"battery_remaining": 1e-3}
+
+
+def abs_tolerance(name: str) -> float:
+    """The absolute tolerance of KPI ``name`` in its SI unit (0 for an unknown KPI)."""
+    info = get(name)
+    if info is None:
+        return 0.0
+    if info.abs_tol is not None:
+        return float(info.abs_tol)
+    tail = name.split(".")[-1]
+    if tail in ABS_TOL or name in ABS_TOL:
+        return ABS_TOL.get(name, ABS_TOL.get(tail, 0.0))
+    return UNIT_ABS_TOL.get(info.unit, 0.0)
 
 
 def get(name: str) -> KPI | None:
@@ -127,11 +152,16 @@ def names() -> list[str]:
     return list(REGISTRY)
 
 
-def register(name: str, unit: str = "1", better: str | None = None, description: str = "") -> KPI:
-    """Register a custom KPI (e.g. a probe metric ``probe.metric``)."""
+def register(name: str, unit: str = "1", better: str | None = None, description: str = "",
+             abs_tol: float | None = None) -> KPI:
+    """Register a custom KPI (e.g. a probe metric ``probe.metric``); ``abs_tol``: a
+    change smaller than this is noise in comparisons (default: the unit's)."""
     if better not in ("higher", "lower", None):
         raise ConfigError(f"KPI {name!r}: better = {better!r} is not allowed; allowed: 'higher', 'lower', None")
-    k = KPI(name, unit, better, description)
+    if abs_tol is not None and not (isinstance(abs_tol, (int, float)) and abs_tol >= 0):
+        raise ConfigError(f"KPI {name!r}: abs_tol = {abs_tol!r} is not allowed; expected a "
+                          f"number >= 0 (in the KPI's SI unit) or None")
+    k = KPI(name, unit, better, description, None if abs_tol is None else float(abs_tol))
     old = REGISTRY.get(name)
     if old is not None and old != k and "." not in name:
         raise ConfigError(f"KPI {name!r} is built in; choose another name")

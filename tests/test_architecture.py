@@ -15,7 +15,7 @@ PKG = Path(__file__).resolve().parent.parent / "pytest_flockai"
 #: bottom to top; a name is a top-level module or subpackage of pytest_flockai
 LAYERS = [
     {"errors", "physics", "phases", "clock", "_check", "_io", "kpis", "recording", "result",
-     "limits", "memo", "_mujoco"},
+     "limits", "memo", "_mujoco", "notebook"},
     {"compute", "world"},
     {"energy", "sensors"},
     {"comm", "airframe"},
@@ -53,7 +53,8 @@ LAZY_LOADS = {
 SAME_LAYER = {
     ("_check", "errors"), ("_io", "errors"), ("kpis", "errors"), ("limits", "errors"),
     ("recording", "errors"),
-    ("result", "_io"), ("result", "errors"), ("result", "phases"),
+    ("result", "_io"), ("result", "errors"), ("result", "phases"), ("result", "notebook"),
+    ("notebook", "kpis"),
     ("ml", "control"),
     ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
     ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),

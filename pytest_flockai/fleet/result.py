@@ -24,6 +24,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from .. import notebook as _notebook
 from ..control.stages import TAKEOFF
 from ..mission import collect
 from ..result import FlightResult
@@ -39,6 +40,10 @@ class FleetResult(FlightResult):
     """A ``FlightResult`` of the whole fleet; ``drones``: name -> that drone's FlightResult."""
 
     drones: dict
+
+    def _repr_html_(self) -> str:
+        """In a notebook: the fleet KPIs, one row and one path colour per drone."""
+        return _notebook.fleet_html(self)
 
     def __repr__(self):
         return (f"FleetResult({len(self.drones)} drones, end_reason={self.end_reason!r}, "
