@@ -43,6 +43,9 @@ from . import comm, kpis, limits, ml, probes, sensors
 from .airframe import Drone, blueprints, drone
 from .compute import devices
 from .control import pilots
+from . import policy
+from .policy import Policy
+from .world import actors
 from .energy import EnergyModel
 from .errors import ConfigError, FlockAIError, SimulationError
 from .clock import Clocked
@@ -58,7 +61,7 @@ from .world import Atmosphere, Wind, World
 
 __version__ = "0.1.0"
 
-__all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet", "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission",
+__all__ = ["Atmosphere", "Clocked", "Policy", "actors", "policy", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet", "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
            "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "sweep",
            "__version__"]

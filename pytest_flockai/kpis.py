@@ -74,6 +74,20 @@ _ROWS = [
     ("recall", "fraction", "higher", "objects matched by a detection at the score threshold"),
     ("objects_missed", "fraction", "lower", "objects in view never detected"),
     ("accuracy", "fraction", "higher", "frames whose predicted classes are exactly right"),
+    # closed loop (fa.policy.Follow, SearchThenOrbit, MarkerLanding): scored against the truth
+    # after the flight, never used in a decision
+    ("time_to_detect_s", "s", "lower", "start of the plan to the first confirmed target"),
+    ("track_error_p95_m", "m", "lower", "95th percentile horizontal distance drone to followed "
+     "target while following"),
+    ("track_error_mean_m", "m", "lower", "mean horizontal distance drone to followed target "
+     "while following"),
+    ("track_lost_count", "count", "lower", "times the followed target's track was lost"),
+    ("track_lost_s", "s", "lower", "time spent with the target's track lost"),
+    ("landing_error_m", "m", "lower", "horizontal distance from the touchdown point to the "
+     "landing marker's centre"),
+    ("targets_found", "count", "higher", "distinct targets a search confirmed"),
+    ("time_to_find_all_s", "s", "lower", "start of the plan until every target was found "
+     "(NaN unless all were)"),
     # fleet (fa.Fleet); each drone's own KPIs are '<drone name>.<kpi>'
     ("fleet.drones", "count", None, "drones in the fleet"),
     ("fleet.makespan_s", "s", "lower", "time until the last drone's flight ended"),

@@ -19,7 +19,7 @@ LAYERS = [
     {"energy", "sensors"},
     {"comm", "airframe"},
     {"control", "ml", "probes"},
-    {"mission", "cache", "fleet"},
+    {"mission", "cache", "fleet", "policy"},
     {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
      "plugin", "__init__", "sweeps"},
 ]

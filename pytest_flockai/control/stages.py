@@ -65,6 +65,17 @@ class StageMachine(Clocked):
         """Leave the pilot's plan now: return home (if away) and land."""
         self._after_pilot(t, force_home=True)
 
+    def replace_pilot(self, t: float, pilot) -> None:
+        """Fly ``pilot`` from now on, from where the drone is (a policy's new plan;
+        only during the pilot stage)."""
+        qc = self.st.qc
+        self.pilot, self._pupdate = pilot, pilot.update
+        pilot.start(t, (qc[0], qc[1], qc[2]), self.accel)
+
+    def land_here(self, t: float) -> None:
+        """Leave the plan now and land straight down."""
+        self._land(t)
+
     # -- transitions -----------------------------------------------------------
     def _start_pilot(self, t):
         s = self.st

@@ -27,6 +27,7 @@ from ..probes.telemetry import TelemetryRecorder, TelemetryStep
 from ..sensors import (IMU, GPS, Barometer, BatterySensor, Camera, Compass, Rangefinder,
                        SensorSuite)
 from ..sensors.base import Sensing
+from ..world.actors import ActorSet
 from ..world.wind import WindStep
 from .book import FlightBook
 from .ending import EndConditions, WallClockGuard
@@ -72,6 +73,9 @@ class Run:
         rho = plan.atmosphere.density
         spec = build_spec(drone, plan.world, physics_dt=plan.physics_dt, rho=rho)
         self.suite.add_to_spec(spec, "drone")
+        self.actors = ActorSet(plan.actors) if plan.actors else None
+        if self.actors is not None:
+            self.actors.add_to_spec(spec)
         self.model = spec.compile()
         self.data = mujoco.MjData(self.model)
         mujoco.mj_forward(self.model, self.data)
@@ -85,6 +89,11 @@ class Run:
         st.home = (0.0, 0.0, float(self.data.qpos[2]))
         self.suite.bind(self.model, self.data, seed_sequence(plan.seed, "sensors"), world=plan.world,
                         battery=lambda: st.battery_remaining)
+        if self.actors is not None:
+            self.actors.bind(self.model)
+        for sensor in self.suite:
+            if hasattr(sensor, "bind_actors"):
+                sensor.bind_actors(self.actors)        # None: no actors in this flight
         self.controller = CascadedController(drone, plan.ctrl_dt, rho=rho)
         self.meter = Meter(flight_energy_model(
             drone.energy, extra_sensors=list(drone.extra_sensors) + list(plan.sensors),
@@ -135,6 +144,10 @@ class Run:
         for c in plan.components:
             c.bind(self)
             comps.append(c)
+        self.policies = [copy.copy(p) for p in plan.policies]   # per-flight state on the copy
+        for p in self.policies:
+            p.bind(self)
+            comps.append(p)
         if plan.max_wall_s is not None:
             guard = WallClockGuard(plan.max_wall_s)
             guard.bind(self)

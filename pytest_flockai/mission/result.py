@@ -18,6 +18,8 @@ def build(run, mission, wall_s: float, t_final: float, end_reason: str) -> Fligh
     stage = DONE if st.t_land else PILOT
     kpis = run.probing.final(t_final, d.qpos.tolist(), d.qvel.tolist(), stage)
     kpis.update(run.scheduler.evaluation_kpis())
+    for p in getattr(run, "policies", ()):
+        kpis.update(p.kpis(run))
     frames = run.hub.frames()
     _merge_probe_columns(tel, frames)
     scen = mission.scenario()

@@ -7,12 +7,14 @@
 - ``Task`` and ``TaskRunner``: what runs where, executed on the simulated clock;
 - ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
   into one shape; ``evaluation``: COCO detection metrics and classification;
-- ``count_macs``: MACs and parameters of an ONNX graph.
+- ``count_macs``: MACs and parameters of an ONNX graph;
+- ``Oracle``: the frame's truth boxes as detections (optionally degraded), no pixels.
 """
 
 from .macs import MacReport, count_macs
 from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
+from .oracle import Oracle, OracleFrame
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord
 from .jpeg import decode_jpeg, encode_jpeg
@@ -21,6 +23,6 @@ from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
 __all__ = ["Classifier", "Clusterer", "Counter", "Detections", "Detector", "DeviceClock",
-           "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel",
+           "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel", "Oracle", "OracleFrame",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
            "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]
