@@ -32,13 +32,14 @@ def ground_point(u: float, v: float, nav, lens, height: float = 0.0):
     from ``nav`` = (x, y, z, qw, qx, qy, qz) with ``lens`` = (width, height, fov_deg,
     pitch_deg); None when the ray does not go down to it."""
     w, h, fov, pitch = lens
-    cam_pos, R = gimbal_pose(nav[:3], yaw_of(nav[3:7]), pitch)
+    _, R = gimbal_pose((0.0, 0.0, 0.0), yaw_of(nav[3:7]), pitch)
     f = focal_px(fov, h)
-    d = R @ np.array([(u - 0.5 * w) / f, -(v - 0.5 * h) / f, -1.0])
-    if d[2] >= -1e-6 or cam_pos[2] <= height:
+    a, b = (u - 0.5 * w) / f, -(v - 0.5 * h) / f
+    dx, dy, dz = (float(R[i, 0] * a + R[i, 1] * b - R[i, 2]) for i in range(3))
+    if dz >= -1e-6 or nav[2] <= height:
         return None
-    s = (height - cam_pos[2]) / d[2]
-    return float(cam_pos[0] + s * d[0]), float(cam_pos[1] + s * d[1])
+    s = (height - nav[2]) / dz
+    return float(nav[0] + s * dx), float(nav[1] + s * dy)
 
 
 class Tracker:

@@ -178,6 +178,7 @@ class ActorSet:
         self._shape = {k: _meshes(k) for k in ("person", "vehicle")}
         pv = np.vstack([m[0] for m in self._shape["person"].values()])
         self._pshape = (pv, _fig.person_samples(WALK_POSE))
+        self._turn_cache: dict = {}
         self._geoms: list = []          # per actor: [(geom id, local pos (3,), local mat (3, 3))]
 
     def __len__(self) -> int:
@@ -197,11 +198,21 @@ class ActorSet:
         people = [(s, a) for s, a in zip(st, self.actors) if a.kind == "person"]
         cars = [(s, a) for s, a in zip(st, self.actors) if a.kind != "person"]
         feet = np.array([(x, y, 0.0) for (x, y, _), _ in people]).reshape(-1, 3)
-        shapes = [(_rotate(self._pshape[0], h), _rotate(self._pshape[1], h))
-                  for (_, _, h), _ in people]
+        shapes = [self._turned(h) for (_, _, h), _ in people]
         veh = np.array([(x, y, 0.0, h) for (x, y, h), _ in cars]).reshape(-1, 4)
         tab = ObjectTable.build(feet, veh, shapes=shapes if people else [])
         return feet + (0.0, 0.0, PERSON_HEIGHT / 2), tab
+
+    def _turned(self, heading: float):
+        """(vertices, samples) of the walking figure facing ``heading`` (cached: walkers
+        keep a heading for a whole leg)."""
+        got = self._turn_cache.get(heading)
+        if got is None:
+            if len(self._turn_cache) > 64:
+                self._turn_cache.clear()
+            got = (_rotate(self._pshape[0], heading), _rotate(self._pshape[1], heading))
+            self._turn_cache[heading] = got
+        return got
 
     # -- rendering ---------------------------------------------------------
     def add_to_spec(self, spec) -> None:
