@@ -292,6 +292,7 @@ class Policy(Clocked):
         """Per-flight set-up of a subclass (called from ``bind``)."""
 
     def step(self, t: float) -> None:
+        t = round(t, 9)           # the summed physics steps' drift: 25.0, not 24.99999999999
         self.drone.t = t
         self.decide(t, self.drone)
         self.advance_clock()

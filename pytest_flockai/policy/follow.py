@@ -74,6 +74,10 @@ class _Perceiving(Policy):
         if self.target not in tk.classes:
             raise ConfigError(f"{where}: target = {self.target!r} is not a class of task "
                               f"{self.task!r}; allowed: {', '.join(map(repr, tk.classes))}")
+        reports = getattr(tk.model, "classes", None)      # an oracle says what it reports
+        if reports is not None and self.target not in reports:
+            raise ConfigError(f"{where}: target = {self.target!r} is not a class the model of "
+                              f"task {self.task!r} reports; allowed: {', '.join(map(repr, reports))}")
         names = [a.name for a in getattr(mission, "actors", ()) if a.name]
         if self.score is not None and self.score not in names:
             raise ConfigError(f"{where}: score = {self.score!r} is not an actor of the mission; "
