@@ -144,6 +144,32 @@ def walkers(n: int, area, seed: int = 0, *, legs: int = 4, speed: float = WALK_S
     return out
 
 
+def traffic(world, n: int, seed: int = 0, *, speed: float = CAR_SPEED) -> list:
+    """``n`` cars driving ``world``'s streets (an urban or scene world), each along one
+    street's right-hand lane from one end to the other and back (``loop=True``), the
+    street and the direction drawn from ``seed``; speeds vary +-10 % around ``speed``."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        raise ConfigError(f"traffic: n = {n!r} is not allowed; expected an int >= 0")
+    streets = list(getattr(world, "streets", []) or [])
+    if n and not streets:
+        raise ConfigError(f"traffic: world {getattr(world, 'name', world)!r} has no streets; "
+                          f"use World.urban(...) or World.scene(...)")
+    rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(26,)))
+    out = []
+    for k in range(int(n)):
+        x0, y0, x1, y1 = streets[int(rng.integers(len(streets)))]
+        along_x = (x1 - x0) >= (y1 - y0)
+        sign = 1.0 if rng.random() < 0.5 else -1.0
+        lane = 0.25 * ((y1 - y0) if along_x else (x1 - x0)) * -sign    # keep right
+        cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+        ends = ([(x0 + 3.0, cy + lane), (x1 - 3.0, cy + lane)] if along_x
+                else [(cx - lane, y0 + 3.0), (cx - lane, y1 - 3.0)])
+        if sign < 0:
+            ends.reverse()
+        out.append(Car(ends, speed * rng.uniform(0.9, 1.1), loop=True, name=f"car{k}"))
+    return out
+
+
 def check_actors(actors, world, where: str = "Mission") -> tuple:
     """The actors as a tuple, each checked to stay inside ``world`` (its size, or
     ``limits.MAX_EXTENT_M`` for unbounded worlds)."""
@@ -272,4 +298,4 @@ def merge_tables(a: ObjectTable | None, b: ObjectTable) -> ObjectTable:
 
 
 __all__ = ["CAR_HEIGHT", "CAR_SPEED", "CAR_VERTS", "WALK_SPEED", "Actor", "ActorSet", "Car",
-           "Person", "check_actors", "merge_tables", "walk_and_turn", "walkers"]
+           "Person", "check_actors", "merge_tables", "traffic", "walk_and_turn", "walkers"]
