@@ -39,7 +39,7 @@ SAME_LAYER = {
     ("_check", "errors"), ("kpis", "errors"), ("limits", "errors"), ("recording", "errors"),
     ("result", "_io"), ("result", "errors"), ("result", "phases"),
     ("ml", "control"),
-    ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
+    ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"), ("mission", "policy"),
     ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
     ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
     ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),
