@@ -66,9 +66,12 @@ class StageMachine(Clocked):
         self._after_pilot(t, force_home=True)
 
     def replace_pilot(self, t: float, pilot) -> None:
-        """Fly ``pilot`` from now on, from where the drone is (a policy's new plan;
-        only during the pilot stage)."""
+        """Fly ``pilot`` from now on, from where the drone is (a policy's new plan; during
+        the pilot stage, or on the way home: then the pilot stage starts again)."""
         qc = self.st.qc
+        if self.st.stage == RETURN:
+            self.st.stage = PILOT
+            self.events.add(t, "stage", stage="pilot")
         self.pilot, self._pupdate = pilot, pilot.update
         pilot.start(t, (qc[0], qc[1], qc[2]), self.accel)
 

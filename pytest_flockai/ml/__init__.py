@@ -8,12 +8,14 @@
 - ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
   into one shape; ``evaluation``: COCO detection metrics and classification;
 - ``count_macs``: MACs and parameters of an ONNX graph;
-- ``Oracle``: the frame's truth boxes as detections (optionally degraded), no pixels.
+- ``Oracle``: the frame's truth boxes as detections (optionally degraded), no pixels;
+  ``MarkerDetector``: ArUco markers through OpenCV.
 """
 
 from .macs import MacReport, count_macs
 from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
+from .fiducial import MarkerDetector
 from .oracle import Oracle, OracleFrame
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord
@@ -23,6 +25,6 @@ from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
 __all__ = ["Classifier", "Clusterer", "Counter", "Detections", "Detector", "DeviceClock",
-           "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel", "Oracle", "OracleFrame",
+           "FrameRecord", "InferenceEvent", "MacReport", "MarkerDetector", "Model", "OnnxModel", "OpenCVModel", "Oracle", "OracleFrame",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
            "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]

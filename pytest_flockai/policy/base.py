@@ -17,7 +17,8 @@ Actions (each an event ``{"kind": "policy", "policy": name, "action": ...}`` in
 ``set_model``, ``set_execution``, ``enable``, ``disable`` a task; ``fly(pilot)``
 (replace the plan), ``goto``, ``orbit``, ``hold``, ``resume`` (back to the
 mission's own plan where it was left), ``return_home``, ``land``. Plan actions
-need the pilot stage; asked at another stage they are refused (an event
+need the pilot stage (or the way home, which they end); asked at another stage
+(take-off, landing) they are refused (an event
 ``policy_refused``, the flight goes on). ``drone.mode(name)`` names what the
 policy is doing; ``policy.<name>.time_<mode>_s`` is the time spent in each.
 """
@@ -30,7 +31,7 @@ import math
 from ..clock import Clocked
 from ..control.follow import Goto, Resume, yaw_of
 from ..control.pilots import Hover, Orbit, Pilot
-from ..control.stages import LAND, PILOT, STAGES, TAKEOFF
+from ..control.stages import LAND, PILOT, RETURN, STAGES, TAKEOFF
 from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
@@ -197,7 +198,7 @@ class Cockpit:
         """Replace the plan with ``pilot`` now (pilot stage only); False when refused."""
         if not isinstance(pilot, Pilot):
             raise ConfigError(f"policy {self._policy.name!r}: fly({pilot!r}) is not a Pilot")
-        if self._st.stage != PILOT:
+        if self._st.stage not in (PILOT, RETURN):
             return self._refuse(action)
         if self._survey is None:
             self._survey = (self._stages.pilot, self.t, list(self._st.sp))

@@ -26,6 +26,7 @@ import numpy as np
 from .. import _check, limits
 from ..errors import ConfigError
 from . import figures as _fig
+from . import markers as _markers
 from .objects import CAR_HEIGHT, CAR_VERTS, PERSON_HEIGHT, ObjectTable, _rotate
 
 WALK_SPEED = 1.4        # m/s, Bohannon 1997 / Mohler et al. 2007 (module docstring)
@@ -116,6 +117,39 @@ class Car(Actor):
     default_speed = CAR_SPEED
 
 
+class Marker(Actor):
+    """An ArUco marker lying still at (x, y) (``world.markers``): ``size_m`` the side of
+    its black square, ``marker_id`` in ``dictionary``, turned by ``yaw_deg``. It is drawn
+    in rendered frames and is no object of the detection truth."""
+
+    kind = "marker"
+
+    def __init__(self, x: float, y: float, *, size_m: float = 1.5, marker_id: int = 0,
+                 dictionary: str = "DICT_4X4_50", yaw_deg: float = 0.0, name: str | None = None):
+        super().__init__([(x, y)], 1.0, name=name or f"marker{marker_id}")
+        where = f"Marker {self.name!r}"
+        self.size_m = _check.positive("size_m", size_m, where=where)
+        self.dictionary = _check.choice("dictionary", dictionary, _markers.DICTIONARIES, where=where)
+        if isinstance(marker_id, bool) or not isinstance(marker_id, (int, np.integer)) or \
+                not 0 <= marker_id < 50:
+            raise ConfigError(f"{where}: marker_id = {marker_id!r} is not allowed; expected an "
+                              f"int in 0..49")
+        self.marker_id = int(marker_id)
+        self.yaw_deg = _check.number("yaw_deg", yaw_deg, where=where)
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        return self.path[0]
+
+    def to_dict(self) -> dict:
+        return {"type": "Marker", "name": self.name, "x": self.centre[0], "y": self.centre[1],
+                "size_m": self.size_m, "marker_id": self.marker_id, "dictionary": self.dictionary,
+                "yaw_deg": self.yaw_deg}
+
+    def __repr__(self):
+        return f"Marker({self.name!r}, at={self.centre}, size_m={self.size_m:g})"
+
+
 def walk_and_turn(start=(0.0, 0.0), heading_deg: float = 0.0, first_m: float = 60.0,
                   turn_deg: float = 90.0, then_m: float = 60.0, **kw) -> Person:
     """A scripted target: walks ``first_m`` metres along ``heading_deg`` (0 = east,
@@ -199,7 +233,10 @@ class ActorSet:
     """The actors of one flight: their truth table at any time, their geoms in the model."""
 
     def __init__(self, actors):
-        self.actors = tuple(actors)
+        everything = tuple(actors)
+        #: what moves (people and cars); markers lie still and are drawn only
+        self.actors = tuple(a for a in everything if a.kind != "marker")
+        self.markers = tuple(a for a in everything if a.kind == "marker")
         self.n_people = sum(a.kind == "person" for a in self.actors)
         self._shape = {k: _meshes(k) for k in ("person", "vehicle")}
         pv = np.vstack([m[0] for m in self._shape["person"].values()])
@@ -208,7 +245,7 @@ class ActorSet:
         self._geoms: list = []          # per actor: [(geom id, local pos (3,), local mat (3, 3))]
 
     def __len__(self) -> int:
-        return len(self.actors)
+        return len(self.actors) + len(self.markers)
 
     def states(self, t: float) -> list:
         """[(x, y, heading)] of every actor at t."""
@@ -242,7 +279,11 @@ class ActorSet:
 
     # -- rendering ---------------------------------------------------------
     def add_to_spec(self, spec) -> None:
-        """One mesh geom per actor and material in the world body (no collisions)."""
+        """One mesh geom per actor and material in the world body (no collisions), and
+        each marker's textured slab."""
+        for i, m in enumerate(self.markers):
+            _markers.add_marker(spec, f"marker{i}", m.centre, m.size_m, m.dictionary, m.marker_id,
+                                m.yaw_deg)
         for i, a in enumerate(self.actors):
             for part, (v, f) in self._shape[a.kind].items():
                 name = f"actor{i}_{part}"
@@ -298,4 +339,4 @@ def merge_tables(a: ObjectTable | None, b: ObjectTable) -> ObjectTable:
 
 
 __all__ = ["CAR_HEIGHT", "CAR_SPEED", "CAR_VERTS", "WALK_SPEED", "Actor", "ActorSet", "Car",
-           "Person", "check_actors", "merge_tables", "traffic", "walk_and_turn", "walkers"]
+           "Marker", "Person", "check_actors", "merge_tables", "traffic", "walk_and_turn", "walkers"]
