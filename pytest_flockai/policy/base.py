@@ -208,16 +208,17 @@ class Cockpit:
 
     def goto(self, x: float, y: float, z: float | None = None, speed: float = 5.0) -> bool:
         z = self.position[2] if z is None else z
-        return self.fly(Goto((x, y, z), speed), action="goto", x=x, y=y, z=z)
+        return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y), z=float(z))
 
     def orbit(self, x: float, y: float, radius: float = 10.0, speed: float = 3.0,
               altitude: float | None = None) -> bool:
         alt = self.position[2] if altitude is None else altitude
-        return self.fly(Orbit((x, y), radius, alt, speed), action="orbit", x=x, y=y, radius=radius)
+        return self.fly(Orbit((x, y), radius, alt, speed), action="orbit", x=float(x), y=float(y),
+                        radius=float(radius))
 
     def hold(self) -> bool:
         x, y, z = self.position
-        return self.fly(Hover(max(z, 0.5)), action="hold", x=x, y=y, z=z)
+        return self.fly(Hover(max(z, 0.5)), action="hold", x=float(x), y=float(y), z=float(z))
 
     def resume(self) -> bool:
         """Back to the mission's own plan where it was left (nothing to do if never left)."""

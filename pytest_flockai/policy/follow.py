@@ -11,9 +11,10 @@ what the drone does: ``"search"`` (resume the plan where it was left and look
 again), ``"hold"``, ``"return_home"`` or ``"land"``.
 
 ``SearchThenOrbit(task)``: the plan (a lawnmower) until a confirmed detection,
-then orbit it at ``radius``; ``find`` > 1 resumes the search after ``orbit_s``
-to look for the next target (a new target is one farther than ``gate_m`` from
-every target found).
+then orbit it at ``radius`` for ``orbit_s``; with ``find`` > 1 it resumes the
+search to look for the next target (a new target is one farther than ``gate_m``
+from every target found). Once ``find`` targets are found: ``after="return_home"``
+(go home and land) or ``"orbit"`` (keep orbiting the last one).
 
 Closed-loop KPIs (``policy/scoring.py``, from the truth after the flight, never
 in a decision): ``time_to_detect_s``, ``track_error_p95_m``, ``track_lost_count``,
@@ -34,6 +35,8 @@ from . import scoring
 from .base import Policy
 
 ON_LOST = ("search", "hold", "return_home", "land")
+#: what SearchThenOrbit does once it found ``find`` targets and orbited the last
+AFTER = ("return_home", "orbit")
 #: m: the height of an object's centre, where a box's centre ray meets it
 CENTRE_Z = {"person": PERSON_HEIGHT / 2, "vehicle": CAR_HEIGHT / 2}
 
@@ -180,11 +183,12 @@ class Follow(_Perceiving):
 class SearchThenOrbit(_Perceiving):
     """Fly the plan until a confirmed detection, then orbit it (module docstring)."""
 
-    modes = ("search", "orbit")
+    modes = ("search", "orbit", "done")
 
     def __init__(self, task: str, *, target: str = "person", radius: float = 10.0,
                  speed: float = 3.0, find: int = 1, orbit_s: float = 20.0, confirm: int = 2,
-                 gate_m: float = 10.0, name: str = "search", period_s: float = 0.2):
+                 gate_m: float = 10.0, after: str = "return_home", name: str = "search",
+                 period_s: float = 0.2):
         super().__init__(task, target, name, period_s, gate_m, confirm, None)
         where = f"policy {self.name!r}"
         self.radius = _check.positive("radius", radius, where=where)
@@ -193,6 +197,7 @@ class SearchThenOrbit(_Perceiving):
             raise ConfigError(f"{where}: find = {find!r} is not allowed; expected an int >= 1")
         self.find = find
         self.orbit_s = _check.positive("orbit_s", orbit_s, where=where)
+        self.after = _check.choice("after", after, AFTER, where=where)
 
     def start(self, run) -> None:
         super().start(run)
@@ -217,13 +222,17 @@ class SearchThenOrbit(_Perceiving):
                     self._orbit_t = t
                     drone.mode("orbit")
                 tr.reset()
-        elif len(self.found) < self.find and t - self._orbit_t >= self.orbit_s:
-            if drone.resume():
-                drone.mode("search")
+        elif self._mode == "orbit" and t - self._orbit_t >= self.orbit_s:
+            if len(self.found) < self.find:
+                if drone.resume():
+                    drone.mode("search")
+            elif self.after != "orbit" and drone.return_home():
+                drone.mode("done")
 
     def to_dict(self):
         return {**super().to_dict(), "task": self.task, "target": self.target,
-                "radius": self.radius, "find": self.find, "orbit_s": self.orbit_s}
+                "radius": self.radius, "find": self.find, "orbit_s": self.orbit_s,
+                "after": self.after}
 
 
-__all__ = ["Follow", "ON_LOST", "SearchThenOrbit"]
+__all__ = ["AFTER", "Follow", "ON_LOST", "SearchThenOrbit"]
