@@ -3,8 +3,7 @@
 ``MarkerDetector(dictionary="DICT_4X4_50")`` runs ``cv2.aruco.ArucoDetector`` on the
 rendered frame and returns an (N, 6) array ``x0, y0, x1, y1, score, class``: the
 box of each found marker's corners, score 1, class 0 (give the task
-``classes=("marker",)``); ``ids`` of the last call holds their marker ids and
-``centres`` their centre pixels (the mean of the four corners).
+``classes=("marker",)``).
 
 Cost: ``MACS_PER_PIXEL`` = 60 operations per pixel, an estimate from what
 ``detectMarkers`` does with its default parameters: greyscale conversion (~3 per
@@ -36,12 +35,14 @@ class MarkerDetector(Model):
             raise ConfigError(f"MarkerDetector: dictionary = {dictionary!r} is not allowed; "
                               f"allowed: {', '.join(map(repr, DICTIONARIES))}")
         self.dictionary, self.marker_id, self.name = dictionary, marker_id, name
-        self._det = cv2.aruco.ArucoDetector(aruco_dictionary(dictionary),
-                                            cv2.aruco.DetectorParameters())
         self.macs = MACS_PER_PIXEL * int(width) * int(height)
         self.params = 0
-        self.ids: list = []
-        self.centres: list = []
+
+    def bind_detector(self):
+        """OpenCV's detector, made on the first frame (not part of the flight-cache key)."""
+        self._det = cv2.aruco.ArucoDetector(aruco_dictionary(self.dictionary),
+                                            cv2.aruco.DetectorParameters())
+        return self._det
 
     def macs_for(self, frame) -> int:
         h, w = np.shape(frame)[:2]
@@ -50,16 +51,15 @@ class MarkerDetector(Model):
     def __call__(self, frame) -> np.ndarray:
         a = np.asarray(frame)
         grey = cv2.cvtColor(a, cv2.COLOR_RGB2GRAY) if a.ndim == 3 else a
-        corners, ids, _ = self._det.detectMarkers(grey)
-        rows, self.ids, self.centres = [], [], []
+        det = getattr(self, "_det", None) or self.bind_detector()
+        corners, ids, _ = det.detectMarkers(grey)
+        rows = []
         for c, i in zip(corners, ids.reshape(-1) if ids is not None else []):
             if self.marker_id is not None and int(i) != self.marker_id:
                 continue
             pts = c.reshape(4, 2)
             lo, hi = pts.min(axis=0), pts.max(axis=0)
             rows.append((lo[0], lo[1], hi[0], hi[1], 1.0, 0.0))
-            self.ids.append(int(i))
-            self.centres.append(tuple(pts.mean(axis=0)))
         return np.asarray(rows, dtype=float).reshape(-1, 6)
 
     def to_dict(self) -> dict:
