@@ -9,9 +9,15 @@ not objects of the detection truth). ``ml.MarkerDetector`` finds them in frames.
 
 from __future__ import annotations
 
+import os
+import tempfile
+from pathlib import Path
+
 import cv2
 import mujoco
 import numpy as np
+
+from .._io import atomic_write
 
 
 DICTIONARIES = ("DICT_4X4_50", "DICT_5X5_50", "DICT_6X6_50", "DICT_APRILTAG_36h11")
@@ -37,14 +43,24 @@ def marker_image(dictionary: str, marker_id: int) -> np.ndarray:
     return np.ascontiguousarray(np.repeat(full[:, :, None], 3, axis=2))
 
 
+def marker_file(dictionary: str, marker_id: int) -> Path:
+    """A PNG of the tag's texture in this user's temporary folder (written once,
+    atomically): a texture from a file keeps the model's spec writable as MJCF."""
+    folder = Path(tempfile.gettempdir()) / f"pytest-flockai-markers-{os.getuid()}"
+    path = folder / f"{dictionary}-{int(marker_id)}-{TEXEL_PER_CELL}.png"
+    if not path.exists():
+        folder.mkdir(parents=True, exist_ok=True)
+        ok, png = cv2.imencode(".png", marker_image(dictionary, marker_id)[:, :, ::-1])
+        atomic_write(path, lambda fh: fh.write(png.tobytes()), text=False)
+    return path
+
+
 def add_marker(spec, name: str, centre, size_m: float, dictionary: str, marker_id: int,
                yaw_deg: float = 0.0) -> None:
     """A textured slab on the ground of the world body: the tag's black square
     ``size_m`` wide, centred at ``centre`` (x, y), turned by ``yaw_deg``."""
-    img = marker_image(dictionary, marker_id)
-    tex = spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_2D,
-                           width=img.shape[1], height=img.shape[0], nchannel=3)
-    tex.data = img.tobytes()
+    spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_2D,
+                     file=str(marker_file(dictionary, marker_id)))
     mat = spec.add_material(name=name, specular=0.0, shininess=0.0, reflectance=0.0)
     mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = name
     half = 0.5 * size_m * (CELLS[dictionary] + 4) / (CELLS[dictionary] + 2)
@@ -56,4 +72,5 @@ def add_marker(spec, name: str, centre, size_m: float, dictionary: str, marker_i
                             contype=0, conaffinity=0, group=0)
 
 
-__all__ = ["CELLS", "DICTIONARIES", "TOP_Z", "add_marker", "aruco_dictionary", "marker_image"]
+__all__ = ["CELLS", "DICTIONARIES", "TOP_Z", "add_marker", "aruco_dictionary", "marker_file",
+           "marker_image"]
