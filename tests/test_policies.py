@@ -156,3 +156,26 @@ def test_an_actor_path_outside_the_world_is_refused():
         mission(actors=[stray])
     assert "path[2] = (30, 120) is outside the world" in str(e.value)
     assert "|y| <= 100 m" in str(e.value)
+
+
+def test_with_fly_on_estimate_the_policy_sees_the_estimate():
+    """The position a policy reads, and the pose it projects boxes with, is the GPS and
+    barometer estimate the drone flies on: it differs from the truth by the sensors' noise."""
+    got = []
+
+    class Look(fa.Policy):
+        def decide(self, t, drone):
+            st = drone._st
+            got.append((drone.position, tuple(st.qc[:3]), tuple(st.q[:3])))
+            for r in drone.results("eye"):
+                got.append(("nav", r.nav))
+
+    m = fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(altitude=15.0),
+                   world=fa.World.scene(people=[(0.0, 0.0)]), tasks=[oracle_task()],
+                   policies=[Look(name="look", period_s=1.0)], fly_on="estimate", until=30.0)
+    m.run()
+    poses = [g for g in got if g[0] != "nav"]
+    assert all(seen == est for seen, est, _ in poses)
+    assert max(math.dist(seen, true) for seen, _, true in poses[5:]) > 0.05
+    navs = [g[1] for g in got if g[0] == "nav"]
+    assert navs and all(n is not None for n in navs)
