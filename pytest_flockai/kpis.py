@@ -97,6 +97,12 @@ _ROWS = [
     ("fleet.min_separation_m", "m", "higher", "smallest distance between two airborne drones"),
     ("fleet.crashes", "count", "lower", "drones whose flight ended in a crash"),
     ("fleet.energy_total_j", "J", "lower", "sum of the drones' energy_total_j"),
+    ("fleet.targets_found", "count", "higher", "a search together (fa.policy.SharedSearch): "
+     "distinct people confirmed"),
+    ("fleet.time_to_find_all_s", "s", "lower", "a search together: first plan start until "
+     "every person was confirmed (NaN unless all were)"),
+    ("fleet.reports", "count", None, "a search together: detections reported to the ground station"),
+    ("fleet.assignments", "count", None, "a search together: drones sent to confirm a report"),
     ("offload.latency_p95_s", "s", "lower", "fleet offload: 95th percentile capture-to-result latency"),
     ("link.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the channel"),
     ("ground.queue_delay_mean_s", "s", "lower", "fleet offload: mean wait for the ground device"),
