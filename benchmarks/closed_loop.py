@@ -11,7 +11,11 @@ jobs on a shared machine) of
   target of issue 25 is >= 100x),
 - the shipped detector (fixtures/models/detector.onnx) at 5 Hz on 320 x 240 frames
   + Follow, with where its time goes (cProfile of one more run, cumulative
-  seconds in rendering, ONNX Runtime, the frame truth, the policy, MuJoCo physics).
+  seconds in rendering, ONNX Runtime, the frame truth, the policy, MuJoCo physics);
+- a fleet of 4 surveying with an oracle task each, with and without a
+  ``fa.policy.SharedSearch`` per drone, over a world without people, so the
+  policies step, read every delivered result and never act: their own cost, as
+  CPU seconds per simulated drone-second (target of issue 25: within 10 %).
 
     python benchmarks/closed_loop.py [--repeat 3] [--seconds 60]
 """
@@ -82,6 +86,37 @@ def where_time_goes(seconds: float) -> dict:
     return out
 
 
+def fleet(policies: bool) -> fa.Fleet:
+    area = ((-60.0, -60.0), (60.0, 60.0))
+    station = fa.policy.GroundStation()
+    drones = []
+    for i, (pilot, pad) in enumerate(fa.fleet.survey(area, 4, altitude=20.0, spacing=15.0,
+                                                     speed=6.0)):
+        eye = fa.Task(fa.ml.Oracle(classes=["person"]), period_s=0.2, evaluate="detection",
+                      name="eye")
+        pol = [fa.policy.SharedSearch("eye", station)] if policies else []
+        drones.append(fa.FleetDrone(f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad,
+                                    tasks=[eye], seed=i, policies=pol))
+    return fa.Fleet(drones, world=fa.World.scene(size=(140.0, 140.0)))
+
+
+def fleet_cost(repeat: int) -> dict:
+    """CPU s per simulated drone-second of the fleet, without and with policies,
+    interleaved runs (median)."""
+    out: dict = {False: [], True: []}
+    for f in (fleet(False), fleet(True)):
+        f.run()                                          # warm
+    for _ in range(repeat):
+        for with_policies in (False, True):
+            f = fleet(with_policies)
+            c0 = time.process_time()
+            res = f.run()
+            cpu = time.process_time() - c0
+            drone_s = sum(res.kpis[f"d{i}.flight_time_s"] for i in range(1, 5))
+            out[with_policies].append(cpu / drone_s)
+    return {k: statistics.median(v) for k, v in out.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeat", type=int, default=3)
@@ -103,6 +138,10 @@ def main() -> None:
         print(f"  {k:<16} {v:6.2f} s  {100 * v / total:5.1f} %")
     rest = total - sum(parts.values())
     print(f"  {'the rest':<16} {rest:6.2f} s  {100 * rest / total:5.1f} %")
+    cost = fleet_cost(a.repeat)
+    print(f"fleet of 4, oracle 5 Hz each: {1e3 * cost[False]:.2f} ms CPU per drone-second "
+          f"without policies, {1e3 * cost[True]:.2f} with SharedSearch "
+          f"({100 * (cost[True] / cost[False] - 1):+.1f} %)")
     print(f"load average after {os.getloadavg()[0]:.2f}")
 
 
