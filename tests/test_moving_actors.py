@@ -89,7 +89,7 @@ def test_a_rendered_frame_shows_the_actor_in_its_truth_box():
     spy = Spy([18.0, 26.0], render=True)
     hover_over(car, spy).run()
     paint = np.array([0.1, 0.3, 0.8]) * 255
-    for t, truth, frame, _ in spy.seen:
+    for _t, truth, frame, _ in spy.seen:
         x0, y0, x1, y1 = truth.objects.boxes[0].astype(int)
         inside = frame[y0:y1, x0:x1].reshape(-1, 3).astype(float)
         blue = np.linalg.norm(inside - paint, axis=1) < 90

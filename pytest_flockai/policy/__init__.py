@@ -9,9 +9,21 @@ the actions it can take, and docs/how-to/policies.md.
 from .base import Cockpit, Delivered, Link, Policy, register_kpis
 from .follow import ON_LOST, Follow, SearchThenOrbit
 from .landing import MarkerLanding
+from .rules import (
+                    Action,
+                    DisableTask,
+                    EnableTask,
+                    GoTo,
+                    Hold,
+                    Land,
+                    ResumePlan,
+                    ReturnHome,
+                    Rule,
+                    SetExecution,
+                    SetModel,
+                    SetPeriod,
+)
 from .together import GroundStation, SharedSearch
-from .rules import (Action, DisableTask, EnableTask, GoTo, Hold, Land, ResumePlan, ReturnHome,
-                    Rule, SetExecution, SetModel, SetPeriod)
 
 __all__ = ["Action", "Cockpit", "Delivered", "DisableTask", "EnableTask", "Follow", "GoTo", "GroundStation", "Hold",
            "Land", "Link", "MarkerLanding", "ON_LOST", "Policy", "ResumePlan", "ReturnHome", "Rule",

@@ -28,6 +28,8 @@ from __future__ import annotations
 import copy
 import math
 
+from .. import _check
+from .. import kpis as _kpis
 from ..clock import Clocked
 from ..control.follow import Goto, Resume, yaw_of
 from ..control.pilots import Hover, Orbit, Pilot
@@ -36,7 +38,6 @@ from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
-from .. import _check, kpis as _kpis
 
 
 class Delivered:
@@ -73,7 +74,7 @@ class Link:
 class Cockpit:
     """What a policy sees and can do (see the module docstring)."""
 
-    def __init__(self, run, policy: "Policy"):
+    def __init__(self, run, policy: Policy):
         self._run, self._policy = run, policy
         self._st = run.vehicle
         self._stages = run.stages

@@ -30,7 +30,6 @@ import numpy as np
 from .. import _check
 from ..comm.link import link as _link
 from ..errors import ConfigError
-from .base import Policy
 from .follow import _Perceiving
 from .scoring import MATCH_M
 

@@ -19,7 +19,6 @@ import numpy as np
 
 from .._io import atomic_write
 
-
 DICTIONARIES = ("DICT_4X4_50", "DICT_5X5_50", "DICT_6X6_50", "DICT_APRILTAG_36h11")
 CELLS = {"DICT_4X4_50": 4, "DICT_5X5_50": 5, "DICT_6X6_50": 6, "DICT_APRILTAG_36h11": 6}
 TEXEL_PER_CELL = 16
