@@ -179,3 +179,14 @@ def test_with_fly_on_estimate_the_policy_sees_the_estimate():
     assert max(math.dist(seen, true) for seen, _, true in poses[5:]) > 0.05
     navs = [g[1] for g in got if g[0] == "nav"]
     assert navs and all(n is not None for n in navs)
+
+
+def test_a_rule_on_a_probe_metric_and_no_truth_probes():
+    busy = fa.policy.Rule("compute.cpu_utilization >= 0.0", [fa.policy.SetPeriod("eye", 1.0)],
+                          name="busy", once=True, period_s=1.0)
+    res = mission([busy], until=25.0).run()
+    acts = [e for e in res.events if e["kind"] == "policy"]
+    assert [a["action"] for a in acts] == ["set_period"]
+    assert acts[0]["t"] >= 1.0          # the compute probe's first sample is one period in
+    with pytest.raises(ConfigError, match="signal 'ml.detection_recall'"):
+        mission([fa.policy.Rule("ml.detection_recall < 0.5", [fa.policy.Hold()])])

@@ -10,7 +10,9 @@ components of that tick) and calls ``decide(t, drone)``. ``drone`` is a
 - ``drone.position`` / ``velocity`` / ``yaw``: the navigation state it flies on
   (the estimate with ``Mission(fly_on="estimate")``); ``drone.battery``: the
   battery monitor's remaining fraction; ``drone.link``: distance to the ground
-  station and whether the tasks' radio reaches it; ``drone.stage``.
+  station and whether the tasks' radio reaches it; ``drone.stage``;
+  ``drone.probe(name)``: the last sample of a probe (``energy``, ``compute``,
+  ``comm``, yours; not ``flight`` or ``ml``, which are scored against the truth).
 
 Actions (each an event ``{"kind": "policy", "policy": name, "action": ...}`` in
 ``result.events``, counted in ``policy.<name>.triggers``): ``set_period``,
@@ -38,6 +40,10 @@ from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
+
+
+#: built-in probes scored against the simulator's truth: no policy reads them
+TRUTH_PROBES = ("flight", "ml")
 
 
 class Delivered:
@@ -116,6 +122,22 @@ class Cockpit:
         gs = runners[0].task.ground_station if runners else (0.0, 0.0, 0.0)
         rng = runners[0].link.range_m() if runners else math.inf
         return Link(math.dist(self.position, gs), rng)
+
+    def probe(self, name: str) -> dict:
+        """The last sample of probe ``name`` ({metric: value}, empty before its first);
+        the built-in ``flight`` and ``ml`` probes are not readable (they are scored
+        against the truth: tracking error, recall)."""
+        hub = self._run.hub
+        names = [p.name for p in hub.probes if p.name not in TRUTH_PROBES]
+        if name not in names:
+            raise ConfigError(f"policy {self._policy.name!r}: probe = {name!r} is not a probe "
+                              f"the drone can read{close_matches(name, names)}; allowed: "
+                              f"{', '.join(map(repr, names))}")
+        ts, rows = hub.samples[name]
+        if not rows:
+            return {}
+        p = next(p for p in hub.probes if p.name == name)
+        return dict(zip(p._metric_names, rows[-1]))
 
     def results(self, task: str) -> list:
         """The results of ``task`` delivered since the last call, in delivery order."""
@@ -338,4 +360,4 @@ def register_kpis(name: str, modes=()) -> None:
                        f"policy {name!r}: time spent in mode {m!r}")
 
 
-__all__ = ["Cockpit", "Delivered", "Link", "Policy", "register_kpis"]
+__all__ = ["Cockpit", "Delivered", "Link", "Policy", "TRUTH_PROBES", "register_kpis"]

@@ -10,8 +10,10 @@ Signals a condition may name (``"<signal> <op> <number>"``, op one of < <= > >= 
 ``battery`` (remaining fraction), ``time_s``, ``altitude_m``, ``home_distance_m``,
 ``link_distance_m``, and per task ``<task>.count`` (the last delivered count),
 ``<task>.detections`` (boxes in the last delivered result), ``<task>.latency_s``
-(capture to delivery of the last result). A name that is none of these is a
-ConfigError when the Mission is built.
+(capture to delivery of the last result), and ``<probe>.<metric>``, a probe's last
+sample (``energy.mean_power_w``, ``compute.cpu_utilization``, your probes'; not the
+``flight`` and ``ml`` probes, scored against the truth). A name that is none of
+these is a ConfigError when the Mission is built.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from .. import _check
 from ..control.pilots import _extent
 from ..errors import ConfigError, close_matches
 from ..ml.task import EXECUTIONS
-from .base import Policy
+from .base import TRUTH_PROBES, Policy
 
 SIGNALS = ("battery", "time_s", "altitude_m", "home_distance_m", "link_distance_m")
 TASK_SIGNALS = ("count", "detections", "latency_s")
@@ -189,6 +191,8 @@ class Rule(Policy):
         where = f"Rule {self.name!r}"
         names = [t.name for t in mission.tasks]
         allowed = list(SIGNALS) + [f"{n}.{s}" for n in names for s in TASK_SIGNALS]
+        allowed += [f"{p.name}.{m}" for p in mission.probes if p.name not in TRUTH_PROBES
+                    for m in p._metric_names]
         if self.signal not in allowed:
             raise ConfigError(f"{where}: when = {self.when!r} names signal {self.signal!r}, which "
                               f"the drone does not know{close_matches(self.signal, allowed)}; "
@@ -214,6 +218,8 @@ class Rule(Policy):
         if s == "link_distance_m":
             return drone.link.distance_m
         task, _, what = s.rpartition(".")
+        if task not in drone._runners:                    # a probe's metric
+            return drone.probe(task).get(what, math.nan)
         for r in drone.results(task):
             self._last[task] = r
         r = self._last.get(task)
