@@ -11,6 +11,7 @@ KPIs, events and truth records.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -107,6 +108,27 @@ class TaskScheduler(Clocked):
     def refresh(self) -> None:
         """Recompute when the next frame is due (after a task's period changed)."""
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
+
+    def retask(self, runner: TaskRunner, t: float, **changes) -> None:
+        """Change a running task from time t on (a policy's action): ``period_s``,
+        ``model``, ``execution`` (a copy of its Task, the mission's is untouched), or
+        ``enabled`` (False: no frame until enabled again; True: a frame now)."""
+        enabled = changes.pop("enabled", None)
+        if changes:
+            last = runner.next_frame_t - runner.task.period_s
+            runner.task = copy.copy(runner.task)
+            for k, v in changes.items():
+                setattr(runner.task, k, v)
+            if "period_s" in changes and runner.next_frame_t != math.inf:
+                runner._t0 = last
+                runner._next_frame_t = max(t, last + runner.task.period_s)
+            if "execution" in changes:
+                runner._shared = self.device_clock if runner.task.execution == "onboard" else None
+        if enabled is False:
+            runner._next_frame_t = math.inf
+        elif enabled is True and runner.next_frame_t == math.inf:
+            runner._t0 = runner._next_frame_t = t
+        self.refresh()
 
     def _read(self, name, t, pixels=True):
         if name not in self.suite:

@@ -27,7 +27,6 @@ policy is doing; ``policy.<name>.time_<mode>_s`` is the time spent in each.
 
 from __future__ import annotations
 
-import copy
 import math
 
 from .. import _check
@@ -40,7 +39,6 @@ from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
-
 
 #: built-in probes scored against the simulator's truth: no policy reads them
 TRUTH_PROBES = ("flight", "ml")
@@ -176,18 +174,12 @@ class Cockpit:
     def set_period(self, task: str, period_s: float) -> None:
         r = self._runner(task)
         p = _check.positive("period_s", period_s, where=f"policy {self._policy.name!r}")
-        last = r.next_frame_t - r.task.period_s
-        r.task = copy.copy(r.task)
-        r.task.period_s = p
-        r._t0 = last
-        r._next_frame_t = max(self.t, last + p)
-        self._sched.refresh()
+        self._sched.retask(r, self.t, period_s=p)
         self._log("set_period", task=task, period_s=p)
 
     def set_model(self, task: str, model) -> None:
         r = self._runner(task)
-        r.task = copy.copy(r.task)
-        r.task.model = as_model(model)
+        self._sched.retask(r, self.t, model=as_model(model))
         self._log("set_model", task=task, model=str(getattr(r.task.model, "name", "model")))
 
     def set_execution(self, task: str, execution: str) -> None:
@@ -197,23 +189,15 @@ class Cockpit:
         if ex == "remote" and not getattr(r.task.model, "needs_pixels", True):
             raise ConfigError(f"{where}: set_execution({task!r}, 'remote') is not allowed: its "
                               f"model reads the truth, not pixels; there is no frame to send")
-        r.task = copy.copy(r.task)
-        r.task.execution = ex
-        r._shared = self._sched.device_clock if ex == "onboard" else None
+        self._sched.retask(r, self.t, execution=ex)
         self._log("set_execution", task=task, execution=ex)
 
     def disable(self, task: str) -> None:
-        r = self._runner(task)
-        r._next_frame_t = math.inf
-        self._sched.refresh()
+        self._sched.retask(self._runner(task), self.t, enabled=False)
         self._log("disable", task=task)
 
     def enable(self, task: str) -> None:
-        r = self._runner(task)
-        if r._next_frame_t == math.inf:
-            r._t0 = self.t
-            r._next_frame_t = self.t
-            self._sched.refresh()
+        self._sched.retask(self._runner(task), self.t, enabled=True)
         self._log("enable", task=task)
 
     # -- actions on the flight plan ------------------------------------------
