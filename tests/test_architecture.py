@@ -20,7 +20,7 @@ LAYERS = [
     {"energy", "sensors"},
     {"comm", "airframe"},
     {"control", "ml", "probes"},
-    {"mission", "cache", "fleet"},
+    {"mission", "cache", "fleet", "policy"},
     {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
      "plugin", "__init__", "sweeps"},
 ]
@@ -56,7 +56,8 @@ SAME_LAYER = {
     ("result", "_io"), ("result", "errors"), ("result", "phases"), ("result", "notebook"),
     ("notebook", "kpis"),
     ("ml", "control"),
-    ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
+    ("fleet", "cache"), ("fleet", "mission"), ("fleet", "policy"), ("mission", "cache"),
+    ("mission", "policy"),
     ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
     ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
     ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),
