@@ -7,20 +7,36 @@
 - ``Task`` and ``TaskRunner``: what runs where, executed on the simulated clock;
 - ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
   into one shape; ``evaluation``: COCO detection metrics and classification;
-- ``count_macs``: MACs and parameters of an ONNX graph.
+- ``count_macs``: MACs and parameters of an ONNX graph;
+- ``Oracle``: the frame's truth boxes as detections (optionally degraded), no pixels;
+  ``MarkerDetector``: ArUco markers through OpenCV;
+- ``evaluate_dataset``: a task's model over a labelled folder, each image once,
+  offline; ``analyse``: PR curves, per-class AP, confusion matrix, F1-best
+  threshold from COCOeval's arrays;
+- ``shipped("detector")``: the models shipped in the package; ``compare_models``:
+  several models on the same frames, accuracy next to latency, energy, endurance.
 """
 
 from .macs import MacReport, count_macs
 from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
+from .fiducial import MarkerDetector
+from .oracle import Oracle, OracleFrame
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord
+from .analysis import analyse, write_coco_pair
+from .dataset_eval import DatasetEvaluation, evaluate_dataset
+from .shipped import SHIPPED, shipped, shipped_path
+from .compare import compare_models
 from .jpeg import decode_jpeg, encode_jpeg
 from .runner import DeviceClock, InferenceEvent, TaskRunner
 from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
-__all__ = ["Classifier", "Clusterer", "Counter", "Detections", "Detector", "DeviceClock",
-           "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel",
+__all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detections", "Detector",
+           "DeviceClock", "SHIPPED", "analyse", "compare_models", "evaluate_dataset", "shipped", "shipped_path",
+           "write_coco_pair",
+           "FrameRecord", "InferenceEvent", "MacReport", "MarkerDetector", "Model", "OnnxModel",
+           "OpenCVModel", "Oracle", "OracleFrame",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
            "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]
