@@ -123,7 +123,8 @@ def jsonable(obj):
 
 
 def environment() -> dict:
-    pk = {}
+    """Python, platform and package versions of this run (None: not installed)."""
+    pk: dict[str, str | None] = {}
     for name in _PACKAGES:
         try:
             pk[name] = metadata.version(name)

@@ -57,9 +57,13 @@ class FlightResult:
     - ``probe_errors``: failures of probes or subscribers (the flight went on)
     - ``cache``: where the flight cache got it (``pytest_flockai.cache``), or None
     """
-    #: (n, 3) positions of the world's people, set after the flight (absent on a result
-    #: built by hand: readers use ``getattr(result, "people", ...)``)
+    # Set after the flight (absent on a result built by hand: readers use getattr).
+    #: (n, 3) positions of the world's people
     people: np.ndarray
+    #: the detection tasks' worst frames, drawn, by task
+    ml_gallery: dict
+    #: the detection tasks' truth and predictions (COCO form), by task
+    ml_coco: dict
 
     cache: dict | None = None
     verdicts: tuple = ()     # the budgets last checked against it (budgets.check/evaluate)

@@ -54,25 +54,29 @@ class Tracker:
         self.reset()
 
     def reset(self) -> None:
-        self.x = None                 # [x, y, vx, vy]
-        self.P = None
+        self.x: np.ndarray | None = None      # [x, y, vx, vy]
+        self.P: np.ndarray | None = None      # its covariance (set with x)
         self.t = -math.inf            # time of the state (the last measurement's capture)
         self.hits = 0
         self.last_hit = -math.inf     # capture time of the last measurement used
 
     @property
     def confirmed(self) -> bool:
+        """A state exists and enough measurements confirmed it."""
         return self.x is not None and self.hits >= self.confirm
 
     def predict(self, t: float) -> tuple[float, float, float, float]:
-        """(x, y, vx, vy) predicted at t (the state itself before any measurement: None)."""
+        """(x, y, vx, vy) predicted at t; TypeError before the first measurement."""
         x = self.x
+        if x is None:
+            raise TypeError("Tracker.predict: the track has no state before its first measurement")
         dt = t - self.t
         return x[0] + x[2] * dt, x[1] + x[3] * dt, x[2], x[3]
 
     def update(self, t: float, px: float, py: float) -> bool:
         """Fuse a measurement captured at t; False when it fails the gate or is stale."""
-        if self.x is None:
+        x0, P0 = self.x, self.P
+        if x0 is None or P0 is None:              # both None until the first measurement
             self.x = np.array([px, py, 0.0, 0.0])
             self.P = np.diag([self.r, self.r, 4.0, 4.0])
             self.t, self.hits, self.last_hit = t, 1, t
@@ -82,8 +86,8 @@ class Tracker:
         dt = t - self.t
         F = np.array([[1, 0, dt, 0], [0, 1, 0, dt], [0, 0, 1, 0], [0, 0, 0, 1]], float)
         g = np.array([[0.5 * dt * dt, 0], [0, 0.5 * dt * dt], [dt, 0], [0, dt]])
-        x = F @ self.x
-        P = F @ self.P @ F.T + self.q * (g @ g.T)
+        x = F @ x0
+        P = F @ P0 @ F.T + self.q * (g @ g.T)
         y = np.array([px, py]) - x[:2]
         if math.hypot(y[0], y[1]) > self.gate_m:
             return False

@@ -206,7 +206,7 @@ def ignored_settings(item) -> list[tuple[str, str]]:
         for key in mark.kwargs:
             fixture = READ_BY.get(key)
             fds = defs.get(fixture) if fixture else None
-            if not fds:
+            if not fds or fixture is None:
                 continue
             module = getattr(fds[-1].func, "__module__", "")
             if module != __name__.rsplit(".", 1)[0] + ".fixtures" and (key, fixture) not in out:

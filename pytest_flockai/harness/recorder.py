@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
@@ -24,12 +25,17 @@ from .. import report as _report
 from ..errors import ConfigError
 from .markers import Markers
 
+if TYPE_CHECKING:      # the core loads on first use
+    from ..result import FlightResult
+
 STATE = pytest.StashKey["TestState"]()
 
 
 @dataclass
 class Flight:
-    result: object                 # FlightResult
+    """One flight of a test: its result and where its name comes from."""
+
+    result: FlightResult
     explicit: str | None = None    # Mission(name=...)
     fixture: str | None = None     # the fixture that returned it
     name: str = "flight"           # final, unique within the test
@@ -37,6 +43,7 @@ class Flight:
 
     @property
     def kpis(self) -> dict:
+        """The flight's KPIs."""
         return self.result.kpis
 
 
@@ -44,7 +51,7 @@ class Flight:
 class TestState:
     """What the plugin knows about one test."""
 
-    item: object
+    item: pytest.Item
     markers: Markers = field(default_factory=Markers)
     flights: list = field(default_factory=list)       # [Flight], in the order flown
     verdicts: list = field(default_factory=list)      # [budgets.Verdict]
@@ -70,7 +77,8 @@ class TestState:
         self.finished, self.example, self.hypothesis = False, 0, None
         self.sweep, self.sweep_files, self.checks = None, [], {}
 
-    def record(self, mission, result) -> None:
+    def record(self, mission: object, result: FlightResult) -> None:
+        """A flight of this test, flown now (its name is settled when it is added)."""
         explicit = getattr(mission, "name", None) or (result.scenario or {}).get("name")
         self._add(Flight(result, explicit=explicit, example=self.example))
 
@@ -185,7 +193,7 @@ class TestState:
         error = self.markers.error or ("\n".join(self.problems) or None)
         checks = [{**v.to_dict(), "flight": v.flight or k[0], "source": "check", "checked": n}
                   for k, (v, n) in self.checks.items()]
-        out = {"flights": flights, "budgets": [v.to_dict() for v in self.verdicts] + checks,
+        out: dict[str, Any] = {"flights": flights, "budgets": [v.to_dict() for v in self.verdicts] + checks,
                "regressions": self.regressions, "error": error}
         if self.baseline_missing or self.baseline_unmatched:
             out["baseline_missing"] = self.baseline_missing

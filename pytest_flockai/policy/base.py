@@ -85,8 +85,8 @@ class Cockpit:
         self._sched = run.scheduler
         self._runners = {r.task.name: r for r in run.scheduler.runners}
         self._seen = dict.fromkeys(self._runners, 0)
-        self._survey = None            # (the mission's plan, t left, setpoint then)
-        self._refused_key = None
+        self._survey: tuple | None = None      # (the mission's plan, t left, setpoint then)
+        self._refused_key: tuple | None = None
         cams = [s for s in run.suite.sensors if hasattr(s, "lens")] if hasattr(run.suite, "sensors") else []
         self.camera = cams[0] if cams else None
         self.t = 0.0
@@ -293,7 +293,8 @@ class Policy(Clocked):
         super().bind(run)
         self.drone = Cockpit(run, self)
         self.triggers = 0
-        self._mode, self._mode_t = None, 0.0
+        self._mode: str | None = None
+        self._mode_t = 0.0
         self._time_in: dict = {m: 0.0 for m in self.modes}
         self.start(run)
 

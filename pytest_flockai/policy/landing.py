@@ -60,9 +60,10 @@ class MarkerLanding(Policy):
 
     def start(self, run) -> None:
         cam = self.drone.camera
+        assert cam is not None, "check() made sure a task reads the camera"
         self._lens = (cam.width, cam.height, cam.fov_deg, cam.pitch_deg)
         self._fixes: list = []               # ground points of the marker, latest last
-        self._aim = None                     # (x, y, z) the drone was last sent to
+        self._aim: tuple | None = None       # (x, y, z) the drone was last sent to
         markers = run.actors.markers if run.actors is not None else ()
         self._truth = next((m for m in markers if self.marker in (None, m.name)), None)
 
@@ -102,6 +103,7 @@ class MarkerLanding(Policy):
             if self._send(drone, est[0], est[1], pz, 0.0):
                 drone.mode("approach")
         elif mode == "approach":
+            assert self._aim is not None, "approach starts after a goto: _aim is set"
             self._send(drone, est[0], est[1], self._aim[2], 0.3)
             if settled:
                 self._send(drone, est[0], est[1], self.descend_to, 0.0)

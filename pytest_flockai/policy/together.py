@@ -165,7 +165,7 @@ class SharedSearch(_Perceiving):
         self.me = run.vehicle.name
         self.station.bind_flight(run)
         self._sent: list = []          # points this drone reported
-        self._job = None               # (target index, (x, y), t started)
+        self._job: tuple | None = None   # (target index, (x, y), t started)
 
     def decide(self, t, drone) -> None:
         s = self.station

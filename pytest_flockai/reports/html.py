@@ -269,7 +269,8 @@ def deltas(page: Page) -> str:
 def details(page: Page) -> str:
     """Each test with its outcome, budgets and pictures. A picture already shown for an
     earlier test (a shared fixture flight's path) is embedded once and linked after."""
-    out, seen = [], {}
+    out: list[str] = []
+    seen: dict[str, str] = {}
     for t in page.doc.get("tests", ()):
         o = t.get("outcome", "")
         figs = []

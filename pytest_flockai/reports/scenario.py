@@ -39,7 +39,7 @@ def _models(tasks) -> str | None:
 
 
 def _links(tasks, offload=None) -> str | None:
-    names = [t.get("link") for t in tasks or () if isinstance(t, dict) and t.get("link")]
+    names = [str(t["link"]) for t in tasks or () if isinstance(t, dict) and t.get("link")]
     if isinstance(offload, dict) and offload.get("link"):
         names.append(offload["link"])
     return ", ".join(dict.fromkeys(names)) or None

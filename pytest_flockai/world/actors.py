@@ -139,7 +139,9 @@ class Marker(Actor):
 
     @property
     def centre(self) -> tuple[float, float]:
-        return self.path[0]
+        """(x, y) of the marker."""
+        x, y = self.path[0]
+        return x, y
 
     def to_dict(self) -> dict:
         return {"type": "Marker", "name": self.name, "x": self.centre[0], "y": self.centre[1],

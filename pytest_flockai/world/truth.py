@@ -94,7 +94,7 @@ def segment_hits(cam_pos, points, boxes) -> np.ndarray:
 
 def occluded(cam_pos, points, boxes) -> np.ndarray:
     """Mask (N,): the segment cam_pos -> point crosses one of the boxes (M, 6)."""
-    return segment_hits(cam_pos, points, boxes).any(axis=1)
+    return np.asarray(segment_hits(cam_pos, points, boxes).any(axis=1))
 
 
 def visible_people(world_people, cam_pos, cam_mat, fov_deg: float, width: int, height: int, *,

@@ -33,16 +33,17 @@ from __future__ import annotations
 import hashlib
 import os
 from numbers import Integral, Real
+from typing import SupportsInt, cast
 
-from .._mujoco import mujoco
 import numpy as np
 
 from .. import _check, limits
+from .._mujoco import mujoco
 from ..errors import ConfigError
-from . import urban as _urban
-from .mjcf import box_occluders, find_people
 from . import figures as _fig
 from . import scenery as _scenery
+from . import urban as _urban
+from .mjcf import box_occluders, find_people
 from .objects import PERSON_HEIGHT, ObjectTable
 
 GROUND_RGBA = (0.45, 0.5, 0.4, 1)
@@ -59,8 +60,8 @@ class World:
         self.occluders = np.zeros((0, 6))
         self.buildings = np.zeros((0, 5))     # rows (cx, cy, hx, hy, height)
         self.streets: list = []
-        self.size = None
-        self.seed = None
+        self.size: tuple[float, ...] | None = None    # (width, depth) m of an urban world
+        self.seed: int | None = None
         self.crowds: list = []
         self.scattered = 0
         self.vehicles = np.zeros((0, 4))     # rows (x, y, z, yaw): cars
@@ -70,19 +71,19 @@ class World:
         self.trousers_idx = np.zeros(0, dtype=int)  # index into urban.TROUSERS per person
         self.poses = np.zeros((0, 7))               # figures.draw_poses rows per person
         self.figures = "articulated"
-        self.path = None
+        self.path: str | None = None                 # the MJCF file of World.from_mjcf
         self._info: dict = {}
 
     # -- constructors ------------------------------------------------------
     @classmethod
-    def empty(cls) -> "World":
+    def empty(cls) -> World:
         return cls("empty")
 
     @classmethod
     def urban(cls, seed: int = 0, size=(200.0, 200.0), people: int = 100, crowds=(), *,
               building_density: float = 0.7, clear_radius: float = 15.0,
               max_building_height: float | None = None, vehicles: int = 0,
-              figures: str = "articulated") -> "World":
+              figures: str = "articulated") -> World:
         """A procedural city of ``size = (east-west, north-south)`` metres centred on home.
 
         people: scattered people (uniform over the area, outside buildings);
@@ -141,7 +142,7 @@ class World:
 
     @classmethod
     def scene(cls, people=(), vehicles=(), buildings=(), *, size=(100.0, 100.0),
-              figures: str = "articulated", poses=None) -> "World":
+              figures: str = "articulated", poses=None) -> World:
         """A test range: figures, cars and buildings exactly where you put them, on
         the urban world's ground and streets. people: (x, y) feet positions;
         vehicles: (x, y, yaw) rows; buildings: (cx, cy, half_x, half_y, height);
@@ -177,7 +178,7 @@ class World:
         return w
 
     @classmethod
-    def from_mjcf(cls, path, people=None) -> "World":
+    def from_mjcf(cls, path, people=None) -> World:
         """A user's static MJCF scene (no joints; textures resolve relative to the file).
 
         people: None to find them in the scene (bodies, else geoms, whose name
@@ -219,7 +220,7 @@ class World:
         return w
 
     # -- MuJoCo ------------------------------------------------------------
-    def add_to_spec(self, spec: "mujoco.MjSpec") -> None:
+    def add_to_spec(self, spec: mujoco.MjSpec) -> None:
         if self.path is not None:
             self._add_mjcf(spec)
             return
@@ -304,7 +305,8 @@ class World:
         if len(self.vehicles):
             d["vehicles"] = int(len(self.vehicles))
         if self.name == "urban" and self.path is None:
-            d.update(seed=self.seed, size=list(self.size), scattered=self.scattered,
+            d.update(seed=self.seed, size=None if self.size is None else list(self.size),
+                     scattered=self.scattered,
                      figures=self.figures,
                      crowds=[list(c) for c in self.crowds], buildings=int(len(self.buildings)),
                      **self._info)
@@ -373,7 +375,7 @@ def _crowds(crowds, size, where) -> list:
         x = _check.number(f"{f}.x", x, where=where, minimum=-W / 2, maximum=W / 2)
         y = _check.number(f"{f}.y", y, where=where, minimum=-H / 2, maximum=H / 2)
         if isinstance(count, Real) and not isinstance(count, bool) and float(count).is_integer():
-            count = int(count)
+            count = int(cast(SupportsInt, count))   # int, float, NumPy: all have __int__
         count = _count(f"{f}.count", count, where)
         spread = _check.positive(f"{f}.spread_m", spread, where=where)
         cap = _urban.crowd_capacity(spread)
