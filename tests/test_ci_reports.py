@@ -146,7 +146,7 @@ def test_the_dashboard_is_one_self_contained_file(run_with_baseline):
     energy = deltas[("test_higher", "energy_total_j")]
     assert energy[0] == "regression" and energy[6] == "+25.00%"
     assert ("test_too_short", "energy_total_j") not in deltas        # unchanged: not listed
-    (head, reg), = [page.tables["regressions"]]
+    (_head, reg), = [page.tables["regressions"]]
     assert reg[:2] == ["+25.00%", "energy_total_j"]
     kpis = page.tables["kpis"]
     assert kpis[0][:5] == ["outcome", "test", "flight", "source", "flight_time_s"]

@@ -213,7 +213,7 @@ def test_no_flight():
     assert report["schema"] == "pytest-flockai/1"
     assert report["interrupted"] is False
     env = report["environment"]
-    assert env["python"] == "%d.%d.%d" % sys.version_info[:3]
+    assert env["python"] == "{}.{}.{}".format(*sys.version_info[:3])
     assert env["platform"]
     assert {"pytest-flockai", "pytest", "mujoco", "numpy"} <= set(env["packages"])
     assert env["packages"]["pytest"] == pytest.__version__
