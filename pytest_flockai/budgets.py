@@ -120,7 +120,7 @@ class Budget:
             margin = math.nan
         return bool(passed), float(margin)
 
-    def verdict(self, actual, flight: str | None = None) -> "Verdict":
+    def verdict(self, actual, flight: str | None = None) -> Verdict:
         """The one verdict type: this budget against ``actual`` (SI)."""
         passed, margin = self.evaluate(actual)
         a = math.nan if actual is None else float(actual)
@@ -231,7 +231,7 @@ class Verdict:
                 "margin_text": self.margin_text}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Verdict":
+    def from_dict(cls, d: dict) -> Verdict:
         """From a report row (``to_dict``), e.g. one that came through pytest-xdist."""
         return cls(flight=d.get("flight"), kpi=d["kpi"], budget=d["budget"], op=d.get("op", ""),
                    limit=d.get("limit", math.nan), actual=d.get("actual", math.nan),

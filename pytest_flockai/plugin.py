@@ -52,19 +52,19 @@ from __future__ import annotations
 import pytest
 
 from . import hookspecs as _hookspecs
+from .harness import ci_reports as _ci_reports
 from .harness import examples as _examples
+from .harness import flightcache as _flightcache
 from .harness import markers as _markers
 from .harness import options as _options
 from .harness import rootdir as _rootdir
-from .harness import ci_reports as _ci_reports
-from .harness import flightcache as _flightcache
 from .harness import sweeps as _sweeps
 from .harness import tracebacks as _tracebacks
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
-from .harness.sweeps import flockai_sweep, flockai_sweep_executor  # noqa: F401
 from .harness.recorder import STATE, TestState
 from .harness.session import SESSION, FlockSession
+from .harness.sweeps import flockai_sweep, flockai_sweep_executor  # noqa: F401
 from .recording import checking, recording
 
 

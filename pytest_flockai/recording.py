@@ -19,9 +19,9 @@ test, so the reports show the budgets of a test that flies nothing.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from contextlib import contextmanager
 from contextvars import ContextVar
-from typing import Callable
 
 from .errors import ConfigError
 

@@ -21,13 +21,13 @@ from pathlib import Path
 
 import pytest
 
-from .._io import atomic_write
 from .. import report as _report
+from .._io import atomic_write
 from ..reports import compare as _compare
 from ..reports import history as _history
 from ..reports import html as _html
-from ..reports import ml_gallery as _ml_gallery
 from ..reports import markdown as _markdown
+from ..reports import ml_gallery as _ml_gallery
 from . import html_extras as _html_extras
 from .options import path_option
 from .recorder import STATE
@@ -101,7 +101,7 @@ class ReportsPlugin:
         return out
 
     def _flight_pictures(self, name, result) -> list[dict]:
-        from .. import plots       # lazy: numpy, and matplotlib (see tests/test_architecture.py)
+        from .. import plots  # lazy: numpy, and matplotlib (see tests/test_architecture.py)
         gallery = _ml_gallery.pictures(name, result)      # drawn with OpenCV, no matplotlib
         if not plots.available():
             return gallery

@@ -201,7 +201,7 @@ class TestState:
         if self.hypothesis is not None:
             out["hypothesis"] = self.hypothesis
         if self.sweep is not None:
-            from ..sweeps import envelope     # lazy: a sweep flew, so it is loaded already
+            from ..sweeps import envelope  # lazy: a sweep flew, so it is loaded already
             out["sweep"] = envelope.summary(self.sweep, self.sweep_files)
         return _report.jsonable(out)
 

@@ -17,9 +17,8 @@ import time as _time
 
 import numpy as np
 
-from .. import _check
+from .. import _check, limits
 from .. import cache as _cache
-from .. import limits
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
@@ -32,8 +31,7 @@ from ..world.actors import check_actors
 from ..world.wind import Wind
 from . import collect, loop
 from .assemble import Flight
-from .plan import (check_components, check_policies, check_sensors, check_tasks, check_until,
-                   resolve)
+from .plan import check_components, check_policies, check_sensors, check_tasks, check_until, resolve
 from .plan import computers as _computers
 
 
@@ -116,7 +114,7 @@ class Mission:
         self.policies = check_policies(policies, self)
         resolve(self)
 
-    def subscribe(self, target) -> "Mission":
+    def subscribe(self, target) -> Mission:
         """Receive probe samples live: ``target`` is a callable ``fn(sample)`` or a
         ``queue.Queue``; each sample is ``{"t": s, "probe": name, "values": {...}}``."""
         if not (callable(target) or hasattr(target, "put_nowait")):
@@ -125,12 +123,13 @@ class Mission:
         return self
 
     def scenario(self) -> dict:
+        """JSON-ready description of what is flown (drone, pilot, world, seed...)."""
         return {
             "name": self.name, "drone": self.drone.to_dict(), "pilot": self.pilot.to_dict(),
             "world": self.world.to_dict() if self.world is not None else {"name": "empty"},
             "wind": self.wind.to_dict() if self.wind is not None else None,
             "seed": self.seed, "until": self.until, "return_home": self.return_home,
-            "tasks": [getattr(t, "to_dict", lambda: repr(t))() for t in self.tasks],
+            "tasks": [getattr(t, "to_dict", lambda t=t: repr(t))() for t in self.tasks],
             "computers": _computers(self.tasks, self.drone),
             "probes": [p.to_dict() for p in self.probes],
             "sensors": [sn.name for sn in self.drone.extra_sensors + self.sensors],

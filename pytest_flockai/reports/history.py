@@ -63,7 +63,7 @@ def record(directory, entries: list[dict], cwd) -> Path:
     """Write this run's KPIs (per-test entries of the session) into ``directory``."""
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
-    now = _dt.datetime.now(_dt.timezone.utc)
+    now = _dt.datetime.now(_dt.UTC)
     info = git_info(cwd)
     doc = {"schema": SCHEMA, "created": now.isoformat(timespec="seconds"), **info,
            "tests": _report.baseline_from_tests(entries)["tests"]}

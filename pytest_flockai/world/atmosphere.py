@@ -52,7 +52,7 @@ class Atmosphere:
         return self.density / RHO_SEA_LEVEL
 
     @classmethod
-    def coerce(cls, value) -> "Atmosphere":
+    def coerce(cls, value) -> Atmosphere:
         if value is None:
             return cls()
         if isinstance(value, Atmosphere):

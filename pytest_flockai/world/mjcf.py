@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from .._mujoco import mujoco
 import numpy as np
+
+from .._mujoco import mujoco
 
 
 def find_people(model) -> np.ndarray:

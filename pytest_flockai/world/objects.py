@@ -25,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .figures import CAR as CAR_MESHES, box, prism, sphere
+from .figures import CAR as CAR_MESHES
+from .figures import box, prism, sphere
 from .truth import CLASSES
 
 PERSON_HEIGHT = 1.7          # m, adult figure
@@ -105,7 +106,7 @@ class ObjectTable:
         return int(len(self.cls))
 
     @classmethod
-    def build(cls, people=(), vehicles=(), shapes=None) -> "ObjectTable":
+    def build(cls, people=(), vehicles=(), shapes=None) -> ObjectTable:
         """people: (N, 3) feet positions; vehicles: (M, 4) rows (x, y, z, yaw);
         shapes: None (simple figures and cars) or, per person, (vertices (V, 3),
         samples (S, 3)) relative to the feet (``figures.person`` in its pose), with

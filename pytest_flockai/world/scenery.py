@@ -15,9 +15,9 @@ the sun as the conditions say (``sun_azimuth_deg``, ``sun_elevation_deg``).
 
 from __future__ import annotations
 
-from .._mujoco import mujoco
 import numpy as np
 
+from .._mujoco import mujoco
 from . import figures as _fig
 from . import urban as _urban
 from .objects import HEAD, SIMPLE_CAR, TORSO, _rotate

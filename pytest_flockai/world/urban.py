@@ -67,7 +67,7 @@ def streets(size) -> list[tuple[float, float, float, float]]:
     """Street rectangles (x0, y0, x1, y1) clipped to the area."""
     W, H = size
     out = []
-    for axis, (half_along, half_across) in ((0, (W / 2, H / 2)), (1, (H / 2, W / 2))):
+    for axis, (_half_along, half_across) in ((0, (W / 2, H / 2)), (1, (H / 2, W / 2))):
         k0 = math.ceil(-half_across / BLOCK_PITCH)
         k1 = math.floor(half_across / BLOCK_PITCH)
         for k in range(k0, k1 + 1):
