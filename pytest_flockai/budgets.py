@@ -221,6 +221,7 @@ class Verdict:
 
     @property
     def verdict(self) -> str:
+        """``"pass"`` or ``"fail"``."""
         return "pass" if self.passed else "fail"
 
     def to_dict(self) -> dict:

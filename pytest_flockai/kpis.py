@@ -14,6 +14,8 @@ from .errors import ConfigError
 
 @dataclass(frozen=True)
 class KPI:
+    """One KPI: its name, SI unit, which way is better and what it measures."""
+
     name: str
     unit: str          # "s", "J", "W", "m", "m/s", "kB", "V", "fraction" (0..1), "count", "1" (custom, unitless)
     better: str | None
@@ -169,6 +171,7 @@ def get(name: str) -> KPI | None:
 
 
 def names() -> list[str]:
+    """Every KPI name known now (built in and registered), in table order."""
     return list(REGISTRY)
 
 

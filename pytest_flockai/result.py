@@ -87,6 +87,7 @@ class FlightResult:
 
     @property
     def sim_time_s(self) -> float:
+        """Simulated seconds flown (NaN when the scenario does not say)."""
         return float(self.scenario.get("sim_time_s", float("nan")))
 
     @property

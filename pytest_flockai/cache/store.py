@@ -72,6 +72,7 @@ class Lookup:
     cached: FlightResult | None = field(default=None, repr=False)   # verify: the entry
 
     def to_dict(self) -> dict:
+        """What ``FlightResult.cache`` holds: status, key and reason."""
         return {"status": self.status, "key": self.key, "reason": self.reason}
 
     def store(self, result: FlightResult) -> None:

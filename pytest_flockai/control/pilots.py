@@ -52,12 +52,17 @@ class Pilot:
         cls.__init__ = checked
 
     def start(self, t: float, position, accel: float) -> None:
+        """The plan begins at simulated time ``t`` from ``position`` (x, y, z);
+        ``accel``: the drone's acceleration limit (m/s^2)."""
         self.t0 = t
 
     def update(self, t: float, state, sp) -> bool:  # pragma: no cover - interface
+        """Write the setpoint for time ``t`` into ``sp`` (position, velocity,
+        acceleration, yaw); True when the plan is done."""
         raise NotImplementedError
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"type": type(self).__name__}
 
     def __repr__(self):
@@ -91,17 +96,17 @@ class Hover(Pilot):
         self.yaw = _check.number("yaw", yaw, where="Hover")
         self.path_length = 0.0
 
-    def start(self, t, position, accel):
+    def start(self, t: float, position, accel: float) -> None:
         self.t0 = t
         self.pos = (position[0], position[1], self.altitude)
 
-    def update(self, t, state, sp):
+    def update(self, t: float, state, sp) -> bool:
         sp[0], sp[1], sp[2] = self.pos
         sp[3] = sp[4] = sp[5] = sp[6] = sp[7] = sp[8] = 0.0
         sp[9] = self.yaw
         return self.duration is not None and t - self.t0 >= self.duration
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {"type": "Hover", "altitude": self.altitude, "duration": self.duration, "yaw": self.yaw}
 
 
@@ -132,13 +137,13 @@ class Waypoints(Pilot):
         self.altitude = self.points[0][2]
         self.path_length = sum(math.dist(a, b) for a, b in zip(self.points, self.points[1:]))
 
-    def start(self, t, position, accel):
+    def start(self, t: float, position, accel: float) -> None:
         self.t0 = t
         self._accel = accel
         self.path = waypoint_path(position, self.points, self.speed, accel)
         self.path_length = self.path.length
 
-    def update(self, t, state, sp):
+    def update(self, t: float, state, sp) -> bool:
         done = self.path.fill(t - self.t0, sp)
         sp[9] = self.yaw
         if done and self.loop:
@@ -147,7 +152,7 @@ class Waypoints(Pilot):
             return False
         return done
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {"type": "Waypoints", "points": [list(p) for p in self.points], "speed": self.speed,
                 "loop": self.loop, "yaw": self.yaw}
 
@@ -183,7 +188,7 @@ class ZigZag(Waypoints):
         super().__init__(pts, speed, False, yaw=yaw)
         self.altitude = alt
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {"type": "ZigZag", "area": [list(self.area[0]), list(self.area[1])],
                 "altitude": self.altitude, "spacing": self.spacing, "speed": self.speed, "yaw": self.yaw}
 
@@ -203,7 +208,7 @@ class Orbit(Pilot):
         self.laps = None if laps is None else _check.positive("laps", laps, where="Orbit")
         self.path_length = None if laps is None else 2 * math.pi * self.radius * self.laps
 
-    def start(self, t, position, accel):
+    def start(self, t: float, position, accel: float) -> None:
         self.t0 = t
         cx, cy = self.center
         self._entry = Path([Leg(position, (cx + self.radius, cy, self.altitude), self.speed, accel)])
@@ -214,7 +219,7 @@ class Orbit(Pilot):
         if self.laps is not None:
             self.path_length = self._entry.length + 2 * math.pi * self.radius * self.laps
 
-    def update(self, t, state, sp):
+    def update(self, t: float, state, sp) -> bool:
         tl = t - self.t0
         e = self._entry
         if tl < e.duration:
@@ -238,6 +243,6 @@ class Orbit(Pilot):
         sp[9] = 0.0
         return self.laps is not None and s >= 2 * math.pi * r * self.laps
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {"type": "Orbit", "center": list(self.center), "radius": self.radius,
                 "altitude": self.altitude, "speed": self.speed, "laps": self.laps}

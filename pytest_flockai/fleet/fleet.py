@@ -74,6 +74,7 @@ class FleetDrone:
         self.policies = tuple(policies or ())       # checked by the drone's Mission
 
     def to_dict(self) -> dict:
+        """JSON-ready description of this drone's part of the fleet."""
         return {"name": self.name, "drone": self.drone.name, "pilot": self.pilot.to_dict(),
                 "pad": list(self.pad), "seed": self.seed,
                 "tasks": [tk.to_dict() for tk in self.tasks],
@@ -150,6 +151,7 @@ class Fleet:
         return plans
 
     def scenario(self) -> dict:
+        """JSON-ready description of what is flown (the drones, the world, the seed...)."""
         return {"name": self.name, "fleet": [fd.to_dict() for fd in self.drones],
                 "world": self.world.to_dict() if self.world is not None else {"name": "empty"},
                 "area": [list(c) for c in self.area] if self.area else None,
@@ -161,6 +163,8 @@ class Fleet:
         return f"Fleet({[fd.name for fd in self.drones]!r})"
 
     def run(self) -> result.FleetResult:
+        """Fly every drone together (or take the fleet from the open flight cache); a
+        ``SimulationError`` carries the partial FleetResult on ``.result``."""
         found = _cache.lookup(self, result.FleetResult)     # the flight cache, if one is open
         if found is not None and found.result is not None:
             publish(found.result, self)

@@ -47,9 +47,13 @@ from ..ml.events import SharedGround
 
 
 class Offload:
+    """Remote inference for ``Fleet(offload=...)``: every ``period_s`` each drone sends
+    a frame to the ground station, which runs ``macs`` per frame on ``ground_device``
+    and answers (see the module docstring for the channel and queue model)."""
+
     def __init__(self, *, period_s: float = 1.0, frame_bytes: int = 60_000, result_bytes: int = 200,
                  macs: float = 8.7e9, ground_device: str = "ground-gpu", link="wifi-80211n",
-                 shared_link: bool = True, ground_station=(0.0, 0.0, 0.0)):
+                 shared_link: bool = True, ground_station=(0.0, 0.0, 0.0)) -> None:
         w = "Offload"
         self.period_s = _check.positive("period_s", period_s, where=w)
         for field, v in (("frame_bytes", frame_bytes), ("result_bytes", result_bytes)):
@@ -67,6 +71,7 @@ class Offload:
         self.compute_s = modeled_latency(self.macs, self.ground_device)
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the fleet's scenario."""
         return {"period_s": self.period_s, "frame_bytes": self.frame_bytes,
                 "result_bytes": self.result_bytes, "macs": self.macs,
                 "ground_device": self.ground_device.name, "link": self.link.name,

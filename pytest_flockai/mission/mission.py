@@ -145,6 +145,8 @@ class Mission:
         return f"Mission({self.drone.name!r}, {self.pilot!r}, seed={self.seed}, until={self.until!r})"
 
     def run(self) -> FlightResult:
+        """Fly the mission (or take it from the open flight cache) and return its
+        result; a ``SimulationError`` carries the partial result on ``.result``."""
         found = _cache.lookup(self)     # the flight cache of this context, if one is open
         if found is not None and found.result is not None:
             publish(found.result, self)

@@ -94,28 +94,34 @@ class Cockpit:
     # -- what the drone knows --------------------------------------------------
     @property
     def position(self) -> tuple:
+        """(x, y, z) m, as the drone's estimator knows it."""
         q = self._st.qc
         return (q[0], q[1], q[2])
 
     @property
     def velocity(self) -> tuple:
+        """(vx, vy, vz) m/s, as the drone's estimator knows it."""
         v = self._st.vc
         return (v[0], v[1], v[2])
 
     @property
     def yaw(self) -> float:
+        """Heading (rad)."""
         return yaw_of(self._st.qc[3:7])
 
     @property
     def battery(self) -> float:
+        """Battery remaining, a fraction of the usable charge."""
         return self._st.battery_remaining
 
     @property
     def stage(self) -> str:
+        """The stage the drone is in ("takeoff", "pilot", "return", "landing", "done")."""
         return STAGES[self._st.stage]
 
     @property
     def link(self) -> Link:
+        """Distance to the ground station and the radio's range (``Link``)."""
         runners = list(self._runners.values())
         gs = runners[0].task.ground_station if runners else (0.0, 0.0, 0.0)
         rng = runners[0].link.range_m() if runners else math.inf
@@ -172,17 +178,20 @@ class Cockpit:
 
     # -- actions on tasks ------------------------------------------------------
     def set_period(self, task: str, period_s: float) -> None:
+        """Run ``task`` every ``period_s`` seconds from now."""
         r = self._runner(task)
         p = _check.positive("period_s", period_s, where=f"policy {self._policy.name!r}")
         self._sched.retask(r, self.t, period_s=p)
         self._log("set_period", task=task, period_s=p)
 
     def set_model(self, task: str, model) -> None:
+        """Run ``task`` with another model from now (anything ``Task(model=...)`` takes)."""
         r = self._runner(task)
         self._sched.retask(r, self.t, model=as_model(model))
         self._log("set_model", task=task, model=str(getattr(r.task.model, "name", "model")))
 
     def set_execution(self, task: str, execution: str) -> None:
+        """Run ``task`` on board or remotely (``ml.task.EXECUTIONS``) from now."""
         r = self._runner(task)
         where = f"policy {self._policy.name!r}"
         ex = _check.choice("execution", execution, EXECUTIONS, where=where)
@@ -193,10 +202,12 @@ class Cockpit:
         self._log("set_execution", task=task, execution=ex)
 
     def disable(self, task: str) -> None:
+        """Stop running ``task`` (no more frames taken for it)."""
         self._sched.retask(self._runner(task), self.t, enabled=False)
         self._log("disable", task=task)
 
     def enable(self, task: str) -> None:
+        """Run ``task`` again."""
         self._sched.retask(self._runner(task), self.t, enabled=True)
         self._log("enable", task=task)
 
@@ -214,16 +225,21 @@ class Cockpit:
         return True
 
     def goto(self, x: float, y: float, z: float | None = None, speed: float = 5.0) -> bool:
+        """Fly to (x, y, z) (z: the current altitude when None) and hover there; False
+        when refused (not in the pilot stage)."""
         z = self.position[2] if z is None else z
         return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y), z=float(z))
 
     def orbit(self, x: float, y: float, radius: float = 10.0, speed: float = 3.0,
               altitude: float | None = None) -> bool:
+        """Circle (x, y) at ``radius`` m (altitude: the current one when None); False
+        when refused."""
         alt = self.position[2] if altitude is None else altitude
         return self.fly(Orbit((x, y), radius, alt, speed), action="orbit", x=float(x), y=float(y),
                         radius=float(radius))
 
     def hold(self) -> bool:
+        """Hover where the drone is; False when refused."""
         x, y, z = self.position
         return self.fly(Hover(max(z, 0.5)), action="hold", x=float(x), y=float(y), z=float(z))
 
@@ -240,6 +256,7 @@ class Cockpit:
         return True
 
     def return_home(self) -> bool:
+        """Fly back to the pad and land; False when refused (already returning)."""
         if self._st.stage not in (PILOT, TAKEOFF):
             return self._refuse("return_home")
         self._stages.go_home(self.t)
@@ -247,6 +264,7 @@ class Cockpit:
         return True
 
     def land(self) -> bool:
+        """Land where the drone is; False when refused (already landing)."""
         if self._st.stage >= LAND:
             return self._refuse("land")
         self._stages.land_here(self.t)
@@ -308,6 +326,7 @@ class Policy(Clocked):
         self.advance_clock()
 
     def decide(self, t: float, drone: Cockpit) -> None:  # pragma: no cover - interface
+        """Look at ``drone`` (a ``Cockpit``) at simulated time ``t`` and act (override)."""
         raise NotImplementedError
 
     def _set_mode(self, t: float, mode: str) -> None:

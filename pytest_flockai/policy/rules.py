@@ -40,6 +40,7 @@ class Action:
     tasks: tuple = ()
 
     def check(self, mission, where: str) -> None:
+        """ConfigError when a task it names is not a task of ``mission``."""
         names = [t.name for t in mission.tasks]
         for task in self.tasks:
             if task not in names:
@@ -48,6 +49,7 @@ class Action:
                                   f"{', '.join(map(repr, names)) or 'none (the mission has no tasks)'}")
 
     def apply(self, drone) -> None:  # pragma: no cover - interface
+        """Do it on ``drone`` (the policy's ``Cockpit``)."""
         raise NotImplementedError
 
     def __repr__(self):
@@ -73,7 +75,7 @@ class SetPeriod(_TaskAction):
         super().__init__(task)
         self.period_s = _check.positive("period_s", period_s, where="SetPeriod")
 
-    def apply(self, drone):
+    def apply(self, drone) -> None:
         drone.set_period(self.task, self.period_s)
 
 
@@ -84,7 +86,7 @@ class SetModel(_TaskAction):
         super().__init__(task)
         self.model = model
 
-    def apply(self, drone):
+    def apply(self, drone) -> None:
         drone.set_model(self.task, self.model)
 
 
@@ -95,7 +97,7 @@ class SetExecution(_TaskAction):
         super().__init__(task)
         self.execution = _check.choice("execution", execution, EXECUTIONS, where="SetExecution")
 
-    def check(self, mission, where):
+    def check(self, mission, where: str) -> None:
         super().check(mission, where)
         tk = next(t for t in mission.tasks if t.name == self.task)
         if self.execution == "remote" and not getattr(tk.model, "needs_pixels", True):
@@ -103,17 +105,21 @@ class SetExecution(_TaskAction):
                               f"drone cannot take: the task's model reads the truth, not pixels, "
                               f"so there is no frame to send")
 
-    def apply(self, drone):
+    def apply(self, drone) -> None:
         drone.set_execution(self.task, self.execution)
 
 
 class EnableTask(_TaskAction):
-    def apply(self, drone):
+    """Run ``task`` again."""
+
+    def apply(self, drone) -> None:
         drone.enable(self.task)
 
 
 class DisableTask(_TaskAction):
-    def apply(self, drone):
+    """Stop running ``task``."""
+
+    def apply(self, drone) -> None:
         drone.disable(self.task)
 
 
@@ -126,27 +132,35 @@ class GoTo(Action):
         self.z = None if z is None else _extent("z", _check.positive("z", z, where="GoTo"), "GoTo")
         self.speed = _check.positive("speed", speed, where="GoTo")
 
-    def apply(self, drone):
+    def apply(self, drone) -> None:
         drone.goto(self.x, self.y, self.z, self.speed)
 
 
 class Hold(Action):
-    def apply(self, drone):
+    """Hover where the drone is."""
+
+    def apply(self, drone) -> None:
         drone.hold()
 
 
 class ResumePlan(Action):
-    def apply(self, drone):
+    """Back to the mission's own plan where it was left."""
+
+    def apply(self, drone) -> None:
         drone.resume()
 
 
 class ReturnHome(Action):
-    def apply(self, drone):
+    """Fly back to the pad and land."""
+
+    def apply(self, drone) -> None:
         drone.return_home()
 
 
 class Land(Action):
-    def apply(self, drone):
+    """Land where the drone is."""
+
+    def apply(self, drone) -> None:
         drone.land()
 
 

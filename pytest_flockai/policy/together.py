@@ -120,6 +120,8 @@ class GroundStation:
 
     # -- scoring ---------------------------------------------------------------
     def kpis(self) -> dict:
+        """Fleet KPIs: people found (a confirmed target within ``MATCH_M`` of one), the
+        time to find them all after the plan started, reports and assignments."""
         found: dict = {}
         people = [a for a in (self.actors.actors if self.actors is not None else ())
                   if a.kind == "person"]
@@ -137,6 +139,7 @@ class GroundStation:
                 "fleet.reports": float(self.reports), "fleet.assignments": float(self.assignments)}
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the scenario."""
         return {"type": "GroundStation", "position": list(self.position), "link": self.link.name,
                 "report_bytes": self.report_bytes, "gate_m": self.gate_m, "seed": self.seed}
 
@@ -199,7 +202,7 @@ class SharedSearch(_Perceiving):
             drone.resume()
             drone.mode("search")
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {**super().to_dict(), "task": self.task, "station": self.station.to_dict(),
                 "radius": self.radius, "orbit_s": self.orbit_s}
 

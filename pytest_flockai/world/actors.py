@@ -95,6 +95,7 @@ class Actor:
                                   f"world; allowed: |x| <= {half_x:g} m, |y| <= {half_y:g} m")
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"type": type(self).__name__, "name": self.name, "path": [list(p) for p in self.path],
                 "speed": self.speed, "start_s": self.start_s, "loop": self.loop}
 
@@ -144,6 +145,7 @@ class Marker(Actor):
         return x, y
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"type": "Marker", "name": self.name, "x": self.centre[0], "y": self.centre[1],
                 "size_m": self.size_m, "marker_id": self.marker_id, "dictionary": self.dictionary,
                 "yaw_deg": self.yaw_deg}

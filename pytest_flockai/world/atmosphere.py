@@ -52,7 +52,8 @@ class Atmosphere:
         return self.density / RHO_SEA_LEVEL
 
     @classmethod
-    def coerce(cls, value) -> Atmosphere:
+    def coerce(cls, value: object) -> Atmosphere:
+        """``value`` itself, or sea level for None; ConfigError for anything else."""
         if value is None:
             return cls()
         if isinstance(value, Atmosphere):
@@ -61,6 +62,7 @@ class Atmosphere:
                                  f"fa.Atmosphere(altitude_m, temperature_c) or None (sea level)")
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"altitude_m": self.altitude_m, "temperature_c": self.temperature_c,
                 "pressure_pa": self.pressure_pa, "density_kg_m3": self.density}
 

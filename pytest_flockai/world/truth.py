@@ -50,6 +50,7 @@ def gimbal_pose(pos, yaw: float, pitch_deg: float) -> tuple[np.ndarray, np.ndarr
 
 
 def focal_px(fov_deg: float, height: int) -> float:
+    """Focal length in pixels of a camera with vertical field of view ``fov_deg``."""
     return 0.5 * height / math.tan(math.radians(fov_deg) / 2.0)
 
 
@@ -173,9 +174,11 @@ class Truth:
 
     @property
     def count(self) -> int:
+        """How many objects are visible."""
         return int(len(self.indices))
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"t": float(self.t), "count": self.count,
                 "indices": [int(i) for i in self.indices],
                 "pixels": [[round(float(u), 2), round(float(v), 2)] for u, v in self.pixels],
@@ -283,9 +286,11 @@ class CameraModel:
 
     @property
     def focal_px(self) -> float:
+        """Focal length in pixels."""
         return focal_px(self.fov_deg, self.height)
 
-    def project(self, points, cam_pos, cam_mat):
+    def project(self, points, cam_pos, cam_mat) -> tuple[np.ndarray, np.ndarray]:
+        """(uv (N, 2), depth (N,)) of ``points`` seen from this camera."""
         return project(points, cam_pos, cam_mat, self.fov_deg, self.width, self.height)
 
     def truth(self, t, points, cam_pos, cam_mat, occluders=None, objects=None) -> Truth:

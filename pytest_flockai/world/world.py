@@ -77,6 +77,7 @@ class World:
     # -- constructors ------------------------------------------------------
     @classmethod
     def empty(cls) -> World:
+        """A world with nothing in it but the ground."""
         return cls("empty")
 
     @classmethod
@@ -221,6 +222,8 @@ class World:
 
     # -- MuJoCo ------------------------------------------------------------
     def add_to_spec(self, spec: mujoco.MjSpec) -> None:
+        """Add this world's ground, buildings, people and vehicles (or its MJCF scene)
+        to the flight's MuJoCo model."""
         if self.path is not None:
             self._add_mjcf(spec)
             return
@@ -301,6 +304,7 @@ class World:
         return pts
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         d = {"name": self.name, "people": int(len(self.people))}
         if len(self.vehicles):
             d["vehicles"] = int(len(self.vehicles))
