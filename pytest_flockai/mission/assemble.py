@@ -16,11 +16,11 @@ from ..control.controller import CascadedController
 from ..control.estimator import NavEstimator
 from ..control.stages import StageMachine
 from ..control.steps import Control, Navigation
+from ..control.trajectory import accel_limit
 from ..energy.factory import flight_energy_model
 from ..energy.integrator import EnergyIntegrator
 from ..energy.model import Meter
 from ..ml.scheduler import DatasetRecorder, TaskScheduler, memory_utilization
-from ..physics import G
 from ..probes.builtin import TaskProbe
 from ..probes.hub import ProbeHub, RunView
 from ..probes.telemetry import TelemetryRecorder, TelemetryStep
@@ -94,10 +94,8 @@ class Run:
     def _components(self, plan, subscribers, probes) -> list:
         drone, st, d = plan.drone, self.vehicle, self.data
         n_rot = drone.airframe.rotor_count
-        # trajectories' acceleration limit: a quarter of the thrust margin, at most 2.5 m/s^2,
-        # and no more than the velocity loop can follow (1.5 x its bandwidth)
-        tw = drone.thrust_to_weight_at(plan.atmosphere.density)
-        accel = min(2.5, 0.25 * (tw - 1.0) * G, 1.5 * self.controller.k_vel)
+        accel = accel_limit(drone.thrust_to_weight_at(plan.atmosphere.density),
+                            self.controller.k_vel)
         self.stages = StageMachine(st, copy.deepcopy(plan.pilot), self.events, d, accel=accel,
                                    climb_speed=plan.climb_speed, descent_speed=plan.descent_speed,
                                    return_home=plan.return_home)
