@@ -69,7 +69,7 @@ def ou_coefficients(dt, su, sw, tu, tw, xp=MATH):
 class WindParams(NamedTuple):
     """A wind as numbers (``Wind.batch_params``; -1 stands for None)."""
 
-    mean: tuple
+    mean: np.ndarray
     active: bool
     gust_std: float
     gust_tau_s: float
@@ -105,7 +105,7 @@ class Wind:
 
     def batch_params(self) -> WindParams:
         """This wind's numbers, for the shared formulas and the batched backend."""
-        return WindParams(mean=tuple(self.mean), active=self.turbulent,
+        return WindParams(mean=np.asarray(self.mean, dtype=float), active=self.turbulent,
                           gust_std=-1.0 if self.gust_std is None else float(self.gust_std),
                           gust_tau_s=-1.0 if self.gust_tau_s is None else float(self.gust_tau_s),
                           sigma_w20=self.sigma_w20, carry_mps=self.carry_mps)

@@ -63,8 +63,10 @@ def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
     return rows
 
 
-def _stack(items) -> dict:
-    return {k: jnp.asarray(np.stack([np.asarray(it[k]) for it in items])) for k in items[0]}
+def _stack(items):
+    """The variants' ``VariantParams`` stacked leaf by leaf (one pytree of batched arrays)."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])),
+                                  *items)
 
 
 def _models(models, dev):
@@ -88,19 +90,19 @@ def _init_state(num, model, sampler, dev):
     return {
         "d": mjx.put_data(model, data, device=dev), "home": home, "stage": np.int32(TAKEOFF),
         "sp": np.concatenate([home, np.zeros(7)]), "t_stage": 0.0, "leg_p0": home,
-        "leg_p1": np.array([0.0, 0.0, num["altitude"]]), "leg_speed": num["climb_speed"],
+        "leg_p1": np.array([0.0, 0.0, num.pilot.altitude]), "leg_speed": num.mission.climb_speed,
         "pilot_t0": 0.0, "pilot_start": np.zeros(3), "t_land": math.nan, "integ": np.zeros(3),
         "airborne": True, "end": np.int32(0), "t_end_at": math.nan,
         "w_g": np.asarray(sampler.g, dtype=float) if sampler is not None else np.zeros(3),
         "w_coef": np.zeros(4), "w_h": math.nan, "w": np.zeros(3),
         "hb_next": 0.0, "hb_pending": 0.0, "hb_drained": 0.0,
-        "e_next": num["energy_period"], "t_e": 0.0, "energy_j": 0.0,
-        "e_leaf": np.zeros(len(num["const_w"])), "loss_j": 0.0,
-        "vi": num.get("m_vi0", np.zeros(n)), "vrel": np.zeros(3),
-        "b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": num["b_v0"],
+        "e_next": num.mission.energy_period, "t_e": 0.0, "energy_j": 0.0,
+        "e_leaf": np.zeros(len(num.energy.const_w)), "loss_j": 0.0,
+        "vi": num.motors.vi0, "vrel": np.zeros(3),
+        "b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": num.battery.v0,
         "b_next": 0.0, "t_book": 0.0, "acc": 0.0, "pv": np.zeros(3),
         "ticks": np.zeros(6, dtype=np.int32), "dist": 0.0, "vmax": 0.0, "terr": 0.0,
-        "ec_next": num["energy_period"], "speed": 0.0}
+        "ec_next": num.mission.energy_period, "speed": 0.0}
 
 
 def _stack_states(states):
@@ -128,7 +130,7 @@ def _fly_group(key, members, dev) -> list[dict]:
                      kinds, pkind)
     dvals = jax.device_put(tuple(diff[j] for j in sorted(diff)), dev)
     shared = jax.device_put(tuple(leaves), dev)
-    t_end = max(num["t_end"] for num in nums)
+    t_end = max(num.mission.t_end for num in nums)
     t = 0.0
     while True:
         noise = np.zeros((chunk_ticks, len(members), 3))
@@ -175,19 +177,19 @@ def _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
     speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
     s = {**s, "speed": speed}
     s, landed = C.stages(p, s, t, q, v, _contact(d), pkind)
-    f, integ = C.controller(p, s["integ"], q, v, s["sp"], ctrl_dt)
+    f, integ = C.controller(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt)
     off = s["stage"] == DONE
     s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off}
     ctrl = jnp.where(off, 0.0, f)
-    w, wst = E.wind_step(p, s, q[2], noise, ctrl_dt)
+    w, wst = E.wind_step(p.wind, s, q[2], noise, ctrl_dt)
     s = {**s, **wst, "w": w}
     hb = E.due(t, s["hb_next"])
-    s = {**s, "hb_next": s["hb_next"] + jnp.where(hb, p["hb_period"], 0.0),
+    s = {**s, "hb_next": s["hb_next"] + jnp.where(hb, p.mission.hb_period, 0.0),
          "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
     vrel = C.rotation(q[3:7]).T @ (v[:3] - w)
     e_due = E.due(t, s["e_next"])
     es = E.integrate(p, {**s, "vrel": vrel}, t, d.act, vrel, s["airborne"], kinds)
-    es["e_next"] = s["e_next"] + p["energy_period"]
+    es["e_next"] = s["e_next"] + p.mission.energy_period
     s = _sel(e_due, es, s)
     b_due = True if book_every else E.due(t, s["b_next"])
     bs = E.book(p, s, t, q, v, speed, book_dt, book_every)
@@ -201,28 +203,28 @@ def _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
 def _end_conditions(p, s, t, dt, landed):
     """``EndConditions.step`` where due (its clock, and every tick near the end)."""
     on_clock = E.due(t, s["ec_next"])
-    run = on_clock | (t >= p["t_end"] - dt - E.CLOCK_EPS)
+    run = on_clock | (t >= p.mission.t_end - dt - E.CLOCK_EPS)
     end = jnp.where(landed, _END["landed"], s["end"])
     live = run & (end == 0)
-    empty = live & ((s["energy_j"] >= p["e_usable"]) | s["b_cut"])
+    empty = live & ((s["energy_j"] >= p.mission.e_usable) | s["b_cut"])
     end = jnp.where(empty, _END["battery_depleted"], end)
-    reserve = live & ~empty & p["use_reserve"] & (s["stage"] == C.PILOT) & (
-        p["e_usable"] - s["energy_j"] <= p["reserve_j"])
+    reserve = live & ~empty & p.mission.use_reserve & (s["stage"] == C.PILOT) & (
+        p.mission.e_usable - s["energy_j"] <= p.mission.reserve_j)
     s = C.go_home(p, s, t, reserve)
-    timeout = live & ~empty & (t + 0.5 * dt >= p["t_end"])
-    end = jnp.where(timeout, jnp.where(p["timed"], _END["time"], _END["time_cap"]), end)
-    return {**s, "end": end, "ec_next": s["ec_next"] + jnp.where(on_clock, p["energy_period"], 0.0)}
+    timeout = live & ~empty & (t + 0.5 * dt >= p.mission.t_end)
+    end = jnp.where(timeout, jnp.where(p.mission.timed, _END["time"], _END["time_cap"]), end)
+    return {**s, "end": end, "ec_next": s["ec_next"] + jnp.where(on_clock, p.mission.energy_period, 0.0)}
 
 
 def _physics(m, p, s, d, ctrl, nsub):
     """``substeps`` MJX steps with the body drag (every step, as MuJoCo's fluid model) and
     the rotor drag (from the tick's state, held over the tick as ``RotorDrag``), then the
     crash check (``loop._impact``)."""
-    hf, hm = E.rotor_drag(p, d.qpos[3:7], d.qvel, s["w"], d.act)
+    hf, hm = E.rotor_drag(p.aero, d.qpos[3:7], d.qvel, s["w"], d.act)
     d = d.replace(ctrl=ctrl)
 
     def sub(_, dd):
-        f = E.drag(p, dd.qpos[3:7], dd.qvel[:3], s["w"])
+        f = E.drag(p.aero, dd.qpos[3:7], dd.qvel[:3], s["w"])
         xf = jnp.zeros_like(dd.xfrc_applied).at[1, :3].set(f + hf).at[1, 3:].set(hm)
         out = mjx.step(m, dd.replace(xfrc_applied=xf))
         return jax.tree_util.tree_map(lambda a, b: b.astype(a.dtype), dd, out)

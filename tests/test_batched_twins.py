@@ -1,0 +1,259 @@
+"""Every JAX twin of the batched backend against the core function it twins, one at a
+time, on random states and on the edge cases (saturated mixer, empty battery,
+vortex-ring descent, a stopped rotor, a zero-length leg).
+
+The battery's voltage, resistance and current, the wind's intensities and OU
+coefficients and the legs' timing are one formula called with ``xp`` (``math`` in
+the core, ``jax.numpy`` in the batch): their tests check the wiring around the
+formula (state, cut-off hold, height threshold). The controller, mixer, motors,
+legs and paths, drag and H-force are twins: their tests are what keeps them from
+drifting. Tolerances: 1e-9 relative (float64 on both sides; the twins reorder a few
+sums). Run with the ``[mjx]`` extra; CI's newest stage fails if these skip.
+"""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import pytest_flockai as fa
+from pytest_flockai.airframe.rotor_drag import RotorDrag
+from pytest_flockai.control.controller import CascadedController
+from pytest_flockai.control.trajectory import Leg, waypoint_path
+from pytest_flockai.energy import Motors
+from pytest_flockai.energy.battery import Circuit
+from pytest_flockai.energy.factory import flight_energy_model
+from pytest_flockai.energy.model import Meter
+from pytest_flockai.mission.plan import resolve
+from pytest_flockai.world.wind import Wind
+
+pytestmark = pytest.mark.jax
+jax = pytest.importorskip("jax", reason="the batched twins need JAX: pip install 'pytest-flockai[mjx]'")
+jnp = jax.numpy
+pytest.importorskip("mujoco.mjx", reason="pip install 'pytest-flockai[mjx]'")
+from pytest_flockai.sweeps.batched import control as C  # noqa: E402
+from pytest_flockai.sweeps.batched import energy as E  # noqa: E402
+from pytest_flockai.sweeps.batched import params as P  # noqa: E402
+
+REL = 1e-9
+
+
+@pytest.fixture(autouse=True)
+def _x64():
+    with jax.enable_x64(True):
+        yield
+
+
+def _tree(p):
+    return jax.tree_util.tree_map(jnp.asarray, p)
+
+
+def _close(got, want, rel=REL, atol=1e-12):
+    got, want = np.asarray(got, dtype=float), np.asarray(want, dtype=float)
+    assert np.allclose(got, want, rtol=rel, atol=atol), (got, want)
+
+
+def _unit(rng):
+    q = rng.normal(size=4)
+    return q / np.linalg.norm(q)
+
+
+@pytest.mark.parametrize("name", ["crazyflie-2-1", "dji-mavic-2-pro", "generic-hexa-680"])
+def test_controller_twin_matches_cascaded_controller(name):
+    """Random states, near and far from the setpoint: the far ones saturate the tilt, the
+    vertical acceleration and (large yaw and attitude errors) the mixer."""
+    drone = fa.drone(name)
+    core = CascadedController(drone, 0.01)
+    c = _tree(core.batch_params())
+    rng = np.random.default_rng(7)
+    saturated = 0
+    for k in range(24):
+        scale = 0.2 if k % 3 == 0 else 6.0
+        q = np.r_[rng.normal(0, scale, 3), _unit(rng) if k % 2 else [1.0, 0, 0, 0]]
+        v = np.r_[rng.normal(0, scale, 3), rng.normal(0, scale, 3)]
+        sp = np.r_[rng.normal(0, 2, 3), rng.normal(0, 2, 3), rng.normal(0, 1, 3), rng.uniform(-3, 3)]
+        integ = rng.normal(0, 0.5, 3)
+        core.ix, core.iy, core.iz = integ
+        f = core.update(list(q), list(v), list(sp))
+        got, g_int = C.controller(c, jnp.asarray(integ), jnp.asarray(q), jnp.asarray(v),
+                                  jnp.asarray(sp), 0.01)
+        _close(got, f)
+        _close(g_int, [core.ix, core.iy, core.iz])
+        saturated += min(f) == 0.0 or max(f) == pytest.approx(core.fmax)
+    assert saturated >= 3                  # the saturated mixer was exercised
+
+
+def test_mixer_twin_matches_the_saturated_mixer():
+    """Collective and torques from hover to far beyond what the rotors can give: every
+    branch of ``_mix`` (fits; roll/pitch fit and the collective moves; roll/pitch scaled;
+    yaw scaled)."""
+    core = CascadedController(fa.drone("dji-mavic-2-pro"), 0.01)
+    B, fmax = jnp.asarray(np.asarray(core.B)), core.fmax
+    rng = np.random.default_rng(3)
+    for k in range(40):
+        T = rng.uniform(0.0, 4.5 * fmax)
+        tx, ty, tz = rng.normal(0, [0.1, 0.1, 0.05][k % 3] * (1 + k // 4) * fmax, 3)
+        want = core._mix(T, tx, ty, tz)
+        _close(C.mix(B, fmax, T, tx, ty, tz), want)
+
+
+def _motors(name):
+    drone = fa.drone(name)
+    meter = Meter(flight_energy_model(drone.energy), drone, rho=1.2)
+    return drone, next(c for _, c in meter.model.leaves() if isinstance(c, Motors))
+
+
+@pytest.mark.parametrize("name", ["dji-mavic-2-pro", "dji-mavic-2-pro-datasheet", "generic-hexa-680"])
+def test_motor_power_twin_matches_motors(name):
+    """Hover, forward flight (wake interference), climb, vortex-ring descent, autorotation
+    (negative total) and a stopped rotor; the induced-velocity state carried over ticks."""
+    drone, core = _motors(name)
+    mp = _tree(core.batch_params())
+    n = drone.airframe.rotor_count
+    hover = drone.mass_kg * 9.81 / n
+    rng = np.random.default_rng(11)
+    cases = [(0.0, 0.0, 0.0), (12.0, 0.0, 0.5), (3.0, -4.0, 2.0), (0.0, 0.0, -3.0),
+             (0.5, 0.2, -6.0), (1.0, 0.0, -12.0), (0.0, 0.0, -25.0)]
+    cases += [tuple(rng.normal(0, 6, 3)) for _ in range(12)]
+    vi = jnp.asarray(core.batch_params().vi0)
+    for k, vrel in enumerate(cases):
+        thrust = hover * rng.uniform(0.3, 1.8, n)
+        if k % 4 == 1:
+            thrust[k % n] = 0.0                      # a stopped rotor
+        want = sum(core.power_parts(SimpleNamespace(v_rel_body=vrel, thrust=list(thrust))))
+        got, vi = E.motors(mp, jnp.asarray(thrust), jnp.asarray(vrel), vi)
+        assert float(got) == pytest.approx(want, rel=REL), vrel
+        _close(vi, core._vi)
+
+
+@pytest.mark.parametrize("chemistry", ["lipo", "li-ion"])
+def test_battery_twin_matches_circuit_draw_down_to_empty(chemistry):
+    """Draws from full to beyond empty: the resistance's rise, the cut-off hold, a load
+    beyond the pack's maximum power (the discriminant below 0)."""
+    core = Circuit(chemistry=chemistry, cells=3, capacity_ah=0.05, resistance_ohm=0.06,
+                   cutoff_v_per_cell=3.0 if chemistry == "lipo" else 2.5)
+    b = _tree(core.batch_params())
+    s = {"b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": b.v0}
+    rng = np.random.default_rng(5)
+    cut_at = None
+    for k in range(400):
+        power = 0.0 if k % 50 == 7 else rng.uniform(5.0, 40.0)
+        if k == 390:
+            power = 1e4                                      # beyond the pack's maximum
+        s = {**s, "b_soc": core.soc}               # each draw from the core's own state
+        loss = core.draw(power, 0.5)
+        got, s = E.battery(b, s, power, 0.5)
+        assert float(got) == pytest.approx(loss, rel=REL, abs=1e-12)
+        assert float(s["b_soc"]) == pytest.approx(core.soc, rel=REL, abs=1e-12)
+        assert float(s["b_v"]) == pytest.approx(core.voltage_v, rel=REL)
+        assert bool(s["b_cut"]) == core.cutoff
+        cut_at = k if cut_at is None and core.cutoff else cut_at
+    assert core.soc < 0.05 and cut_at is not None and cut_at < 390    # emptied, cut off
+
+
+@pytest.mark.parametrize("wind", [Wind((6.0, 2.0, 0.0)), Wind((3.0, 0.0, 0.0), gust_std=1.5),
+                                  Wind((0.0, 4.0, 0.0), gust_std=0.8, gust_tau_s=2.0)])
+def test_wind_twin_matches_wind_sampler(wind):
+    """A climb and a descent through the Dryden layer: intensities and time constants
+    follow the height (recomputed past 0.5 m, as the core), the same noise, the same gusts."""
+    dt = 0.01
+    rng = np.random.default_rng(2)
+    core = wind.sampler(np.random.default_rng(9), dt)
+    w = _tree(wind.batch_params())
+    s = {"w_g": jnp.asarray(core.g), "w_coef": jnp.zeros(4), "w_h": jnp.nan}
+    heights = np.r_[np.linspace(0.0, 80.0, 150), np.linspace(80.0, 2.0, 150)] + rng.normal(0, 0.1, 300)
+    for h in heights:
+        want = core.step(h)
+        buf, k = core._buf, core._k - 3
+        got, st = E.wind_step(w, s, h, jnp.asarray(buf[k:k + 3]), dt)
+        s = st
+        _close(got, want)
+
+
+def test_leg_and_path_twins_match_the_trajectory():
+    """Triangular and trapezoidal legs, a zero-length leg, times before, inside and after."""
+    rng = np.random.default_rng(4)
+    sp = [0.0] * 10
+    for k in range(10):
+        p0 = rng.normal(0, 10, 3)
+        p1 = p0 if k == 0 else p0 + rng.normal(0, [0.3, 5.0, 30.0][k % 3], 3)
+        speed, accel = rng.uniform(1, 12), rng.uniform(0.5, 2.5)
+        leg = Leg(p0, p1, speed, accel)
+        for t in np.r_[-0.5, 0.0, rng.uniform(0, leg.duration + 1.0, 12), leg.duration]:
+            leg.fill(t, sp)
+            pos, vel, acc, dur = C.leg(jnp.asarray(p0), jnp.asarray(p1), speed, accel, t)
+            _close(np.r_[pos, vel, acc], sp[:9], atol=1e-9)
+            assert float(dur) == pytest.approx(leg.duration, rel=REL, abs=1e-12)
+    start, pts = (0.0, 0.0, 1.0), rng.normal(0, 8, (5, 3))
+    path = waypoint_path(start, [tuple(p) for p in pts], 5.0, 2.0)
+    ends = jnp.asarray(pts)
+    starts = jnp.concatenate([jnp.asarray([start]), ends[:-1]])
+    for t in np.r_[np.sort(rng.uniform(0, path.duration + 2.0, 30)), path.duration]:
+        done = path.fill(t, sp)
+        pos, vel, acc, got_done = C.path(starts, ends, 5.0, 2.0, t)
+        _close(np.r_[pos, vel, acc], sp[:9], atol=1e-9)
+        assert bool(got_done) == done
+
+
+def test_rotor_drag_twin_matches_the_cores_h_force():
+    """Random attitudes, rates, winds and rotor thrusts (one rotor stopped)."""
+    for name in ("dji-mavic-2-pro", "generic-hexa-680"):
+        drone = fa.drone(name)
+        _, num, _ = P.variant(fa.Mission(drone, fa.pilots.Hover()))
+        a = _tree(num.aero)
+        assert num.aero.h_c > 0
+        rng = np.random.default_rng(2)
+        for _ in range(6):
+            quat = _unit(rng)
+            q = np.r_[0.0, 0.0, 10.0, quat]
+            v = np.r_[rng.normal(0, 6, 3), rng.normal(0, 1.5, 3)]
+            wind, act = rng.normal(0, 4, 3), rng.uniform(0.0, 8.0, drone.airframe.rotor_count)
+            act[0] = 0.0
+            xfrc = np.zeros(6)
+            RotorDrag(drone, SimpleNamespace(q=q, v=v, w=wind), act, xfrc, num.aero.rho).step(0.0)
+            f, tq = E.rotor_drag(a, quat, v, wind, act)
+            _close(f, xfrc[:3])
+            _close(tq, xfrc[3:])
+            assert np.linalg.norm(xfrc[:3]) > 1e-3
+
+
+def test_body_drag_twin_is_mujocos_fluid_ellipsoid():
+    """MJX has only the inertia-box fluid model; the batched step applies the ellipsoid's
+    blunt drag itself: the same force as MuJoCo's C fluid model (1e-6: MuJoCo's own
+    projected-area arithmetic)."""
+    import mujoco
+
+    from pytest_flockai.airframe.model import build_spec
+    m = fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover())
+    _, num, _ = P.variant(m)
+    model = build_spec(m.drone, None, physics_dt=0.002).compile()
+    data = mujoco.MjData(model)
+    a = _tree(num.aero)
+    rng = np.random.default_rng(1)
+    for _ in range(6):
+        quat = _unit(rng)
+        vel, wind = rng.normal(0, 6, 3), rng.normal(0, 4, 3)
+        data.qpos[3:7], data.qvel[:3], data.qvel[3:] = quat, vel, 0.0
+        model.opt.wind[:] = wind
+        mujoco.mj_forward(model, data)
+        ours = E.drag(a, quat, vel, wind)
+        _close(ours, data.qfrc_fluid[:3], rel=1e-6, atol=1e-9)
+        assert np.linalg.norm(ours) > 0.1
+
+
+def test_variant_params_are_the_core_objects_exports():
+    """The batch's numbers are the core's declared exports (no private attributes), typed,
+    and stack into one pytree."""
+    m = fa.Mission(fa.drone("dji-mavic-2-pro-datasheet"), fa.pilots.Hover(altitude=3.0),
+                   wind=fa.Wind((4.0, 0.0, 0.0)))
+    _, num, _ = P.variant(m)
+    ctrl = CascadedController(m.drone, resolve(m).ctrl_dt, rho=num.aero.rho).batch_params()
+    assert num.ctrl.k_pos == ctrl.k_pos and num.ctrl.fmax == ctrl.fmax
+    want = m.wind.batch_params()
+    assert num.wind._replace(mean=None) == want._replace(mean=None)
+    assert np.array_equal(num.wind.mean, want.mean) and num.wind.mean[0] == 4.0
+    assert bool(num.motors.model) and num.battery.cells > 0
+    stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack([jnp.asarray(x) for x in xs]), num, num)
+    assert stacked.ctrl.B.shape == (2,) + np.asarray(num.ctrl.B).shape
+    assert math.isinf(num.pilot.duration)
