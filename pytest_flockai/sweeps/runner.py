@@ -9,10 +9,15 @@ the same seed gives the same DataFrame whatever the worker count. A
 variant that ends in a ``SimulationError`` (or a combination the mission
 rejects) is a row with its ``error``, not a lost sweep.
 
-``backend="mjx"`` flies every variant in one batch instead (MJX physics and
-the core's components in JAX, ``batched/``; ``pip install
-'pytest-flockai[mjx]'``): same columns, for Hover, Waypoints and ZigZag
+``backend="jax"`` flies every variant in one batch instead (the core's
+components in JAX and a free-flying rigid body with the ground handled apart,
+``batched/``; ``pip install 'pytest-flockai[mjx]'``), ``backend="mjx"`` the same
+batch on MJX's full physics: same columns, for Hover, Waypoints and ZigZag
 missions without tasks (``batched.params.check`` names anything else).
+``backend="auto"`` picks the batch ("jax", or "mjx" where the free-flight body
+cannot fly the drone) for a batchable mission of at least ``AUTO_MIN_VARIANTS``
+variants or with a ``device``, else the process pool; ``df.attrs["backend"]``
+says which ran (``"backend_asked"``: what was asked).
 
 Flights of a sweep are not handed to the recording sink of the caller (the
 pytest plugin records the sweep as a whole). Each variant is a flight of the
@@ -25,6 +30,7 @@ counts the variants per cache status ("hit", "stored", ...).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import multiprocessing
 import os
@@ -44,7 +50,10 @@ from . import axes as _axes
 from . import design
 from .batched import params as _batched
 
-BACKENDS = ("process", "mjx")
+BACKENDS = ("process", "mjx", "jax", "auto")
+#: backend="auto" batches from this many variants: below it, compiling the batch (tens of
+#: seconds on a CPU, once per machine with the compile cache) costs more than it saves
+AUTO_MIN_VARIANTS = 16
 #: JAX platforms the mjx backend runs on (None: JAX's default device)
 DEVICES = (None, "cpu", "gpu", "cuda", "tpu")
 _BASE: list = []        # the base mission inside a worker process
@@ -67,8 +76,10 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
     (``{kpi: "<op> <number> [unit]"}``, as ``@pytest.mark.kpi``) one boolean
     column ``ok_<kpi>`` per budget and ``ok`` (every budget holds and the
     variant flew without error). ``df.attrs`` holds the sweep's settings and its
-    wall time. ``backend="mjx"`` flies the variants in one JAX batch (``device``:
-    "cpu", "gpu", or None for JAX's default); ``workers`` is then unused.
+    wall time. ``backend="jax"`` / ``"mjx"`` fly the variants in one JAX batch
+    (``device``: "cpu", "gpu", or None for JAX's default); ``workers`` is then unused.
+    ``backend="auto"`` chooses (``choose_backend``); ``df.attrs["backend"]`` is the one
+    that ran.
     """
     if not isinstance(base_mission, Mission):
         raise ConfigError(f"sweep: base_mission = {base_mission!r} is not a fa.Mission")
@@ -84,16 +95,17 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
                           f"{{kpi: '<op> <number> [unit]'}}")
     parsed = _budgets.parse_many(budgets or {})
     workers = _check_workers(workers)
+    ran = choose_backend(base_mission, len(plan), device) if backend == "auto" else backend
     wall0 = time.perf_counter()
-    if backend == "process":
+    if ran == "process":
         rows, statuses = fly(base_mission, plan, workers)
     else:                       # the batched path neither reads nor stores the flight cache
-        rows, statuses = _fly_batched(base_mission, plan, device), []
+        rows, statuses = _fly_batched(base_mission, plan, device, ran), []
     wall = time.perf_counter() - wall0
     df = frame(rows, list(axes), parsed)
     df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
-                     "wall_s": wall, "backend": backend, "device": device,
+                     "wall_s": wall, "backend": ran, "backend_asked": backend, "device": device,
                      "cache": dict(Counter(s for s in statuses if s is not None))})
     return df
 
@@ -104,7 +116,9 @@ def _check_backend(backend, base, device) -> None:
                           f"{', '.join(map(repr, BACKENDS))}")
     if device not in DEVICES:
         raise ConfigError(f"sweep: device = {device!r} is not allowed; allowed: "
-                          f"{', '.join(map(repr, DEVICES))} (backend='mjx' only)")
+                          f"{', '.join(map(repr, DEVICES))} (batched backends only)")
+    if backend == "auto":
+        return
     if backend == "process":
         if device is not None:
             raise ConfigError(f"sweep: device = {device!r} needs backend='mjx'; "
@@ -113,14 +127,29 @@ def _check_backend(backend, base, device) -> None:
     _batched.check(base)
 
 
-def _fly_batched(base, plan, device) -> list[dict]:
+def choose_backend(base, n_variants: int, device=None) -> str:
+    """``backend="auto"``: "jax" (the free-flight batch) for a mission the batched path
+    flies, with JAX installed, of at least ``AUTO_MIN_VARIANTS`` variants or with a
+    ``device``; "mjx" there if the free-flight body cannot fly the drone; else "process"."""
+    if device is None and n_variants < AUTO_MIN_VARIANTS:
+        return "process"
+    if importlib.util.find_spec("jax") is None or importlib.util.find_spec("mujoco.mjx") is None:
+        return "process"
+    try:
+        _batched.check(base)
+    except ConfigError:
+        return "process"
+    return "jax" if _batched.free_flight_unsupported(base) is None else "mjx"
+
+
+def _fly_batched(base, plan, device, physics) -> list[dict]:
     """The variants in one JAX batch (the backend's modules import JAX: loaded here)."""
     try:
         from .batched import engine
     except ImportError as exc:
-        raise ConfigError(f"sweep: backend='mjx' needs JAX and MJX ({exc}); install them with "
-                          f"pip install 'pytest-flockai[mjx]', or use backend='process'") from None
-    return engine.fly(base, plan, device)
+        raise ConfigError(f"sweep: backend={physics!r} needs JAX and MJX ({exc}); install them "
+                          f"with pip install 'pytest-flockai[mjx]', or use backend='process'") from None
+    return engine.fly(base, plan, device, physics)
 
 
 def _check_workers(workers) -> int:

@@ -29,9 +29,11 @@ from mujoco import mjx
 from ...control.stages import DONE, TAKEOFF
 from ...errors import FlockAIError
 from .. import axes as _axes
+from . import compile_cache
 from . import control as C
 from . import energy as E
 from . import params as P
+from . import rigid as R
 from . import rows as _rows
 
 #: s of simulated time per compiled chunk (the host checks for the end between chunks)
@@ -41,8 +43,9 @@ COMPILER_OPTIONS: dict = {}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
 
 
-def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
-    """One row dict per variant, in the plan's order (as ``runner._fly``)."""
+def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx") -> list[dict]:
+    """One row dict per variant, in the plan's order (as ``runner._fly``); ``physics``:
+    "mjx" (MJX's ``mjx.step``) or "jax" (``rigid.step``, the free-flight body)."""
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
     for i, values in enumerate(plan):
@@ -55,9 +58,10 @@ def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
             continue
         groups.setdefault(key, []).append((i, m, num, model))
     dev = jax.devices(device)[0] if device else jax.devices()[0]
+    compile_cache.enable()
     with jax.enable_x64(True):
         for key, members in groups.items():
-            out = _fly_group(key, members, dev)
+            out = _fly_group(key, members, dev, physics)
             for (i, _, _, _), row in zip(members, out):
                 rows[i] = {**plan[i], **row}
     return rows
@@ -82,13 +86,12 @@ def _models(models, dev):
     return leaves, diff, treedef
 
 
-def _init_state(num, model, sampler, dev):
+def _init_state(num, model, sampler, dev, physics):
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     home = np.array([0.0, 0.0, float(data.qpos[2])])
-    n = model.nu
     return {
-        "d": mjx.put_data(model, data, device=dev), "home": home, "stage": np.int32(TAKEOFF),
+        "d": mjx.put_data(model, data, device=dev) if physics == "mjx" else R.data_of(data), "home": home, "stage": np.int32(TAKEOFF),
         "sp": np.concatenate([home, np.zeros(7)]), "t_stage": 0.0, "leg_p0": home,
         "leg_p1": np.array([0.0, 0.0, num.pilot.altitude]), "leg_speed": num.mission.climb_speed,
         "pilot_t0": 0.0, "pilot_start": np.zeros(3), "t_land": math.nan, "integ": np.zeros(3),
@@ -112,23 +115,38 @@ def _stack_states(states):
                                   *states)
 
 
-def _fly_group(key, members, dev) -> list[dict]:
+def bucket(n: int) -> int:
+    """The batch size ``n`` variants fly in: the next of 8, 16, 32, ... 1,024 and then
+    multiples of 1,024 (1,000 and 1,024 variants share one compiled chunk; the padding
+    repeats the last variant and its rows are dropped)."""
+    if n >= 1024:
+        return -(-n // 1024) * 1024
+    return max(8, 1 << (n - 1).bit_length())
+
+
+def _fly_group(key, members, dev, physics) -> list[dict]:
     nsub, _, ctrl_dt, book_dt, _, (kinds, tops), pkind = key[:7]
+    real = len(members)
+    members = members + [members[-1]] * (bucket(real) - real)
     nums = [num for _, _, num, _ in members]
     p = jax.device_put(_stack(nums), dev)     # committed, like the chunk's outputs:
     # uncommitted inputs would compile the chunk a second time
-    leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
+    if physics == "mjx":
+        leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
+        idx, dvals = tuple(sorted(diff)), tuple(diff[j] for j in sorted(diff))
+    else:
+        leaves, idx, treedef = (), None, None
+        dvals = _stack([R.model_of(mdl) for *_, mdl in members])
     samplers, states = [], []
     for _, m, num, model in members:
         rng = P.wind_rng(m)
         smp = m.wind.sampler(rng, ctrl_dt) if (m.wind is not None and m.wind.turbulent) else None
         samplers.append(smp)
-        states.append(_init_state(num, model, smp, dev))
+        states.append(_init_state(num, model, smp, dev, physics))
     s = jax.device_put(_stack_states(states), dev)
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
-    step = _chunk_fn(tuple(sorted(diff)), treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt,
-                     kinds, pkind)
-    dvals = jax.device_put(tuple(diff[j] for j in sorted(diff)), dev)
+    step = _chunk_fn(idx, treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt, kinds, pkind)
+    dvals = jax.device_put(dvals, dev)
     shared = jax.device_put(tuple(leaves), dev)
     t_end = max(num.mission.t_end for num in nums)
     t = 0.0
@@ -142,7 +160,7 @@ def _fly_group(key, members, dev) -> list[dict]:
         if bool(jnp.all(s["end"] != 0)) or t > t_end + 2 * CHUNK_S:
             break
     s = jax.vmap(lambda p1, s1: _finish(p1, s1, kinds))(p, s)
-    return _rows.rows(jax.device_get(s), nums, tops, book_dt)
+    return _rows.rows(jax.device_get(s), nums[:real], tops, book_dt)
 
 
 @functools.lru_cache(maxsize=16)
@@ -150,10 +168,13 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
     """The compiled chunk of one batch structure (cached: a second sweep of the same
     structure does not compile again)."""
     def one(shared, dvals, p, s, noise):
-        ls = list(shared)
-        for j, val in zip(diff_idx, dvals):
-            ls[j] = val
-        m = jax.tree_util.tree_unflatten(treedef, ls)
+        if treedef is None:                   # the free-flight body: its model is dvals
+            m = dvals
+        else:
+            ls = list(shared)
+            for j, val in zip(diff_idx, dvals):
+                ls[j] = val
+            m = jax.tree_util.tree_unflatten(treedef, ls)
         new = _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind)
         new = jax.tree_util.tree_map(lambda a, b: jnp.asarray(b, dtype=a.dtype), s, new)
         return _sel(s["end"] != 0, s, new)
@@ -166,6 +187,8 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
 
 
 def _contact(d):
+    if isinstance(d, R.RigidData):
+        return d.contact
     c = d._impl.contact
     return jnp.any(c.dist < c.includemargin) if c.dist.shape[0] else jnp.zeros((), bool)
 
@@ -221,6 +244,12 @@ def _physics(m, p, s, d, ctrl, nsub):
     the rotor drag (from the tick's state, held over the tick as ``RotorDrag``), then the
     crash check (``loop._impact``)."""
     hf, hm = E.rotor_drag(p.aero, d.qpos[3:7], d.qvel, s["w"], d.act)
+    if isinstance(d, R.RigidData):
+        def free(_, dd):
+            f = E.drag(p.aero, dd.qpos[3:7], dd.qvel[:3], s["w"])
+            return R.step(m, dd, ctrl, jnp.concatenate([f + hf, hm]))
+        d = jax.lax.fori_loop(0, nsub, free, d)
+        return _crash(s, d, R.up_z(d) < 0.0)
     d = d.replace(ctrl=ctrl)
 
     def sub(_, dd):
@@ -229,7 +258,11 @@ def _physics(m, p, s, d, ctrl, nsub):
         out = mjx.step(m, dd.replace(xfrc_applied=xf))
         return jax.tree_util.tree_map(lambda a, b: b.astype(a.dtype), dd, out)
     d = jax.lax.fori_loop(0, nsub, sub, d)
-    flipped = d.xmat[1, 2, 2] < 0.0
+    return _crash(s, d, d.xmat[1, 2, 2] < 0.0)
+
+
+def _crash(s, d, flipped):
+    """``loop._impact``: touching the ground upside down, or fast away from the pad."""
     on_pad = (s["stage"] == TAKEOFF) & (s["d"].qpos[2] < s["home"][2] + 0.05)
     crash = _contact(d) & (s["stage"] != DONE) & (flipped | (~on_pad & (s["speed"] > 2.0)))
     return {**s, "d": d, "end": jnp.where(crash, _END["crashed"], s["end"]),

@@ -33,6 +33,7 @@ from ...mission.book import book_period
 from ...mission.plan import resolve, seed_sequence
 from ...ml.scheduler import memory_utilization
 from ...world.wind import WindParams
+from .rigid_model import unsupported
 
 PILOTS = (Hover, Waypoints, ZigZag)
 ENERGY_KINDS = (Motors, Constant, SoC, RadioLinear, RadioStates, HoverPower)
@@ -233,6 +234,15 @@ def variant(m) -> tuple[tuple, VariantParams, object]:
     key = (plan.substeps, plan.physics_dt, plan.ctrl_dt, book_period(plan.ctrl_dt),
            drone.airframe.rotor_count, e_key, p_key, model.nq, model.nv, model.ngeom, model.nu)
     return key, num, model
+
+
+def free_flight_unsupported(m) -> str | None:
+    """Why the free-flight body (``backend="jax"``) cannot fly mission ``m``'s drone (None:
+    it can; then ``backend="mjx"`` is not needed)."""
+    plan = resolve(m)
+    spec = build_spec(plan.drone, None, physics_dt=plan.physics_dt, rho=plan.atmosphere.density)
+    spec.option.density = 0.0
+    return unsupported(spec.compile())
 
 
 def wind_rng(m) -> np.random.Generator:
