@@ -23,6 +23,7 @@ costs more than the arithmetic (see benchmarks/flight_core.py).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -54,6 +55,16 @@ class ControllerParams(NamedTuple):
     kd_h: float
     kd_v: float
     B: np.ndarray
+
+
+@functools.lru_cache(maxsize=256)
+def allocation(layout: tuple, k: float) -> list:
+    """The mixer: the pseudo-inverse of [T, tau_x, tau_y, tau_z] = A f for rotors at
+    ``layout`` ((x, y, spin) each) with torque/thrust ratio ``k``, as rows of floats
+    (cached: a sweep builds a controller per variant on the same layout)."""
+    A = np.array([[1.0] * len(layout), [y for _, y, _ in layout], [-x for x, _, _ in layout],
+                  [-s * k for _, _, s in layout]])
+    return [tuple(float(v) for v in row) for row in np.linalg.pinv(A)]
 
 
 class CascadedController:
@@ -91,10 +102,7 @@ class CascadedController:
         # allocation: [T, tau_x, tau_y, tau_z] = A f
         k = rot.torque_coeff / rot.thrust_coeff
         lay = drone.rotor_layout()
-        A = np.array([[1.0] * n, [y for _, y, _ in lay], [-x for x, _, _ in lay],
-                      [-s * k for _, _, s in lay]])
-        B = np.linalg.pinv(A)
-        self.B = [tuple(float(v) for v in row) for row in B]
+        self.B = list(allocation(tuple(tuple(r) for r in lay), k))
         self.gains = {"k_rate": self.k_rate, "k_att": self.k_att, "k_yaw_rate": self.k_yaw_rate,
                       "k_yaw": self.k_yaw, "k_vel": self.k_vel, "k_vel_i": self.k_vel_i,
                       "k_pos": self.k_pos, "max_tilt_rad": self.max_tilt}

@@ -37,6 +37,7 @@ or at once when the load asks for more power than the pack can give.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -103,6 +104,7 @@ class BatteryParams(NamedTuple):
     v0: float
 
 
+@functools.lru_cache(maxsize=512)
 def usable_energy_j(chemistry: str, cells: int, capacity_ah: float, floor: float, n: int = 400) -> float:
     """Chemical energy (J) between full charge and the floor: cells x Q x integral of OCV ds."""
     h = (1.0 - floor) / n

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 import math
+import time
 
 import jax
 import jax.numpy as jnp
@@ -41,11 +42,15 @@ CHUNK_S = 2.0
 #: XLA options of the chunk (see README: compile time against run time)
 COMPILER_OPTIONS: dict = {}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
+#: wall seconds of the last ``fly`` in this process: the variants' numbers and models
+#: (``variants_s``) and the batches (``batch_s``: states, compile or cache load, chunks)
+LAST_TIMINGS: dict = {}
 
 
 def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx") -> list[dict]:
     """One row dict per variant, in the plan's order (as ``runner._fly``); ``physics``:
     "mjx" (MJX's ``mjx.step``) or "jax" (``rigid.step``, the free-flight body)."""
+    t0 = time.perf_counter()
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
     for i, values in enumerate(plan):
@@ -59,9 +64,12 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
         groups.setdefault(key, []).append((i, m, num, model))
     dev = jax.devices(device)[0] if device else jax.devices()[0]
     compile_cache.enable()
+    LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0)
     with jax.enable_x64(True):
         for key, members in groups.items():
+            t1 = time.perf_counter()
             out = _fly_group(key, members, dev, physics)
+            LAST_TIMINGS["batch_s"] += time.perf_counter() - t1
             for (i, _, _, _), row in zip(members, out):
                 rows[i] = {**plan[i], **row}
     return rows
@@ -86,12 +94,20 @@ def _models(models, dev):
     return leaves, diff, treedef
 
 
-def _init_state(num, model, sampler, dev, physics):
+def _data(model, dev, physics):
+    """The physics' initial state: MJX data after ``mj_forward``, or the free body at ``qpos0``."""
+    if physics != "mjx":
+        return R.RigidData(0.0, np.array(model.qpos0, dtype=float), np.zeros(model.nv),
+                           np.zeros(model.na), False)
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    home = np.array([0.0, 0.0, float(data.qpos[2])])
+    return mjx.put_data(model, data, device=dev)
+
+
+def _init_state(num, model, sampler, dev, physics):
+    home = np.array([0.0, 0.0, float(model.qpos0[2])])
     return {
-        "d": mjx.put_data(model, data, device=dev) if physics == "mjx" else R.data_of(data), "home": home, "stage": np.int32(TAKEOFF),
+        "d": _data(model, dev, physics), "home": home, "stage": np.int32(TAKEOFF),
         "sp": np.concatenate([home, np.zeros(7)]), "t_stage": 0.0, "leg_p0": home,
         "leg_p1": np.array([0.0, 0.0, num.pilot.altitude]), "leg_speed": num.mission.climb_speed,
         "pilot_t0": 0.0, "pilot_start": np.zeros(3), "t_land": math.nan, "integ": np.zeros(3),
@@ -105,7 +121,8 @@ def _init_state(num, model, sampler, dev, physics):
         "b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": num.battery.v0,
         "b_next": 0.0, "t_book": 0.0, "acc": 0.0, "pv": np.zeros(3),
         "ticks": np.zeros(6, dtype=np.int32), "dist": 0.0, "vmax": 0.0, "terr": 0.0,
-        "ec_next": num.mission.energy_period, "speed": 0.0}
+        "ec_next": num.mission.energy_period, "speed": 0.0, "landed": False,
+        "ctrl": np.zeros(model.nu)}
 
 
 def _stack_states(states):
@@ -166,24 +183,44 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
 @functools.lru_cache(maxsize=16)
 def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
     """The compiled chunk of one batch structure (cached: a second sweep of the same
-    structure does not compile again)."""
-    def one(shared, dvals, p, s, noise):
+    structure does not compile again). One tick is vmapped in parts; the clocked parts
+    (energy, and the book when it is slower than the tick) run under a ``lax.cond`` on
+    the whole batch, so the ticks where no variant's clock is due skip them (every
+    variant starts at t = 0 on the same clock)."""
+    def model(shared, dvals):
         if treedef is None:                   # the free-flight body: its model is dvals
-            m = dvals
-        else:
-            ls = list(shared)
-            for j, val in zip(diff_idx, dvals):
-                ls[j] = val
-            m = jax.tree_util.tree_unflatten(treedef, ls)
-        new = _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind)
-        new = jax.tree_util.tree_map(lambda a, b: jnp.asarray(b, dtype=a.dtype), s, new)
-        return _sel(s["end"] != 0, s, new)
+            return dvals
+        ls = list(shared)
+        for j, val in zip(diff_idx, dvals):
+            ls[j] = val
+        return jax.tree_util.tree_unflatten(treedef, ls)
 
-    batched = jax.vmap(one, in_axes=(None, 0, 0, 0, 0))
+    def clocked(fn, due, p, s):
+        """``fn`` on the batch where any variant is due (``fn`` selects per variant)."""
+        return jax.lax.cond(jnp.any(jax.vmap(due)(s)),
+                            lambda st: _like(st, jax.vmap(fn)(p, st)), lambda st: st, s)
+
+    def tick(shared, dvals, p, s, noise):
+        old = s
+        s = _like(old, jax.vmap(lambda p1, s1, n1: _pre(p1, s1, n1, ctrl_dt, pkind))(p, s, noise))
+        s = clocked(lambda p1, s1: _energy(p1, s1, kinds), lambda s1: E.due(s1["d"].time, s1["e_next"]),
+                    p, s)
+        book = lambda p1, s1: _book(p1, s1, book_dt, book_every)  # noqa: E731
+        s = _like(old, jax.vmap(book)(p, s)) if book_every else clocked(
+            book, lambda s1: E.due(s1["d"].time, s1["b_next"]), p, s)
+        post = jax.vmap(lambda dv, p1, s1: _post(model(shared, dv), p1, s1, ctrl_dt, nsub),
+                        in_axes=(0, 0, 0))
+        s = _like(old, post(dvals, p, s))
+        return jax.vmap(lambda a, b: _sel(a["end"] != 0, a, b))(old, s)
 
     def run(shared, dvals, p, s, noise):
-        return jax.lax.scan(lambda st, n: (batched(shared, dvals, p, st, n), None), s, noise)[0]
+        return jax.lax.scan(lambda st, n: (tick(shared, dvals, p, st, n), None), s, noise)[0]
     return jax.jit(run, compiler_options=COMPILER_OPTIONS)
+
+
+def _like(ref, new):
+    """``new`` with the dtypes of ``ref`` (the scan's carry and both branches of a cond)."""
+    return jax.tree_util.tree_map(lambda a, b: jnp.asarray(b, dtype=a.dtype), ref, new)
 
 
 def _contact(d):
@@ -193,33 +230,50 @@ def _contact(d):
     return jnp.any(c.dist < c.includemargin) if c.dist.shape[0] else jnp.zeros((), bool)
 
 
-def _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
+def _pre(p, s, noise, ctrl_dt, pkind):
+    """The tick up to the energy: stage machine, controller, wind, heartbeats."""
     d = s["d"]
     t, q, v = d.time, d.qpos, d.qvel
-    ok = jnp.isfinite(q[2]) & (jnp.abs(q[2]) < 1e5) & jnp.isfinite(v[0])
     speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
     s = {**s, "speed": speed}
     s, landed = C.stages(p, s, t, q, v, _contact(d), pkind)
     f, integ = C.controller(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt)
     off = s["stage"] == DONE
-    s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off}
-    ctrl = jnp.where(off, 0.0, f)
+    s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off,
+         "ctrl": jnp.where(off, 0.0, f), "landed": landed}
     w, wst = E.wind_step(p.wind, s, q[2], noise, ctrl_dt)
     s = {**s, **wst, "w": w}
     hb = E.due(t, s["hb_next"])
-    s = {**s, "hb_next": s["hb_next"] + jnp.where(hb, p.mission.hb_period, 0.0),
-         "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
-    vrel = C.rotation(q[3:7]).T @ (v[:3] - w)
-    e_due = E.due(t, s["e_next"])
+    return {**s, "hb_next": s["hb_next"] + jnp.where(hb, p.mission.hb_period, 0.0),
+            "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
+
+
+def _energy(p, s, kinds):
+    """``EnergyIntegrator.step`` where due: the interval charged at the tick's rotor state."""
+    d = s["d"]
+    t = d.time
+    vrel = C.rotation(d.qpos[3:7]).T @ (d.qvel[:3] - s["w"])
     es = E.integrate(p, {**s, "vrel": vrel}, t, d.act, vrel, s["airborne"], kinds)
     es["e_next"] = s["e_next"] + p.mission.energy_period
-    s = _sel(e_due, es, s)
-    b_due = True if book_every else E.due(t, s["b_next"])
-    bs = E.book(p, s, t, q, v, speed, book_dt, book_every)
-    s = _sel(b_due, {**s, **bs}, s)
-    s = _end_conditions(p, s, t, ctrl_dt, landed)
+    return _sel(E.due(t, s["e_next"]), es, s)
+
+
+def _book(p, s, book_dt, book_every):
+    """``FlightBook.step`` where due."""
+    d = s["d"]
+    t = d.time
+    bs = E.book(p, s, t, d.qpos, d.qvel, s["speed"], book_dt, book_every)
+    return {**s, **bs} if book_every else _sel(E.due(t, s["b_next"]), {**s, **bs}, s)
+
+
+def _post(m, p, s, ctrl_dt, nsub):
+    """End conditions, the divergence check, then the physics over the tick."""
+    d = s["d"]
+    t, q, v = d.time, d.qpos, d.qvel
+    ok = jnp.isfinite(q[2]) & (jnp.abs(q[2]) < 1e5) & jnp.isfinite(v[0])
+    s = _end_conditions(p, s, t, ctrl_dt, s["landed"])
     s = {**s, "end": jnp.where(ok, s["end"], _END["diverged"])}
-    stepped = _physics(m, p, s, d, ctrl, nsub)
+    stepped = _physics(m, p, s, d, s["ctrl"], nsub)
     return _sel(s["end"] != 0, s, stepped)
 
 
