@@ -257,3 +257,66 @@ def test_variant_params_are_the_core_objects_exports():
     stacked = jax.tree_util.tree_map(lambda *xs: jnp.stack([jnp.asarray(x) for x in xs]), num, num)
     assert stacked.ctrl.B.shape == (2,) + np.asarray(num.ctrl.B).shape
     assert math.isinf(num.pilot.duration)
+
+
+def _free_model(name):
+    from pytest_flockai.airframe.model import build_spec
+    spec = build_spec(fa.drone(name), None, physics_dt=0.002)
+    spec.option.density = 0.0                   # the batch applies the drag itself
+    return spec.compile()
+
+
+@pytest.mark.parametrize("name", ["crazyflie-2-1", "dji-mavic-2-pro", "generic-hexa-680"])
+def test_free_flight_step_is_mujocos_step_in_the_air(name):
+    """``rigid.step`` against ``mj_step`` from the same random states in the air: rotor
+    thrusts (the filter's state and a new command, some beyond the range), rates, an
+    applied force and torque at the centre of mass."""
+    import mujoco
+
+    from pytest_flockai.sweeps.batched import rigid as R
+    model = _free_model(name)
+    data = mujoco.MjData(model)
+    rm = _tree(R.model_of(model))
+    rng = np.random.default_rng(8)
+    hi = model.actuator_ctrlrange[:, 1]
+    for _ in range(12):
+        mujoco.mj_resetData(model, data)
+        data.qpos[:3] = rng.normal(0, 3, 3) + [0, 0, 10.0]
+        data.qpos[3:7] = _unit(rng)
+        data.qvel[:] = np.r_[rng.normal(0, 4, 3), rng.normal(0, 3, 3)]
+        data.act[:] = rng.uniform(0, hi)
+        data.ctrl[:] = rng.uniform(-0.2 * hi, 1.2 * hi)
+        data.xfrc_applied[1] = rng.normal(0, 0.3 * model.body_mass[1] * 9.81, 6)
+        d = R.RigidData(0.0, data.qpos.copy(), data.qvel.copy(), data.act.copy(), False)
+        got = R.step(rm, d, jnp.asarray(data.ctrl), jnp.asarray(data.xfrc_applied[1]))
+        mujoco.mj_step(model, data)
+        _close(got.qpos, data.qpos, rel=1e-9, atol=1e-12)
+        _close(got.qvel, data.qvel, rel=1e-9, atol=1e-10)
+        _close(got.act, data.act)
+        assert not bool(got.contact)
+
+
+def test_free_flight_ground_rests_and_lifts_off_like_mujoco():
+    """On the pad: below the weight the body stays on the ground (MuJoCo's soft contact
+    sinks it a fraction of a millimetre), above it both lift off within a step or two."""
+    import mujoco
+
+    from pytest_flockai.sweeps.batched import rigid as R
+    model = _free_model("crazyflie-2-1")
+    data = mujoco.MjData(model)
+    rm = _tree(R.model_of(model))
+    weight = model.body_mass[1] * 9.81
+    for share, rises in ((0.8, False), (1.3, True)):
+        mujoco.mj_resetData(model, data)
+        d = R.RigidData(0.0, data.qpos.copy(), data.qvel.copy(), data.act.copy(), False)
+        ctrl = np.full(model.nu, share * weight / model.nu)
+        data.ctrl[:] = ctrl
+        touched = []
+        for _ in range(150):                               # 0.3 s
+            mujoco.mj_step(model, data)
+            d = R.step(rm, d, jnp.asarray(ctrl), jnp.zeros(6))
+            touched.append(bool(d.contact))
+        assert abs(float(d.qpos[2]) - data.qpos[2]) < (0.02 if rises else 1e-3), (share, d.qpos[2], data.qpos[2])
+        assert (float(d.qpos[2]) > 0.02) == rises and (data.qpos[2] > 0.02) == rises
+        assert touched[-1] == (not rises) and (rises or touched[20])   # fell the 1 mm onto the pad
+        _close(d.qpos[3:7], [1.0, 0.0, 0.0, 0.0], atol=1e-9)

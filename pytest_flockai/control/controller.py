@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..physics import G, RHO_SEA_LEVEL
+from ..physics import RHO_SEA_LEVEL, G
 
 CASCADE_RATIO = 3.0
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import _check
 from ..errors import ConfigError
-from ..physics import G, RHO_SEA_LEVEL
+from ..physics import RHO_SEA_LEVEL, G
 from .components import Component
 
 

@@ -21,9 +21,9 @@ import numpy as np
 from ...airframe.model import build_spec
 from ...airframe.rotor_drag import h_coefficient, hubs
 from ...control.controller import CascadedController, ControllerParams
+from ...control.pilots import Hover, Waypoints, ZigZag
 from ...control.trajectory import accel_limit
 from ...energy.battery import BatteryParams
-from ...control.pilots import Hover, Waypoints, ZigZag
 from ...energy.components import Constant, RadioLinear, RadioStates, SoC
 from ...energy.factory import flight_energy_model
 from ...energy.model import Meter
