@@ -10,13 +10,6 @@ from __future__ import annotations
 import math
 
 from .._xp import MATH
-from ..physics import G
-
-
-def accel_limit(thrust_to_weight: float, k_vel: float) -> float:
-    """The trajectories' acceleration limit (m/s^2): a quarter of the thrust margin, at
-    most 2.5 m/s^2, and no more than the velocity loop can follow (1.5 x its bandwidth)."""
-    return min(2.5, 0.25 * (thrust_to_weight - 1.0) * G, 1.5 * k_vel)
 
 
 def leg_timing(length, speed, accel, xp=MATH):

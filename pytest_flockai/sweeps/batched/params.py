@@ -1,14 +1,14 @@
-"""What the batched (MJX) backend flies, and each variant's numbers.
+"""What the batched backends (``jax``, ``mjx``) fly, and each variant's numbers.
 
 ``check(mission)`` raises a ``ConfigError`` naming whatever the batched path
 does not fly (it stays per flight: ``backend="process"``): camera / ML tasks,
 pilots other than Hover, Waypoints and ZigZag, a world, flying on estimates,
 user components or probes, a dataset, energy components other than the
-built-in ones. ``variant(mission)`` turns one resolved variant into plain
-numbers (numpy), read from the core's own objects: the controller's gains from
-``CascadedController``, the energy coefficients from the bound ``Meter``, the
-battery circuit from the blueprint, the MuJoCo model from ``build_spec``. No
-JAX here.
+built-in ones. ``variant(mission)`` turns one resolved variant into typed
+numbers (``VariantParams``, NamedTuples of numpy values), exported by the core's
+own objects built by the flight's own factories (``mission/parts.py``): the
+controller's ``batch_params()``, the bound motors' and battery circuit's, the
+wind's, and the MuJoCo model from ``build_spec``. No JAX here.
 """
 
 from __future__ import annotations
@@ -20,15 +20,13 @@ import numpy as np
 
 from ...airframe.model import build_spec
 from ...airframe.rotor_drag import h_coefficient, hubs
-from ...control.controller import CascadedController, ControllerParams
+from ...control.controller import ControllerParams
 from ...control.pilots import Hover, Waypoints, ZigZag
-from ...control.trajectory import accel_limit
 from ...energy.battery import BatteryParams
 from ...energy.components import Constant, RadioLinear, RadioStates, SoC
-from ...energy.factory import flight_energy_model
-from ...energy.model import Meter
 from ...energy.rotors import HoverPower, MotorParams, Motors
 from ...errors import ConfigError
+from ...mission import parts
 from ...mission.book import book_period
 from ...mission.plan import resolve, seed_sequence
 from ...ml.scheduler import memory_utilization
@@ -68,11 +66,7 @@ def check(m) -> None:
         raise _refuse("dataset_dir", str(m.dataset_dir), "recording a dataset renders frames")
     if m.max_wall_s is not None:
         raise _refuse("max_wall_s", m.max_wall_s, "a per-flight host-time guard")
-    plan = resolve(m)
-    model = flight_energy_model(m.drone.energy, extra_sensors=list(m.drone.extra_sensors)
-                                + list(m.sensors), device=plan.onboard_device,
-                                blueprint_device=m.drone.device)
-    for path, comp in model.leaves():
+    for path, comp in parts.energy_model(resolve(m)).leaves():
         if type(comp) not in ENERGY_KINDS:
             raise _refuse(f"energy component {path!r}", comp, "a user energy component has no "
                           "batched version")
@@ -197,7 +191,7 @@ def _wind(plan) -> WindParams:
 def _mission(plan, drone, meter, ctrl) -> MissionParams:
     bat = drone.battery
     return MissionParams(
-        accel=accel_limit(drone.thrust_to_weight_at(plan.atmosphere.density), ctrl.k_vel),
+        accel=parts.trajectory_accel(plan, ctrl),
         climb_speed=plan.climb_speed, descent_speed=plan.descent_speed,
         return_home=plan.return_home, t_end=plan.t_end, timed=not isinstance(plan.until, str),
         use_reserve=plan.use_reserve, energy_period=1.0 / plan.energy_hz,
@@ -216,10 +210,8 @@ def variant(m) -> tuple[tuple, VariantParams, object]:
     sizes, c_blunt = np.asarray(aero.size, dtype=float), float(aero.fluid_coefs[0])
     spec.option.density = 0.0           # MJX has only the inertia-box fluid model: drag is ours
     model = spec.compile()
-    ctrl = CascadedController(drone, plan.ctrl_dt, rho=rho)
-    meter = Meter(flight_energy_model(
-        drone.energy, extra_sensors=list(drone.extra_sensors) + list(plan.sensors),
-        device=plan.onboard_device, blueprint_device=drone.device), drone, rho=rho)
+    ctrl = parts.controller(plan)
+    meter = parts.meter(plan)
     e_key, leaves, motors = _energy(meter, drone.airframe.rotor_count)
     p_key, pilot = _pilot(plan.pilot)
     num = VariantParams(
