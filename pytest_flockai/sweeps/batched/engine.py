@@ -113,7 +113,7 @@ def _init_state(num, model, sampler, dev, physics):
         "pilot_t0": 0.0, "pilot_start": np.zeros(3), "t_land": math.nan, "integ": np.zeros(3),
         "airborne": True, "end": np.int32(0), "t_end_at": math.nan,
         "w_g": np.asarray(sampler.g, dtype=float) if sampler is not None else np.zeros(3),
-        "w_coef": np.zeros(4), "w_h": math.nan, "w": np.zeros(3),
+        "w_coef": np.zeros(4), "w_h": math.nan, "w": np.asarray(num.wind.mean, dtype=float),
         "hb_next": 0.0, "hb_pending": 0.0, "hb_drained": 0.0,
         "e_next": num.mission.energy_period, "t_e": 0.0, "energy_j": 0.0,
         "e_leaf": np.zeros(len(num.energy.const_w)), "loss_j": 0.0,
@@ -153,7 +153,8 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
         idx, dvals = tuple(sorted(diff)), tuple(diff[j] for j in sorted(diff))
     else:
         leaves, idx, treedef = (), None, None
-        dvals = _stack([R.model_of(mdl) for *_, mdl in members])
+        R.model_of(members[0][3])             # refuses a model the free body cannot fly
+        dvals = _stack([R.model_of(mdl, check=False) for *_, mdl in members])
     samplers, states = [], []
     for _, m, num, model in members:
         rng = P.wind_rng(m)
@@ -202,7 +203,9 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
 
     def tick(shared, dvals, p, s, noise):
         old = s
-        s = _like(old, jax.vmap(lambda p1, s1, n1: _pre(p1, s1, n1, ctrl_dt, pkind))(p, s, noise))
+        s = _like(old, jax.vmap(lambda p1, s1: _pre(p1, s1, ctrl_dt, pkind))(p, s))
+        s = jax.lax.cond(jnp.any(p.wind.active), lambda st: _like(st, jax.vmap(
+            lambda p1, s1, n1: _wind(p1, s1, n1, ctrl_dt))(p, st, noise)), lambda st: st, s)
         s = clocked(lambda p1, s1: _energy(p1, s1, kinds), lambda s1: E.due(s1["d"].time, s1["e_next"]),
                     p, s)
         book = lambda p1, s1: _book(p1, s1, book_dt, book_every)  # noqa: E731
@@ -230,8 +233,8 @@ def _contact(d):
     return jnp.any(c.dist < c.includemargin) if c.dist.shape[0] else jnp.zeros((), bool)
 
 
-def _pre(p, s, noise, ctrl_dt, pkind):
-    """The tick up to the energy: stage machine, controller, wind, heartbeats."""
+def _pre(p, s, ctrl_dt, pkind):
+    """The tick up to the wind: stage machine, controller, heartbeats."""
     d = s["d"]
     t, q, v = d.time, d.qpos, d.qvel
     speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
@@ -241,11 +244,15 @@ def _pre(p, s, noise, ctrl_dt, pkind):
     off = s["stage"] == DONE
     s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off,
          "ctrl": jnp.where(off, 0.0, f), "landed": landed}
-    w, wst = E.wind_step(p.wind, s, q[2], noise, ctrl_dt)
-    s = {**s, **wst, "w": w}
     hb = E.due(t, s["hb_next"])
     return {**s, "hb_next": s["hb_next"] + jnp.where(hb, p.mission.hb_period, 0.0),
             "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
+
+
+def _wind(p, s, noise, ctrl_dt):
+    """``WindStep.step`` (skipped on a batch without turbulence: its air is the mean)."""
+    w, wst = E.wind_step(p.wind, s, s["d"].qpos[2], noise, ctrl_dt)
+    return {**s, **wst, "w": w}
 
 
 def _energy(p, s, kinds):

@@ -70,9 +70,10 @@ def _colliders(model) -> list[int]:
             and (model.geom_contype[g] or model.geom_conaffinity[g])]
 
 
-def model_of(model) -> RigidModel:
-    """The free-flight numbers of a compiled MuJoCo model (``ConfigError`` if unsupported)."""
-    why = unsupported(model)
+def model_of(model, check: bool = True) -> RigidModel:
+    """The free-flight numbers of a compiled MuJoCo model (``ConfigError`` if unsupported;
+    ``check=False``: a variant of a model already checked, same structure)."""
+    why = unsupported(model) if check else None
     if why is not None:
         raise ConfigError(f"sweep: backend='jax' cannot fly this drone's MuJoCo model ({why}); "
                           f"allowed: backend='mjx' or 'process'")
