@@ -320,3 +320,102 @@ def test_free_flight_ground_rests_and_lifts_off_like_mujoco():
         assert (float(d.qpos[2]) > 0.02) == rises and (data.qpos[2] > 0.02) == rises
         assert touched[-1] == (not rises) and (rises or touched[20])   # fell the 1 mm onto the pad
         _close(d.qpos[3:7], [1.0, 0.0, 0.0, 0.0], atol=1e-9)
+
+
+def _stage_twin(mission):
+    """The core's StageMachine and the JAX twin's initial state, for a perfect tracker."""
+    from pytest_flockai.control.stages import StageMachine
+    from pytest_flockai.mission import parts
+    from pytest_flockai.sweeps.batched import engine
+    plan = resolve(mission)
+    key, num, model = P.variant(mission)
+    home = (0.0, 0.0, float(model.qpos0[2]))
+    st = SimpleNamespace(home=home, stage=None, sp=[0.0] * 10, qc=list(home), vc=[0.0] * 3,
+                         v=[0.0] * 6, t_land=None, end_reason=None)
+    events = SimpleNamespace(add=lambda *a, **k: None)
+    data = SimpleNamespace(ncon=0)
+    accel = parts.trajectory_accel(plan, parts.controller(plan))
+    core = StageMachine(st, plan.pilot, events, data, accel=accel, climb_speed=plan.climb_speed,
+                        descent_speed=plan.descent_speed, return_home=plan.return_home)
+    s0 = engine._init_state(num, model, None, None, "jax")
+    s = {k: jnp.asarray(v) for k, v in s0.items() if k != "d"}
+    return core, st, data, _tree(num), s, key[6], plan.ctrl_dt
+
+
+@pytest.mark.parametrize("pilot, home_at", [
+    (fa.pilots.Hover(altitude=2.0, duration=1.5), None),
+    (fa.pilots.ZigZag(area=((0.0, 0.0), (12.0, 6.0)), altitude=5.0, spacing=6.0, speed=4.0), None),
+    (fa.pilots.Waypoints([(3.0, 0.0, 3.0), (3.0, 4.0, 4.0)], speed=3.0, loop=True), 9.0),
+])
+def test_stage_machine_twin_matches_the_core_tick_by_tick(pilot, home_at):
+    """Take-off, the pilot's plan (hover, legs, a looping path), return home (after the
+    pilot, or sent by the battery reserve at ``home_at``) and landing, both driven by a
+    vehicle that tracks the setpoint exactly and stops on the ground: the same stage and
+    setpoint every tick, and the same landing tick."""
+    mission = fa.Mission(fa.drone("dji-mavic-2-pro"), pilot)
+    core, st, data, p, s, pkind, dt = _stage_twin(mission)
+    step = jax.jit(lambda s1, t, q, v, c: C.stages(p, s1, t, q, v, c, pkind))
+    home = jax.jit(lambda s1, t: C.go_home(p, s1, t, True))
+    q, v = list(st.home), [0.0, 0.0, 0.0]
+    stages_seen, landed_at = set(), None
+    for k in range(4000):
+        t = k * dt
+        if home_at is not None and abs(t - home_at) < 0.5 * dt:
+            core.go_home(t)
+            s = home(s, t)
+        contact = q[2] <= st.home[2] + 1e-9
+        data.ncon = int(contact)
+        st.qc, st.vc, st.v = list(q), list(v), list(v) + [0.0] * 3
+        core.step(t)
+        s, landed = step(s, t, jnp.asarray(q + [1.0, 0.0, 0.0, 0.0]),
+                         jnp.asarray(v + [0.0] * 3), contact)
+        assert int(s["stage"]) == st.stage, (t, int(s["stage"]), st.stage)
+        _close(s["sp"], st.sp, atol=1e-9)
+        stages_seen.add(st.stage)
+        if st.stage == 4:                                   # DONE
+            landed_at = t
+            assert bool(landed) and float(s["t_land"]) == pytest.approx(st.t_land)
+            break
+        q, v = list(st.sp[:3]), list(st.sp[3:6])
+        if q[2] <= st.home[2]:                             # the ground stops it
+            q[2], v = st.home[2], [0.0, 0.0, 0.0]
+    assert landed_at is not None and stages_seen >= {0, 1, 3, 4}
+    assert (2 in stages_seen) == (pilot.__class__.__name__ != "Hover")   # returned home
+
+
+@pytest.mark.parametrize("ctrl_dt", [0.004, 0.02])
+def test_flight_book_twin_matches_the_core(ctrl_dt):
+    """Random velocities and stages, on the ground and in the air: phase ticks, distance,
+    top speed, tracking error and the smoothed acceleration after every book step."""
+    from pytest_flockai.mission.book import FlightBook, book_period
+    period = book_period(ctrl_dt)
+    st = SimpleNamespace(v=[0.0] * 6, airborne=True, speed=0.0, stage=0, q=[0.0] * 7,
+                         sp=[0.0] * 10, phase=None)
+    core = FlightBook(st, SimpleNamespace(add=lambda *a, **k: None), ctrl_dt)
+    s = {"t_book": 0.0, "pv": jnp.zeros(3), "acc": 0.0, "stage": 0, "airborne": True,
+         "ticks": jnp.zeros(6, dtype=jnp.int32), "dist": 0.0, "vmax": 0.0, "terr": 0.0,
+         "sp": jnp.zeros(10), "b_next": 0.0}
+    rng = np.random.default_rng(12)
+    v = np.zeros(3)
+    for k in range(1, 400):
+        t = k * period
+        if k % 150 == 0:
+            v = np.zeros(3)
+        elif k % 50 == 0:                                   # steps, then steady: accel, move
+            v = v + rng.normal(0, 1.0, 3)
+        st.v, st.speed = list(v) + [0.0] * 3, float(np.linalg.norm(v))
+        st.stage = int(rng.choice([0, 1, 1, 1, 2, 3])) if k > 10 else 0
+        st.airborne = k % 97 != 0
+        st.q = list(rng.normal(0, 2, 3)) + [1.0, 0, 0, 0]
+        st.sp = list(rng.normal(0, 2, 3)) + [0.0] * 7
+        core.step(t)
+        s = {**s, "stage": st.stage, "airborne": st.airborne, "sp": jnp.asarray(st.sp)}
+        got = E.book(None, s, t, jnp.asarray(st.q), jnp.asarray(st.v), st.speed, period,
+                     core.every_tick)
+        s = {**s, **got}
+        assert [int(n) for n in s["ticks"][:5]] == core.phase_ticks[:5], t
+        assert float(s["dist"]) == pytest.approx(core.distance_m, rel=REL)
+        assert float(s["vmax"]) == pytest.approx(core.max_speed_mps, rel=REL)
+        assert float(s["terr"]) == pytest.approx(core.tracking_error_max_m, rel=REL)
+        assert float(s["acc"]) == pytest.approx(core._acc, rel=REL, abs=1e-12)
+    assert min(core.phase_ticks[:4]) > 0                     # every airborne phase was seen
