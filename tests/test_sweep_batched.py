@@ -15,9 +15,9 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai.sweeps import runner
-from pytest_flockai.sweeps.batched import compile_cache
 
 REL = 0.02
+NEEDS_JAX = "the batched backend needs JAX and MJX: pip install 'pytest-flockai[mjx]'"
 KPIS = ("sim_time_s", "flight_time_s", "energy_total_j", "energy_motors_j", "endurance_s",
         "battery_remaining", "distance_m")
 
@@ -31,11 +31,18 @@ def _agree(cpu, bat, rel=REL):
         assert (err <= rel).all(), f"{k}: cpu {list(cpu[k])} jax {list(bat[k])}"
 
 
+@pytest.fixture
+def jax_installed():
+    pytest.importorskip("jax", reason=NEEDS_JAX)
+    pytest.importorskip("mujoco.mjx", reason=NEEDS_JAX)
+
+
 def _hover(**kw):
     return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=1.0), **kw)
 
 
 @pytest.mark.jax
+@pytest.mark.usefixtures("jax_installed")
 def test_hover_over_payload_and_wind_agrees_with_the_core_and_repeats():
     axes = dict(payload_kg=[0.0, 0.008], wind_mps=[0.0, 2.0])
     cpu = runner.sweep(_hover(), workers=1, **axes)
@@ -50,6 +57,7 @@ def test_hover_over_payload_and_wind_agrees_with_the_core_and_repeats():
 
 
 @pytest.mark.jax
+@pytest.mark.usefixtures("jax_installed")
 def test_zigzag_in_turbulent_wind_with_a_motor_model_agrees_with_the_core():
     """The datasheet Mavic (the DC motor model) flying legs in Dryden turbulence: the
     batch draws each variant's gusts from the core's random stream."""
@@ -65,6 +73,7 @@ def test_zigzag_in_turbulent_wind_with_a_motor_model_agrees_with_the_core():
 
 
 @pytest.mark.jax
+@pytest.mark.usefixtures("jax_installed")
 def test_payload_sweep_to_the_battery_reserve_agrees_with_the_core():
     """Hover until the battery's reserve sends the drone home: endurance across payloads."""
     base = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0),
@@ -77,12 +86,17 @@ def test_payload_sweep_to_the_battery_reserve_agrees_with_the_core():
     assert bat["flight_time_s"].is_monotonic_decreasing
 
 
-def test_auto_batches_a_large_batchable_sweep_and_keeps_the_rest_per_flight():
+@pytest.mark.jax
+@pytest.mark.usefixtures("jax_installed")
+def test_auto_batches_a_large_batchable_sweep():
+    assert runner.choose_backend(_hover(), runner.AUTO_MIN_VARIANTS) == "jax"
+    assert runner.choose_backend(_hover(), 2, device="cpu") == "jax"   # a device asks for it
+
+
+def test_auto_keeps_few_variants_and_unbatchable_missions_per_flight():
     hover = _hover()
     orbit = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Orbit(radius=2.0, altitude=1.0))
     assert runner.choose_backend(hover, 4) == "process"                # compiling costs more
-    assert runner.choose_backend(hover, runner.AUTO_MIN_VARIANTS) == "jax"
-    assert runner.choose_backend(hover, 2, device="cpu") == "jax"      # a device asks for it
     assert runner.choose_backend(orbit, 1000) == "process"             # no batched Orbit
     df = runner.sweep(hover, backend="auto", payload_kg=[0.0, 0.004])
     assert df.attrs["backend"] == "process" and df.attrs["backend_asked"] == "auto"
@@ -95,6 +109,8 @@ def test_a_bad_backend_names_the_allowed_ones():
         assert word in str(exc.value)
 
 
+@pytest.mark.jax
+@pytest.mark.usefixtures("jax_installed")
 def test_variant_counts_share_a_bucket():
     from pytest_flockai.sweeps.batched.engine import bucket
     assert bucket(1000) == bucket(1024) == 1024
@@ -102,7 +118,10 @@ def test_variant_counts_share_a_bucket():
     assert all(bucket(n) >= n for n in range(1, 3000, 7))
 
 
+@pytest.mark.jax
 def test_the_compile_cache_folder_follows_the_environment(monkeypatch, tmp_path):
+    pytest.importorskip("jax", reason=NEEDS_JAX)
+    from pytest_flockai.sweeps.batched import compile_cache
     monkeypatch.setenv(compile_cache.ENV, str(tmp_path / "xla"))
     assert compile_cache.folder() == tmp_path / "xla"
     monkeypatch.setenv(compile_cache.ENV, "")
@@ -113,6 +132,7 @@ def test_the_compile_cache_folder_follows_the_environment(monkeypatch, tmp_path)
 
 
 @pytest.mark.jax
+@pytest.mark.usefixtures("jax_installed")
 def test_a_sweep_with_padding_variants_keeps_its_own_rows():
     """Three variants fly in a bucket of eight; the padding never reaches the frame."""
     df = runner.sweep(_hover(), backend="jax", payload_kg=list(np.linspace(0.0, 0.008, 3)))

@@ -78,7 +78,7 @@ def step(m: RigidModel, d: RigidData, ctrl, xfrc) -> RigidData:
     Iw = m.inertia * w
     ang = (t_body - jnp.cross(w, Iw)) / m.inertia
     ctrl = jnp.clip(ctrl, m.ctrl_lo, m.ctrl_hi)
-    act = act + (ctrl - act) / m.tau * m.tau * (1.0 - jnp.exp(-m.dt / m.tau))
+    act = act + (ctrl - act) / m.tau * m.tau * m.fade
     v = v + m.dt * jnp.concatenate([lin, ang])
     pos = q[:3] + m.dt * v[:3]
     quat = _quat_integrate(q[3:7], v[3:6], m.dt)
@@ -89,8 +89,9 @@ def ground(m: RigidModel, d: RigidData) -> RigidData:
     """The collision box against the plane z = 0: a corner below it is pushed back up,
     the downward velocity removed; resting on it, the body does not slide or turn."""
     q, v = d.qpos, d.qvel
-    R = rotation(q[3:7])
-    low = q[2] - jnp.sum(jnp.abs(R[2]) * m.half)
+    w, x, y, z = q[3], q[4], q[5], q[6]
+    r2 = jnp.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])  # R[2]
+    low = q[2] - jnp.sum(jnp.abs(r2) * m.half)
     touch = low <= 0.0
     rest = touch & (v[2] <= 0.0)
     z = jnp.where(touch, q[2] - low, q[2])

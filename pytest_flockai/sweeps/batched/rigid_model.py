@@ -24,6 +24,7 @@ class RigidModel(NamedTuple):
     site: np.ndarray             # (n, 3) rotor sites, body frame
     gear: np.ndarray             # (n, 6) force (site z) and torque gears
     tau: np.ndarray              # (n,) rotor filter time constants
+    fade: np.ndarray             # (n,) 1 - exp(-dt / tau): the exact filter's step
     ctrl_lo: np.ndarray
     ctrl_hi: np.ndarray
     half: np.ndarray             # (3,) collision box half sizes
@@ -78,12 +79,13 @@ def model_of(model, check: bool = True) -> RigidModel:
         raise ConfigError(f"sweep: backend='jax' cannot fly this drone's MuJoCo model ({why}); "
                           f"allowed: backend='mjx' or 'process'")
     sites, box = model.actuator_trnid[:, 0], _colliders(model)
+    tau = np.maximum(mujoco.mjMINVAL, np.array(model.actuator_dynprm[:, 0], dtype=float))
     return RigidModel(
         mass=float(model.body_mass[1]), inertia=np.array(model.body_inertia[1], dtype=float),
         gravity=np.array(model.opt.gravity, dtype=float), dt=float(model.opt.timestep),
         site=np.array(model.site_pos[sites], dtype=float),
         gear=np.array(model.actuator_gear, dtype=float),
-        tau=np.maximum(mujoco.mjMINVAL, np.array(model.actuator_dynprm[:, 0], dtype=float)),
+        tau=tau, fade=1.0 - np.exp(-float(model.opt.timestep) / tau),
         ctrl_lo=np.where(model.actuator_ctrllimited, model.actuator_ctrlrange[:, 0], -np.inf),
         ctrl_hi=np.where(model.actuator_ctrllimited, model.actuator_ctrlrange[:, 1], np.inf),
         half=np.array(model.geom_size[box[0]], dtype=float))
