@@ -59,7 +59,8 @@ CRAZYFLOW = textwrap.dedent('''
     steps = int(seconds * sim.freq)
     def once():
         sim.reset()
-        t = time.perf_counter()
+        sim.data.states.pos.block_until_ready()
+        t, c = time.perf_counter(), time.process_time()
         if loop:
             per = sim.freq // 100
             for _ in range(steps // per):
@@ -67,11 +68,12 @@ CRAZYFLOW = textwrap.dedent('''
         else:
             sim.state_control(cmd); sim.step(steps)
         sim.data.states.pos.block_until_ready()
-        return time.perf_counter() - t
-    first = once()
-    wall = once()
+        return time.perf_counter() - t, time.process_time() - c
+    first, _ = once()
+    wall, cpu = once()
     z = float(np.mean(np.asarray(sim.data.states.pos)[..., 2]))
-    print(json.dumps({"first_s": first, "wall_s": wall, "drone_s": n * seconds, "z": z}))
+    print(json.dumps({"first_s": first, "wall_s": wall, "cpu_s": cpu, "drone_s": n * seconds,
+                      "z": z}))
 ''')
 
 PYFLYT = textwrap.dedent('''
@@ -159,20 +161,21 @@ def ours(n: int, backend: str) -> dict:
     """One timed ``fa.sweep`` of N hovering Crazyflies (warm: compiled in this process)."""
     m = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=SECONDS))
     payloads = list(np.linspace(0.0, 0.005, n))
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     df = fa.sweep(m, backend=backend, device="cpu", payload_kg=payloads)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     assert df["error"].isna().all() and (df["end_reason"] == "landed").all(), df["end_reason"]
-    return {"wall_s": wall, "drone_s": float(df["sim_time_s"].sum()),
+    return {"wall_s": wall, "cpu_s": cpu, "drone_s": float(df["sim_time_s"].sum()),
             "batch_s": engine.LAST_TIMINGS.get("batch_s", wall), "ran": df.attrs["backend"]}
 
 
-def _line(rnd, n, who, res) -> float:
+def _line(rnd, n, who, res) -> tuple:
     rate = res["drone_s"] / res["wall_s"]
+    cpu = res["drone_s"] / res["cpu_s"] if res.get("cpu_s") else float("nan")
     extra = f"   first call {res['first_s']:.1f} s" if res.get("first_s") else ""
-    print(f"{rnd:>5}{n:>7}  {who:<34}{res['wall_s']:>9.2f}{rate:>12.0f}   load {_load()}{extra}",
-          flush=True)
-    return rate
+    print(f"{rnd:>5}{n:>7}  {who:<34}{res['wall_s']:>9.2f}{rate:>12.0f}{cpu:>12.0f}   "
+          f"load {_load()}{extra}", flush=True)
+    return rate, cpu
 
 
 def main() -> None:
@@ -202,28 +205,34 @@ def main() -> None:
         ours(n, a.backend)
         print(f"pytest-flockai first call at N = {n}: {time.perf_counter() - t0:.1f} s "
               f"(compile or persistent-cache load; load {_load()})", flush=True)
-    print(f"{'round':>5}{'N':>7}  {'contender':<34}{'wall s':>9}{'drone-s/s':>12}")
+    print(f"{'round':>5}{'N':>7}  {'contender':<34}{'wall s':>9}{'drone-s/s':>12}"
+          f"{'per CPU-s':>12}")
     rates: dict = {}
     for rnd in range(1, a.rounds + 1):
         for n in a.n:
             res = ours(n, a.backend)
             rates.setdefault((n, "sweep"), []).append(_line(rnd, n, f"fa.sweep backend={res['ran']}", res))
             rates.setdefault((n, "batch"), []).append(
-                _line(rnd, n, "  of which the batch", {**res, "wall_s": res["batch_s"]}))
+                _line(rnd, n, "  of which the batch", {**res, "wall_s": res["batch_s"],
+                                                       "cpu_s": None}))
             for peer, venv in venvs.items():
                 for loop in ([False, True] if peer == "crazyflow" and a.cf_loop else [False]):
                     got = peer_run(peer, venv, n, loop, a.loop_cap)
                     if got is not None:
                         name = peer + (" (Python loop)" if loop else "")
                         rates.setdefault((n, name), []).append(_line(rnd, n, name, got))
-    print("\nmedian drone-s/s over the rounds, and ratios to crazyflow (one compiled call):")
+    print("\nmedians over the rounds (drone-s per wall s; per CPU-s of the process, which the "
+          "load\nchanges less), and ratios to crazyflow (one compiled call):")
     for n in a.n:
-        cf = statistics.median(rates[(n, "crazyflow")]) if (n, "crazyflow") in rates else None
+        base = rates.get((n, "crazyflow"))
+        cf = [statistics.median(x[i] for x in base) for i in (0, 1)] if base else None
         for (nn, who), vals in rates.items():
-            if nn == n:
-                med = statistics.median(vals)
-                ratio = f"   x{med / cf:.2f} of crazyflow" if cf else ""
-                print(f"  N = {n:>5}  {who:<28}{med:>10.0f}{ratio}")
+            if nn != n:
+                continue
+            med = [statistics.median(x[i] for x in vals) for i in (0, 1)]
+            ratio = (f"   x{med[0] / cf[0]:.2f} wall, x{med[1] / cf[1]:.2f} CPU of crazyflow"
+                     if cf else "")
+            print(f"  N = {n:>5}  {who:<28}{med[0]:>10.0f}{med[1]:>10.0f}{ratio}")
     print(f"load average at the end: {_load()}")
 
 

@@ -262,7 +262,7 @@ def _energy(p, s, kinds):
     vrel = C.rotation(d.qpos[3:7]).T @ (d.qvel[:3] - s["w"])
     es = E.integrate(p, {**s, "vrel": vrel}, t, d.act, vrel, s["airborne"], kinds)
     es["e_next"] = s["e_next"] + p.mission.energy_period
-    return _sel(E.due(t, s["e_next"]), es, s)
+    return _sel_keys(E.due(t, s["e_next"]), es, s)
 
 
 def _book(p, s, book_dt, book_every):
@@ -270,7 +270,7 @@ def _book(p, s, book_dt, book_every):
     d = s["d"]
     t = d.time
     bs = E.book(p, s, t, d.qpos, d.qvel, s["speed"], book_dt, book_every)
-    return {**s, **bs} if book_every else _sel(E.due(t, s["b_next"]), {**s, **bs}, s)
+    return {**s, **bs} if book_every else _sel_keys(E.due(t, s["b_next"]), {**s, **bs}, s)
 
 
 def _post(m, p, s, ctrl_dt, nsub):
@@ -281,7 +281,7 @@ def _post(m, p, s, ctrl_dt, nsub):
     s = _end_conditions(p, s, t, ctrl_dt, s["landed"])
     s = {**s, "end": jnp.where(ok, s["end"], _END["diverged"])}
     stepped = _physics(m, p, s, d, s["ctrl"], nsub)
-    return _sel(s["end"] != 0, s, stepped)
+    return _sel_keys(s["end"] != 0, s, stepped, ("d", "end", "t_end_at"))
 
 
 def _end_conditions(p, s, t, dt, landed):
@@ -337,6 +337,13 @@ def _finish(p, s, kinds):
     t = s["d"].time
     es = E.integrate(p, s, t, s["d"].act, s["vrel"], s["airborne"], kinds)
     return _sel(t > s["t_e"], es, s)
+
+
+def _sel_keys(cond, a: dict, b: dict, keys=None) -> dict:
+    """``_sel`` on the entries that may differ (``keys``, else those not the same object):
+    the rest of the state is passed through, not selected leaf by leaf."""
+    keys = [k for k in a if a[k] is not b[k]] if keys is None else keys
+    return {**b, **_sel(cond, {k: a[k] for k in keys}, {k: b[k] for k in keys})}
 
 
 def _sel(cond, a: dict, b: dict) -> dict:
