@@ -166,7 +166,8 @@ def ours(n: int, backend: str) -> dict:
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     assert df["error"].isna().all() and (df["end_reason"] == "landed").all(), df["end_reason"]
     return {"wall_s": wall, "cpu_s": cpu, "drone_s": float(df["sim_time_s"].sum()),
-            "batch_s": engine.LAST_TIMINGS.get("batch_s", wall), "ran": df.attrs["backend"]}
+            "batch_s": engine.LAST_TIMINGS.get("batch_s", wall),
+            "batch_cpu_s": engine.LAST_TIMINGS.get("batch_cpu_s"), "ran": df.attrs["backend"]}
 
 
 def _line(rnd, n, who, res) -> tuple:
@@ -214,7 +215,7 @@ def main() -> None:
             rates.setdefault((n, "sweep"), []).append(_line(rnd, n, f"fa.sweep backend={res['ran']}", res))
             rates.setdefault((n, "batch"), []).append(
                 _line(rnd, n, "  of which the batch", {**res, "wall_s": res["batch_s"],
-                                                       "cpu_s": None}))
+                                                       "cpu_s": res["batch_cpu_s"]}))
             for peer, venv in venvs.items():
                 for loop in ([False, True] if peer == "crazyflow" and a.cf_loop else [False]):
                     got = peer_run(peer, venv, n, loop, a.loop_cap)

@@ -42,15 +42,15 @@ CHUNK_S = 2.0
 #: XLA options of the chunk (see README: compile time against run time)
 COMPILER_OPTIONS: dict = {}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
-#: wall seconds of the last ``fly`` in this process: the variants' numbers and models
-#: (``variants_s``) and the batches (``batch_s``: states, compile or cache load, chunks)
+#: wall (and CPU) seconds of the last ``fly`` in this process: the variants' numbers and
+#: models (``variants_s``) and the batches (``batch_s``: states, compile or load, chunks)
 LAST_TIMINGS: dict = {}
 
 
 def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx") -> list[dict]:
     """One row dict per variant, in the plan's order (as ``runner._fly``); ``physics``:
     "mjx" (MJX's ``mjx.step``) or "jax" (``rigid.step``, the free-flight body)."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
     for i, values in enumerate(plan):
@@ -64,12 +64,14 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
         groups.setdefault(key, []).append((i, m, num, model))
     dev = jax.devices(device)[0] if device else jax.devices()[0]
     compile_cache.enable()
-    LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0)
+    LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0,
+                        variants_cpu_s=time.process_time() - c0, batch_cpu_s=0.0)
     with jax.enable_x64(True):
         for key, members in groups.items():
-            t1 = time.perf_counter()
+            t1, c1 = time.perf_counter(), time.process_time()
             out = _fly_group(key, members, dev, physics)
             LAST_TIMINGS["batch_s"] += time.perf_counter() - t1
+            LAST_TIMINGS["batch_cpu_s"] += time.process_time() - c1
             for (i, _, _, _), row in zip(members, out):
                 rows[i] = {**plan[i], **row}
     return rows
