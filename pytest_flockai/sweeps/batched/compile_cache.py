@@ -5,7 +5,8 @@ with the same batch structure and size (XLA compiles take 10-100 s on a CPU).
 The folder is ``$FLOCKAI_JAX_CACHE`` if set (an empty value turns the cache off),
 else ``$XDG_CACHE_HOME/pytest-flockai/jax`` (``~/.cache/pytest-flockai/jax``). A
 cache folder the user has already given JAX (``jax_compilation_cache_dir``) is
-left as it is.
+left as it is; otherwise the setting is JAX's, for the whole process (other JAX code
+in it that compiles for more than a second is cached there too).
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ def enable() -> Path | None:
         return None
     path.mkdir(parents=True, exist_ok=True)
     jax.config.update("jax_compilation_cache_dir", str(path))
-    # every chunk is worth keeping: the smallest take seconds to compile
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    # the chunks take seconds to minutes to compile; the small helpers (reductions, the
+    # final step) well under a second: only the former are worth a file
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
     return path
