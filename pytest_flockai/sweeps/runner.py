@@ -152,7 +152,8 @@ def _check_backend(backend, base, device) -> None:
         return
     if backend == "process":
         if device is not None:
-            raise ConfigError(f"sweep: device = {device!r} needs backend='jax' or 'mjx'; "
+            raise ConfigError(f"sweep: device = {device!r} needs a batched backend, backend='jax' "
+                              f"or backend='mjx'; "
                               f"backend='process' flies on this machine's CPU cores")
         return
     _batched.check(base)
