@@ -1,20 +1,20 @@
-"""Fly a sweep's variants in batches: MJX physics, the core's components in JAX.
+"""Fly a sweep's variants in batches: the core's components in JAX, on MJX's physics
+or the free-flying rigid body (``rigid.py``).
 
-Variants with the same structure (``params.variant``'s key: rates, rotor
-count, energy leaves, pilot) fly in one batch: their MuJoCo models go to MJX
-(``mjx.put_model``) and the fields that differ (mass, inertia, thrust limits)
-are stacked and ``jax.vmap``-ed with the state; one control tick is the core's
-loop (``mission/loop.py``) in the core's order: stage machine, controller,
-wind, heartbeats, energy integrator, flight book, end conditions, then
-``substeps`` MJX steps with the body drag applied as ``xfrc_applied`` and the
-crash check. ``jax.lax.scan`` runs ``CHUNK_S`` of simulated time per call; the
-host loops over chunks until every variant has ended, feeding each variant's
-own wind noise (the core's random stream: same seed, same gusts). A variant
-that has ended keeps its state. Float64 throughout (``jax.enable_x64`` around
-the backend): the time sum and the energy integral of a 30-minute flight drift
-visibly in float32.
+Variants with the same structure (``params.variant``'s key: rates, rotor count,
+energy leaves, pilot) fly in one batch, padded to a bucket size (``bucket``). With
+``physics="mjx"`` their MuJoCo models go to MJX (``mjx.put_model``) and the fields
+that differ (mass, inertia, thrust limits) are stacked; with ``"jax"`` each
+variant's ``RigidModel`` is. One control tick is the core's loop
+(``mission/loop.py``) in the core's order: stage machine, controller, wind,
+heartbeats, energy integrator, flight book, end conditions, then ``substeps``
+physics steps with the body and rotor drag applied at the centre of mass, and the
+crash check. ``jax.lax.scan`` runs ``CHUNK_S`` of simulated time per call; the host
+loops over chunks until every variant has ended, feeding each variant's own wind
+noise (the core's random stream: same seed, same gusts). A variant that has ended
+keeps its state. Float64 throughout (``jax.enable_x64`` around the backend): the
+time sum and the energy integral of a 30-minute flight drift visibly in float32.
 """
-
 from __future__ import annotations
 
 import functools
