@@ -54,6 +54,7 @@ from . import executors as _executors
 from . import progress as _progress
 from . import worker as _worker
 from .batched import params as _batched
+from .result import SweepResult
 from .worker import Outcome, row_of
 
 BACKENDS = ("process", "mjx", "jax", "auto")
@@ -138,7 +139,7 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
                      "interrupted": interrupted,
                      "tracebacks": {i: o.trace for i, o in enumerate(outcomes) if o.trace},
                      "cache": dict(Counter(o.status for o in outcomes if o.status is not None))})
-    return df
+    return SweepResult.of(df)
 
 
 def _check_backend(backend, base, device) -> None:
