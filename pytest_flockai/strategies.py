@@ -27,6 +27,7 @@ draw the same examples).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import Any
 
 from hypothesis import HealthCheck, Phase, settings
@@ -39,6 +40,7 @@ from .airframe.drone import G
 from .airframe.drone import drone as _drone
 from .control import pilots as _pilots
 from .mission import Mission
+from .result import FlightResult
 from .sensors.conditions import Conditions
 from .world.wind import Wind
 
@@ -80,7 +82,8 @@ def wind_from(speed_mps: float, heading_rad: float = 0.0, gust_fraction: float =
 
 def conditions(*, max_exposure_s: float = 1 / 15, min_visibility_m: float = 20.0,
                min_sun_elevation_deg: float = 2.0, noise: bool = True,
-               max_readout_s: float = 0.0, weather=()) -> st.SearchStrategy[Conditions]:
+               max_readout_s: float = 0.0,
+               weather: Iterable[str] = ()) -> st.SearchStrategy[Conditions]:
     """Imaging conditions: shutter, sun elevation and haze, and where asked a
     rolling shutter (``max_readout_s`` > 0) and weather (``weather``: names from
     ``sensors.weather.WEATHER``, severities 1-5). Each shrinks towards the ideal
@@ -142,8 +145,9 @@ def hovers(max_duration: float = 60.0) -> st.SearchStrategy[_pilots.Hover]:
                      st.floats(1.0, max_duration))
 
 
-def missions(drone: str = "dji-mavic-2-pro", *, pilots=None, wind=True, battery=True,
-             payload=True, until="landed") -> st.SearchStrategy[Mission]:
+def missions(drone: str = "dji-mavic-2-pro", *, pilots: st.SearchStrategy | None = None,
+             wind: bool = True, battery: bool = True, payload: bool = True,
+             until: str | float = "landed") -> st.SearchStrategy[Mission]:
     """Whole missions: the named drone with drawn battery and payload, a drawn
     pilot (hovers or zig-zags by default), wind and seed."""
     pilots = pilots if pilots is not None else st.one_of(hovers(30.0), zigzags(120.0))
@@ -158,7 +162,8 @@ def missions(drone: str = "dji-mavic-2-pro", *, pilots=None, wind=True, battery=
                      payloads(drone) if payload else st.just(0.0), seeds())
 
 
-def target_margin(result, budgets: dict | None = None, *, label: str = "worst budget margin", **more) -> float:
+def target_margin(result: FlightResult, budgets: dict | None = None, *,
+                  label: str = "worst budget margin", **more: Any) -> float:
     """Tell hypothesis to search towards the worst (lowest) relative budget margin.
 
     Returns that margin (positive: every budget holds). Outside a hypothesis test

@@ -293,7 +293,7 @@ def links() -> list[str]:
     return sorted(LINKS)
 
 
-def link(name) -> Link:
+def link(name: str | Link) -> Link:
     """A link profile by name (or a ``Link`` passed through)."""
     if isinstance(name, Link):
         return name

@@ -12,6 +12,7 @@ legs one drone would.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from .. import _check
 from ..control.pilots import ZigZag
@@ -21,7 +22,7 @@ from . import pads as _pads
 from .fleet import MAX_DRONES, PAD_CLEARANCE_M
 
 
-def strips(area, n: int, spacing: float) -> list:
+def strips(area: Any, n: int, spacing: float) -> list[tuple]:
     """``n`` sub-areas ((x0, y0), (x1, y1)) of ``area``, split across y; the legs
     (``spacing`` apart) are shared out as evenly as whole legs allow."""
     if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_DRONES:
@@ -46,8 +47,9 @@ def strips(area, n: int, spacing: float) -> list:
     return out
 
 
-def survey(area, n: int, *, altitude: float = 30.0, spacing: float = 15.0, speed: float = 8.0,
-           pad_offset_m: float = 5.0, world=None) -> list:
+def survey(area: Any, n: int, *, altitude: float = 30.0, spacing: float = 15.0,
+           speed: float = 8.0, pad_offset_m: float = 5.0,
+           world: World | None = None) -> list[tuple[ZigZag, tuple]]:
     """``n`` (pilot, pad) pairs covering ``area``: ``ZigZag`` over each strip and a pad
     ``pad_offset_m`` before the strip's first corner (x0 - offset, strip's y0). With
     ``world``, a pad that would stand in or against a building is moved to the nearest

@@ -5,13 +5,22 @@ indirect parametrization, else the closest ``flockai`` marker, else a default),
 from __future__ import annotations
 
 import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import pytest
+
+if TYPE_CHECKING:      # the core loads on first use
+    from ..airframe.drone import Drone
+    from ..control.pilots import Pilot
+    from ..mission import Mission
+    from ..result import FlightResult
+    from ..world import World
 
 DEFAULT_DRONE = "dji-mavic-2-pro"
 
 
-def setting(request, key, default=None):
+def setting(request: pytest.FixtureRequest, key: str, default: Any = None) -> Any:
     """The value for one of the provisioning fixtures: an indirect parametrization
     of that fixture (``@pytest.mark.parametrize("drone", [...], indirect=True)``)
     first, then the closest ``flockai`` marker, then the default."""
@@ -24,24 +33,24 @@ def setting(request, key, default=None):
 
 
 @pytest.fixture
-def drone(request):
+def drone(request: pytest.FixtureRequest) -> Drone:
     """A fresh Drone: ``@pytest.mark.flockai(drone=...)`` (a blueprint name, a
     path or a Drone), else ``fa.drone("dji-mavic-2-pro")``."""
     value = setting(request, "drone", DEFAULT_DRONE)
     if isinstance(value, (str, os.PathLike)):
         from ..airframe import drone as make_drone  # lazy: the core loads on first use
-        return make_drone(value)
+        return make_drone(value if isinstance(value, str) else Path(value))
     return value
 
 
 @pytest.fixture
-def world(request):
+def world(request: pytest.FixtureRequest) -> World | None:
     """The world to fly in: ``@pytest.mark.flockai(world=...)``, else None (empty)."""
     return setting(request, "world", None)
 
 
 @pytest.fixture
-def pilot(request):
+def pilot(request: pytest.FixtureRequest) -> Pilot:
     """The flight plan: ``@pytest.mark.flockai(pilot=...)``, else
     ``fa.pilots.Hover(altitude=10.0, duration=30.0)``."""
     value = setting(request, "pilot", None)
@@ -50,19 +59,20 @@ def pilot(request):
 
 
 @pytest.fixture
-def tasks(request):
+def tasks(request: pytest.FixtureRequest) -> tuple:
     """ML tasks flown with the mission: ``@pytest.mark.flockai(tasks=...)``, else ()."""
     return tuple(setting(request, "tasks", ()) or ())
 
 
 @pytest.fixture
-def probes(request):
+def probes(request: pytest.FixtureRequest) -> list | None:
     """Monitoring probes: ``@pytest.mark.flockai(probes=...)``, else None."""
     return setting(request, "probes", None)
 
 
 @pytest.fixture
-def mission(request, drone, pilot, world, tasks, probes):
+def mission(request: pytest.FixtureRequest, drone: Drone, pilot: Pilot, world: World | None,
+            tasks: tuple, probes: list | None) -> Mission:
     """The Mission assembled from the fixtures and the ``flockai`` marker (not flown).
 
     ``pytest_flockai_adjust_mission(mission, item)`` hooks run on it last."""
@@ -75,6 +85,6 @@ def mission(request, drone, pilot, world, tasks, probes):
 
 
 @pytest.fixture
-def flight(mission):
+def flight(mission: Mission) -> FlightResult:
     """The mission flown: a ``FlightResult`` (recorded for the kpi marker and reports)."""
     return mission.run()
