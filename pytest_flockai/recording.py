@@ -19,7 +19,7 @@ test, so the reports show the budgets of a test that flies nothing.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 
@@ -37,7 +37,7 @@ _CHECKS: ContextVar[CheckSink | None] = ContextVar("pytest_flockai_check_sink", 
 
 
 @contextmanager
-def recording(sink: FlightSink):
+def recording(sink: FlightSink) -> Iterator[FlightSink]:
     """Send every flight completed inside the ``with`` block to ``sink(result, mission)``."""
     if not callable(sink):
         raise ConfigError(f"recording: sink = {sink!r} is not callable; expected "
@@ -49,7 +49,7 @@ def recording(sink: FlightSink):
         _SINK.reset(token)
 
 
-def publish(result, mission) -> None:
+def publish(result: object, mission: object) -> None:
     """Hand a completed flight to the sink of the current context, if any."""
     sink = _SINK.get()
     if sink is not None:
@@ -57,7 +57,7 @@ def publish(result, mission) -> None:
 
 
 @contextmanager
-def checking(sink: CheckSink):
+def checking(sink: CheckSink) -> Iterator[CheckSink]:
     """Send the verdicts of every ``budgets.evaluate``/``check`` call inside the
     ``with`` block to ``sink(result, verdicts)``."""
     if not callable(sink):
@@ -70,7 +70,7 @@ def checking(sink: CheckSink):
         _CHECKS.reset(token)
 
 
-def publish_verdicts(result, verdicts: list) -> None:
+def publish_verdicts(result: object, verdicts: list) -> None:
     """Hand the verdicts of a budget check to the check sink of the current context, if any."""
     sink = _CHECKS.get()
     if sink is not None:

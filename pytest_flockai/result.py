@@ -68,9 +68,10 @@ class FlightResult:
     cache: dict | None = None
     verdicts: tuple = ()     # the budgets last checked against it (budgets.check/evaluate)
 
-    def __init__(self, kpis, telemetry: pd.DataFrame, events, scenario, energy_breakdown,
-                 end_reason: str, wall_time_s: float = float("nan"), *, probe_samples=None,
-                 probe_errors=None):
+    def __init__(self, kpis: dict, telemetry: pd.DataFrame, events: list, scenario: dict,
+                 energy_breakdown: dict, end_reason: str, wall_time_s: float = float("nan"), *,
+                 probe_samples: dict[str, pd.DataFrame] | None = None,
+                 probe_errors: list | None = None) -> None:
         self.kpis = kpis
         self.telemetry = telemetry
         self.events = events
@@ -112,7 +113,7 @@ class FlightResult:
                                          "columns": {c: df[c].tolist() for c in df.columns}}
                                   for name, df in self.probe_samples.items()}}
 
-    def save(self, path) -> Path:
+    def save(self, path: str | os.PathLike) -> Path:
         """Write this result; the format follows the extension (.csv, .parquet, .jsonl).
 
         The telemetry's row count and SHA-256 go into the header (the sidecar
@@ -160,7 +161,7 @@ class FlightResult:
         return p
 
     @classmethod
-    def load(cls, path) -> FlightResult:
+    def load(cls, path: str | os.PathLike) -> FlightResult:
         """Read a saved result back; ConfigError naming the file for anything that does
         not check out (missing sidecar, truncated data, checksum or row count off)."""
         p = _path(path, "FlightResult.load")

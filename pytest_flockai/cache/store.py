@@ -325,12 +325,13 @@ def _frame(spec: dict, prefix: str, arrays: dict) -> pd.DataFrame:
 
 
 def _arrays(r: FlightResult, prefix: str, arrays: dict) -> dict:
+    probes: list[dict] = []
     header = {"kpis": r.kpis, "events": r.events, "scenario": r.scenario,
               "energy_breakdown": r.energy_breakdown, "end_reason": r.end_reason,
               "wall_time_s": r.wall_time_s, "probe_errors": r.probe_errors,
-              "telemetry": _frame_arrays(r.telemetry, f"{prefix}t_", arrays), "probes": []}
+              "telemetry": _frame_arrays(r.telemetry, f"{prefix}t_", arrays), "probes": probes}
     for j, (name, df) in enumerate(r.probe_samples.items()):
-        header["probes"].append({"name": name, **_frame_arrays(df, f"{prefix}p{j}_", arrays)})
+        probes.append({"name": name, **_frame_arrays(df, f"{prefix}p{j}_", arrays)})
     people = getattr(r, "people", None)
     if people is not None:                 # the world's people, drawn on the flight path
         arrays[f"{prefix}people"] = np.asarray(people)

@@ -13,7 +13,9 @@ partial result).
 from __future__ import annotations
 
 import os
+import queue
 import time as _time
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
@@ -26,7 +28,7 @@ from ..probes.hub import resolve_probes
 from ..recording import publish
 from ..result import FlightResult
 from ..sensors import Conditions
-from ..world import World
+from ..world import Atmosphere, World
 from ..world.actors import check_actors
 from ..world.wind import Wind
 from . import collect, loop
@@ -53,14 +55,16 @@ class Mission:
     actors: people and cars moving through the world (``fa.actors.Person``, ``Car``).
     """
 
-    def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
-                 seed: int = 0, until="landed", *, return_home: bool = True,
+    def __init__(self, drone: Drone, pilot: Pilot, world: World | None = None,
+                 tasks: Iterable = (), probes: Iterable | None = None, wind: Wind | None = None,
+                 seed: int = 0, until: str | float = "landed", *, return_home: bool = True,
                  max_time_s: float = 4 * 3600.0, telemetry_hz: float = 10.0,
-                 energy_hz: float = 20.0, sensors=(), fly_on: str = "truth",
-                 dataset_dir=None, dataset_period_s: float = 1.0,
+                 energy_hz: float = 20.0, sensors: Iterable = (), fly_on: str = "truth",
+                 dataset_dir: str | os.PathLike | None = None, dataset_period_s: float = 1.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None,
-                 components=(), conditions: Conditions | None = None, atmosphere=None,
-                 max_wall_s: float | None = None, policies=(), actors=()):
+                 components: Iterable = (), conditions: Conditions | None = None,
+                 atmosphere: Atmosphere | None = None, max_wall_s: float | None = None,
+                 policies: Iterable = (), actors: Iterable = ()) -> None:
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
         if not isinstance(pilot, Pilot):
@@ -114,7 +118,7 @@ class Mission:
         self.policies = check_policies(policies, self)
         resolve(self)
 
-    def subscribe(self, target) -> Mission:
+    def subscribe(self, target: Callable[[dict], object] | queue.Queue) -> Mission:
         """Receive probe samples live: ``target`` is a callable ``fn(sample)`` or a
         ``queue.Queue``; each sample is ``{"t": s, "probe": name, "values": {...}}``."""
         if not (callable(target) or hasattr(target, "put_nowait")):
