@@ -113,6 +113,10 @@ _ROWS = [
      "every person was confirmed (NaN unless all were)"),
     ("fleet.reports", "count", None, "a search together: detections reported to the ground station"),
     ("fleet.assignments", "count", None, "a search together: drones sent to confirm a report"),
+    ("fleet.associations", "count", None, "a search together: reports taken as a known target "
+     "(inside its gate), not assigned again"),
+    ("fleet.handoffs", "count", None, "a search together: diverted drones whose unflown legs "
+     "were shared with the free drones (GroundStation share)"),
     ("offload.latency_p95_s", "s", "lower", "fleet offload: 95th percentile capture-to-result latency"),
     ("link.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the channel"),
     ("ground.queue_delay_mean_s", "s", "lower", "fleet offload: mean wait for the ground device"),

@@ -248,13 +248,17 @@ class Cockpit:
         """The mission plan's waypoints not reached yet, [(x, y, z), ...]; when the plan
         was left (orbit, goto), first the setpoint where it was left. [] outside the pilot
         stage or when the plan is not a ``Waypoints`` pilot (``ZigZag`` is one)."""
-        plan = self._survey[0] if self._survey is not None else self._stages.pilot
+        plan, left = self.plan_pilot, None
+        if self._survey is not None:
+            left = self._survey[2]
+        if isinstance(plan, Resume):           # on the way back to a plan left earlier
+            plan, left = plan.plan, (left if getattr(plan, "_back", False) else plan.at)
         if self._st.stage != PILOT or not isinstance(plan, Waypoints):
             return []
         path = getattr(plan, "path", None)
         ahead = list(plan.points[path.leg if path is not None else 0:])
-        if self._survey is not None:
-            ahead.insert(0, tuple(float(v) for v in self._survey[2][:3]))
+        if left is not None:
+            ahead.insert(0, tuple(float(v) for v in left[:3]))
         return ahead
 
     def replan(self, points, **info) -> bool:
