@@ -12,26 +12,31 @@ it; the assignment reaches that drone after the downlink. The assigned drone lea
 its strip, orbits the point for ``orbit_s``, and confirms the target when its own
 detector sees it there (another message up).
 
-The fleet re-plans together: the diverted drone sends the unflown part of its plan
-(``plan_ahead``: where it left the plan, then the waypoints not reached) up in a
-``handoff`` message; the station cuts those legs into contiguous parts, one per free
-drone plus one, keeps the first part (nearest to where it left) for the diverted
-drone and gives each later part to the nearest free drone not yet given one (by the
-positions last sent). Each free drone appends its part to its own unflown plan
-(``replan`` event: ``cover`` = whose legs, ``points``); after the orbit the diverted
-drone flies the part it kept (``replan`` with ``kept``), plus any part it was given
-meanwhile.
+Re-planning together (``share``, default "none": every drone keeps its own strip):
+the diverted drone sends the unflown part of its plan (``plan_ahead``: where it left
+the plan, then the waypoints not reached) up in a ``handoff`` message. With "tail"
+the station cuts off the tail the drone would have flown in its time away
+(``2 * distance + orbit_s * speed`` metres) and splits it into contiguous parts, one
+per free drone; with "all" it splits all of it into one part per free drone plus one
+that the diverted drone keeps. Each part goes to the nearest free drone not yet
+given one (by the positions last sent), which appends it to its own unflown plan
+(``replan`` event: ``cover`` = whose legs, ``added`` = waypoints); after the orbit
+the diverted drone flies what the station left it (``replan`` with ``kept``), plus
+any part it was given meanwhile. A target reported while no drone is free waits for
+the next drone that reports itself free (``free`` message up).
 
 Association (nearest neighbour with a gate): the station keeps each target's last
 fix (its report or the last report associated with it: where and when; not a
-confirmation, which may be of another person walking by). A report is the same
-target as the nearest one whose fix lies within ``gate_m + walk_mps * age`` (age:
-time since that fix, the growth capped at ``gate_max_m``), and only moves its fix; a
-report outside every gate is a new target and gets an assignment. ``gate_m`` (10 m)
-covers the position error of one fix (box noise and the nav estimate: metres at 20
-m altitude); ``walk_mps`` 1.4 m/s is a comfortable walking pace (Bohannon 1997,
-Age Ageing 26:15, 20-79 years: 1.27-1.46 m/s), the farthest a person is likely to
-have gone since the fix.
+confirmation, which may be of another person walking by; with ``predict`` also the
+reporting tracker's velocity, and the fix moves on with it). A report is the same
+target as the nearest one whose fix lies within ``gate_m + min(walk_mps * age,
+gate_max_m)`` (age: time since that fix), and only moves its fix; a report outside
+every gate is a new target and gets an assignment. ``gate_m`` (10 m) covers the
+position error of one fix (box noise and the nav estimate at 20 m altitude);
+``walk_mps`` 1.4 m/s is a comfortable walking pace (Bohannon 1997, Age and Ageing
+26(1): 127-146 cm/s, adults 20-79), the farthest a person is likely to have gone
+since the fix; ``gate_max_m`` (default 0, a fixed gate) caps that growth: a growing
+gate also merges two people who pass each other (tests/test_fleet_search.py).
 
 Fleet KPIs (scored against the truth after the flight): ``fleet.targets_found``
 (distinct people within 5 m of a confirmed target), ``fleet.time_to_find_all_s``
@@ -52,7 +57,6 @@ from ..comm.link import link as _link
 from ..errors import ConfigError
 from .follow import _Perceiving
 from .scoring import MATCH_M
-
 
 #: what a diverted drone hands to the free drones: nothing, the tail of its plan as
 #: long as its time away would have flown, or all its unflown plan
