@@ -1,8 +1,9 @@
 """The package's layers, enforced: each module imports only from its own layer
 or the layers below it, the core never imports pytest, and imports sit at
 module level (a function-level import is allowed only for an optional
-dependency or a platform backend). The layers are written down in the
-README's architecture section; change both together."""
+dependency or a platform backend). Within a layer, a package may import another
+only where SAME_LAYER says so. The docs' architecture page prints LAYERS
+(docs/gen.py reads it from this file)."""
 
 import ast
 from pathlib import Path
@@ -32,6 +33,19 @@ OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "al
 #: sweep runner loading the batched backend, whose modules import JAX (the optional
 #: extra ``mjx``), only when ``backend="mjx"`` is asked for
 ALLOWED_LOCAL = {("__init__.py", "mujoco"), ("sweeps/runner.py", ".batched")}
+#: imports between two different names of one layer (importer, imported): each is a
+#: decision, so a new one fails until it is added here
+SAME_LAYER = {
+    ("_check", "errors"), ("kpis", "errors"), ("limits", "errors"), ("recording", "errors"),
+    ("result", "_io"), ("result", "errors"), ("result", "phases"),
+    ("ml", "control"),
+    ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
+    ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
+    ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
+    ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),
+    ("report", "plots"), ("reports", "report"), ("strategies", "budgets"), ("sweeps", "budgets"),
+    ("sweeps", "plots"),
+}
 
 
 def _layer_of(name: str) -> int:
@@ -71,16 +85,25 @@ def _targets(path: Path, node) -> list[str]:
     return [a.name for a in node.names]          # from . import x
 
 
-@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PKG)))
-def test_imports_go_down_the_layers(path):
+def _layer_violations(path: Path, tree) -> list[str]:
     own = _layer_of(_top(path))
     bad = []
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(tree):
         if isinstance(node, (ast.Import, ast.ImportFrom)):
             for target in _targets(path, node):
                 if target != _top(path) and _layer_of(target) > own:
                     bad.append(f"line {node.lineno}: {_top(path)} (layer {own}) imports "
                                f"{target} (layer {_layer_of(target)})")
+                elif target != _top(path) and _layer_of(target) == own \
+                        and (_top(path), target) not in SAME_LAYER:
+                    bad.append(f"line {node.lineno}: {_top(path)} imports {target} of its own "
+                               f"layer {own}: not in SAME_LAYER (tests/test_architecture.py)")
+    return bad
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PKG)))
+def test_imports_go_down_the_layers(path):
+    bad = _layer_violations(path, ast.parse(path.read_text()))
     assert not bad, "\n".join(bad)
 
 
@@ -121,3 +144,10 @@ def test_layer_checker_catches_an_upward_import(tmp_path):
     assert _layer_of("mission") > _layer_of("energy")
     node = ast.parse("from . import kpis").body[0]
     assert _targets(PKG / "budgets.py", node) == ["kpis"]
+
+
+def test_same_layer_checker_catches_an_unlisted_import():
+    """A layer-0 module importing another one not in SAME_LAYER is reported."""
+    assert _layer_violations(PKG / "kpis.py", ast.parse("from .errors import ConfigError")) == []
+    bad = _layer_violations(PKG / "kpis.py", ast.parse("from .phases import PHASES"))
+    assert len(bad) == 1 and "not in SAME_LAYER" in bad[0]
