@@ -276,9 +276,7 @@ SMALL_SENSORS_W = {"gps": 0.15, "imu": 0.02, "compass": 0.01, "barometer": 0.005
 def avionics(mass_kg: float) -> dict:
     """The ``[energy]`` avionics (flight controller, I/O, sensors, camera, video link) of a
     drone of ``mass_kg`` take-off mass, by class (AVIONICS_CLASSES)."""
-    for top, fc, link, camera in AVIONICS_CLASSES:
-        if mass_kg <= top:
-            break
+    _, fc, link, camera = next(c for c in AVIONICS_CLASSES if mass_kg <= c[0])
     io = IO_W if mass_kg > AVIONICS_CLASSES[0][0] else 0.0
     return {"flight_controller_w": fc, "io_w": io,
             "sensors": {"camera": camera, "video_link": link, **SMALL_SENSORS_W}}
