@@ -2,64 +2,60 @@
 
 The public API (see README.md): ``blueprints``, ``drone``, ``pilots``,
 ``Mission``, ``FlightResult``, ``World``, ``Wind``, ``devices`` and the errors.
+
+Importing the package is cheap: the pytest plugin is loaded in every pytest run
+of a project that installs it, also in runs that fly nothing. Only the errors,
+the clock interface, the KPI table, the limits and the recording are imported
+here; every other name (``fa.Mission``, ``fa.drone``, ``fa.pilots``...) and
+every subpackage (``fa.world``, ``fa.energy``...) is imported on first use
+(PEP 562 ``__getattr__``), with MuJoCo, pandas and the rest of the core behind
+them. MuJoCo is imported through the GL guard of ``_mujoco.py``.
 """
 
-import os as _os
-import sys as _sys
+from importlib import import_module as _import_module
 
-
-def _import_mujoco():
-    """Import MuJoCo even when ``MUJOCO_GL`` names a GL backend that cannot load.
-
-    MuJoCo loads the backend named by ``MUJOCO_GL`` at import time, and a
-    missing library (say OSMesa) breaks the import itself, although physics
-    needs no GL at all. Then MuJoCo is imported with GL disabled, the user's
-    setting is kept, and the camera reports the problem when it is first used.
-    """
-    try:
-        import mujoco  # noqa: F401
-        return None
-    except Exception as exc:
-        gl = _os.environ.get("MUJOCO_GL", "")
-        if not gl.strip():
-            raise
-        for name in [m for m in _sys.modules if m.split(".")[0] in ("mujoco", "OpenGL")]:
-            del _sys.modules[name]
-        saved_platform = _os.environ.pop("PYOPENGL_PLATFORM", None)
-        _os.environ["MUJOCO_GL"] = "disable"
-        try:
-            import mujoco  # noqa: F401,F811
-        finally:
-            _os.environ["MUJOCO_GL"] = gl
-            if saved_platform is not None:
-                _os.environ["PYOPENGL_PLATFORM"] = saved_platform
-        return f"MUJOCO_GL={gl!r} could not be loaded: {type(exc).__name__}: {exc}"
-
-
-GL_IMPORT_ERROR = _import_mujoco()
-
-from . import control as _control  # noqa: E402
-from . import comm, kpis, limits, ml, probes, sensors
-from .airframe import Drone, blueprints, drone
-from .compute import devices
-from .control import pilots
-from .energy import EnergyModel
-from .errors import ConfigError, FlockAIError, SimulationError
+from . import kpis, limits
 from .clock import Clocked
-from .mission import Mission
-from . import fleet
-from .fleet import Fleet, FleetDrone, FleetResult
+from .errors import ConfigError, FlockAIError, SimulationError
 from .recording import recording
-from .ml import Task
-from .result import FlightResult
-from .sensors import Conditions
-from .sweeps import sweep
-from .world import Atmosphere, Wind, World
 
 __version__ = "0.1.0"
 
-__all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet", "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission",
+#: public name -> (module, attribute in it; None: the module itself), imported on first use
+_LAZY = {
+    "Atmosphere": (".world", "Atmosphere"), "Wind": (".world", "Wind"),
+    "World": (".world", "World"), "Conditions": (".sensors", "Conditions"),
+    "Drone": (".airframe", "Drone"), "blueprints": (".airframe", "blueprints"),
+    "drone": (".airframe", "drone"), "devices": (".compute", "devices"),
+    "pilots": (".control.pilots", None), "EnergyModel": (".energy", "EnergyModel"),
+    "Mission": (".mission", "Mission"), "Fleet": (".fleet", "Fleet"),
+    "FleetDrone": (".fleet", "FleetDrone"), "FleetResult": (".fleet", "FleetResult"),
+    "FlightResult": (".result", "FlightResult"), "Task": (".ml", "Task"),
+    "sweep": (".sweeps", "sweep"), "GL_IMPORT_ERROR": ("._mujoco", "GL_IMPORT_ERROR"),
+}
+
+__all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet",
+           "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
            "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "sweep",
            "__version__"]
-del _control
+
+
+def __getattr__(name: str):
+    """A public name or a subpackage, imported on first use (then kept as an attribute)."""
+    module, attr = _LAZY.get(name, (f".{name}", None))
+    if name.startswith("__"):
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    try:
+        mod = _import_module(module, __name__)
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__name__}.{name}":
+            raise
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = mod if attr is None else getattr(mod, attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(__all__) | set(_LAZY))

@@ -69,7 +69,6 @@ from importlib import metadata
 from pathlib import Path
 
 from . import kpis as _kpis
-from . import plots
 from ._io import atomic_write
 from .errors import ConfigError
 
@@ -286,6 +285,7 @@ def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     result.telemetry.to_csv(folder / f"{safe_name(flight)}.telemetry.csv")
     write_json_atomic(folder / f"{safe_name(flight)}.json", result.to_dict())
+    from . import plots           # lazy: numpy, and matplotlib (see tests/test_architecture.py)
     if plots.available():
         plots.energy_figure(result, folder / f"{safe_name(flight)}.energy.png")
         plots.path_figure(result, folder / f"{safe_name(flight)}.path.png")

@@ -24,7 +24,7 @@ C * area and added mass with volume, so the ellipsoid is shrunk by
 
 from __future__ import annotations
 
-import mujoco
+from .._mujoco import mujoco
 
 import math
 

@@ -13,50 +13,103 @@ The pytest plugin opens one per test under pytest's cache directory
 (``--flockai-cache``). A result read from the cache compares equal to the one
 flown (KPIs, telemetry, events, probe samples); ``result.cache`` says where it
 came from (``{"status": "hit" | "stored" | "flown" | "bypass" | "replaced", ...}``).
+
+Importing this package is cheap (the pytest plugin opens a cache around every
+test, also tests that fly nothing): the store, the keys and the memo store
+(NumPy, pandas) load on first use, and the plugin opens a ``Deferred`` cache,
+which builds its ``FlightCache`` when a flight or a memoised computation first asks.
 """
 
 from __future__ import annotations
 
+import sys
 from contextlib import contextmanager
 from contextvars import ContextVar
+from importlib import import_module as _import_module
 
 from .. import memo as _memo
 from ..errors import ConfigError
-from .key import Uncacheable, cacheable, flight_key, memo_key
-from .memo import MemoStore
-from .store import MODES, CacheWarning, CorruptEntry, FlightCache, Lookup
 
-_ACTIVE: ContextVar[FlightCache | None] = ContextVar("pytest_flockai_flight_cache", default=None)
+MODES = ("off", "read", "write", "readwrite")
+
+#: public name -> its module in this package, imported on first use
+_LAZY = {"CacheWarning": ".store", "CorruptEntry": ".store", "FlightCache": ".store",
+         "Lookup": ".store", "MemoStore": ".memo", "Uncacheable": ".key", "cacheable": ".key",
+         "flight_key": ".key", "memo_key": ".key"}
+
+_ACTIVE: ContextVar = ContextVar("pytest_flockai_flight_cache", default=None)
+
+
+class Deferred:
+    """A flight cache opened on first use: ``FlightCache(directory, mode)`` is built
+    (its store, NumPy and pandas loaded) when a flight or a memoised computation of
+    the context first asks; a context that asks nothing loads nothing."""
+
+    def __init__(self, directory, mode: str = "readwrite"):
+        if mode not in MODES:
+            raise ConfigError(f"FlightCache: mode = {mode!r} is not allowed; allowed: "
+                              f"{', '.join(MODES)}")
+        self.directory, self.mode = directory, mode
+        self._cache = None
+
+    def open(self):
+        """The ``FlightCache`` (built on the first call)."""
+        if self._cache is None:
+            self._cache = __getattr__("FlightCache")(self.directory, self.mode)
+        return self._cache
+
+    def recall(self, kind, inputs, compute, pack, unpack):
+        """The memo store's ``recall`` (``pytest_flockai.memo``), through the opened cache."""
+        return self.open().memo.recall(kind, inputs, compute, pack, unpack)
+
+
+def _is_flight_cache(cache) -> bool:
+    store = sys.modules.get(f"{__name__}.store")      # never loaded: no FlightCache exists
+    return store is not None and isinstance(cache, store.FlightCache)
 
 
 @contextmanager
-def caching(cache: FlightCache | None):
-    """Use ``cache`` for every ``Mission.run()`` and ``Fleet.run()`` inside the block,
-    and its memo store for the memoised computations (``pytest_flockai.memo``:
-    rendered views, detection scores, envelopes); None: no cache."""
-    if cache is not None and not isinstance(cache, FlightCache):
+def caching(cache):
+    """Use ``cache`` (a ``FlightCache``, a ``Deferred`` one, or None: no cache) for
+    every ``Mission.run()`` and ``Fleet.run()`` inside the block, and its memo store
+    for the memoised computations (``pytest_flockai.memo``: rendered views,
+    detection scores, envelopes)."""
+    if cache is not None and not isinstance(cache, Deferred) and not _is_flight_cache(cache):
         raise ConfigError(f"caching: cache = {cache!r} is not allowed; expected a FlightCache "
                           f"or None")
     token = _ACTIVE.set(cache)
     try:
-        with _memo.remembering(cache.memo if cache is not None else None):
+        memo = cache if isinstance(cache, Deferred) or cache is None else cache.memo
+        with _memo.remembering(memo):
             yield cache
     finally:
         _ACTIVE.reset(token)
 
 
-def active() -> FlightCache | None:
-    return _ACTIVE.get()
+def active():
+    """The ``FlightCache`` of this context (a deferred one opened now), or None."""
+    cache = _ACTIVE.get()
+    return cache.open() if isinstance(cache, Deferred) else cache
 
 
-def lookup(mission, result_type=None) -> Lookup | None:
+def lookup(mission, result_type=None):
     """The current cache's answer for ``mission`` (None when no cache is open); a
     ``Fleet`` passes its ``result_type`` (FleetResult)."""
-    cache = _ACTIVE.get()
+    cache = active()
     if cache is None:
         return None
     return cache.lookup(mission) if result_type is None else cache.lookup(mission, result_type)
 
 
-__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MODES", "MemoStore",
-           "Uncacheable", "active", "cacheable", "caching", "flight_key", "lookup", "memo_key"]
+def __getattr__(name: str):
+    """The store's, the keys' and the memo store's names, imported on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(_import_module(_LAZY[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+__all__ = ["CacheWarning", "CorruptEntry", "Deferred", "FlightCache", "Lookup", "MODES",
+           "MemoStore", "Uncacheable", "active", "cacheable", "caching", "flight_key", "lookup",
+           "memo_key"]

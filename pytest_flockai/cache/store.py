@@ -28,11 +28,10 @@ import pandas as pd
 from .._io import atomic_write
 from ..errors import ConfigError
 from ..result import FlightResult
+from . import MODES  # the light package module defines them
 from . import key as _key
 from . import memo as _memo_store
 from .entry import MAGIC, CorruptEntry, read_entry, seal, unseal
-
-MODES = ("off", "read", "write", "readwrite")
 
 
 class CacheWarning(UserWarning):

@@ -51,8 +51,7 @@ class Heartbeats(Clocked):
         self.next_due = -CLOCK_EPS
 
     def step(self, t: float) -> None:
-        self._t_next += self.period_s
-        self.next_due = self._t_next - CLOCK_EPS
+        self.advance_clock()
         tr = self.traffic
         tr.tx_b += self.bytes
         tr.tx_p += 1

@@ -54,8 +54,7 @@ class EnergyIntegrator(Clocked):
             s.battery_v = c.voltage_v
             s.battery_cutoff = c.cutoff
         self.t_e = t
-        self._t_next += self.period_s
-        self.next_due = self._t_next - CLOCK_EPS
+        self.advance_clock()
 
     def finish(self, t: float) -> None:
         """Charge the last partial interval (t_e, t]."""

@@ -18,12 +18,13 @@ from .. import cache as _cache
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
-from ..mission import Mission
+from ..mission import Mission, loop
+from ..mission.assemble import Flight
 from ..mission.plan import check_tasks, resolve
 from ..recording import publish
 from ..world import World
-from . import assemble, loop, result
-from .offload import Offload, OffloadStep
+from . import result
+from .offload import Offload, OffloadStep, share_ground
 
 #: m: two pads closer than this are "one pad" (a drone's footprint is < 1 m)
 PAD_CLEARANCE_M = 2.0
@@ -152,21 +153,21 @@ class Fleet:
             return found.result
         wall0 = _time.perf_counter()
         plans = self._plans()
-        names = [fd.name for fd in self.drones]
-        model, data, runs = assemble.build(plans, self.missions, names,
-                                           [fd.pad for fd in self.drones], self.world,
-                                           lambda m: m.probes)
+        flight = Flight(plans, self.missions, [fd.name for fd in self.drones],
+                        [fd.pad for fd in self.drones])
+        runs = flight.runs
         off = OffloadStep(self.offload, runs) if self.offload is not None else None
-        ground = assemble.share_ground(runs, self.shared_link) if self.remote else None
+        sep = result.Separation()
+        ground = share_ground(runs, self.shared_link) if self.remote else None
         try:
-            stats = loop.fly(model, data, runs, plans[0].substeps, off)
+            loop.fly(flight, [st for st in (off, sep) if st is not None])
         except SimulationError as exc:
             exc.result = result.build(self, runs, {"min_separation_m": math.inf},
                                       _time.perf_counter() - wall0)
             publish(exc.result, self)
             raise
-        stats["offload"] = off
-        stats["ground"] = ground
+        stats = {"min_separation_m": sep.min_m, "t_end": [r.t_end for r in runs],
+                 "offload": off, "ground": ground}
         res = result.build(self, runs, stats, _time.perf_counter() - wall0)
         if found is not None and found.status != "off":
             found.store(res)

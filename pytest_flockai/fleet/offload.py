@@ -88,6 +88,8 @@ class OffloadStep:
         self.latency = [[] for _ in range(n)]
 
     def step(self, t: float, members) -> None:
+        """Send this period's frames of the drones flying their plan (``members``:
+        the loop's drones, ``mission.loop.Member``)."""
         sp = self.spec
         self._k += 1
         self.next_due = (self._k + 1) * sp.period_s - 1e-9
@@ -124,6 +126,16 @@ class OffloadStep:
         out["offload.latency_p95_s"] = _pct(every, 95)
         out.update(ground_kpis(self.ground, makespan_s))
         return out
+
+
+def share_ground(runs, shared_link: bool) -> SharedGround:
+    """One ground station for the remote tasks of every drone (``ml.events.SharedGround``)."""
+    ground = SharedGround(shared_link)
+    for i, r in enumerate(runs):
+        for runner in r.scheduler.runners:
+            if runner.task.execution == "remote":
+                runner.share(ground, i)
+    return ground
 
 
 def ground_kpis(g, makespan_s: float) -> dict:

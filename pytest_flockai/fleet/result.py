@@ -24,12 +24,15 @@ import math
 import numpy as np
 import pandas as pd
 
-from ..mission import result as _single
+from ..control.stages import TAKEOFF
+from ..mission import collect
 from ..result import FlightResult
 from .offload import ground_kpis
 
 #: the coverage grid has at most this many cells along a side
 MAX_GRID = 400
+#: Hz: how often the separation of the airborne drones is measured
+SEPARATION_HZ = 50.0
 
 
 class FleetResult(FlightResult):
@@ -46,8 +49,8 @@ def build(fleet, runs, stats: dict, wall_s: float) -> FleetResult:
     ends = stats.get("t_end") or [r.shared.time for r in runs]
     drones = {}
     for r, t_end in zip(runs, ends):
-        drones[r.vehicle.name] = _single.build(r, r.mission, wall_s, t_end,
-                                               r.vehicle.end_reason or "time")
+        drones[r.vehicle.name] = collect.flight_result(r, r.mission, wall_s, t_end,
+                                                       r.vehicle.end_reason or "time")
     kpis: dict = {}
     for name, res in drones.items():
         kpis.update({f"{name}.{k}": v for k, v in res.kpis.items()})
@@ -91,6 +94,37 @@ def fleet_kpis(fleet, drones: dict, stats: dict, ends, tel) -> dict:
     if lat:
         out["fleet.inference_latency_p95_s"] = float(np.percentile(lat, 95))
     return out
+
+
+class Separation:
+    """``fleet.min_separation_m`` measured in flight: a flight-wide step of the loop
+    (``mission.loop.fly``) at ``SEPARATION_HZ``: the smallest distance between two
+    drones in the air (past take-off) at once; infinite while never two were."""
+
+    def __init__(self):
+        self.period_s = 1.0 / SEPARATION_HZ
+        self.next_due = 0.0
+        self.min_m = math.inf
+
+    def step(self, t: float, drones) -> None:
+        self.next_due += self.period_s
+        live = [m for m in drones if m.active]
+        if len(live) > 1:
+            self.min_m = min(self.min_m, separation(live))
+
+
+def separation(drones) -> float:
+    """The smallest distance between two of ``drones`` in the air now (inf if < 2)."""
+    pts = [m.s.q for m in drones if m.s.airborne and m.s.stage != TAKEOFF]
+    best = math.inf                    # squared: sqrt is monotonic, one sqrt at the end
+    for i in range(len(pts) - 1):
+        ax, ay, az = pts[i][:3]
+        for b in pts[i + 1:]:
+            dx, dy, dz = ax - b[0], ay - b[1], az - b[2]
+            d = dx * dx + dy * dy + dz * dz
+            if d < best:
+                best = d
+    return math.sqrt(best)
 
 
 def coverage_time(results) -> float:

@@ -21,7 +21,6 @@ from pathlib import Path
 
 import pytest
 
-from .. import plots
 from .._io import atomic_write
 from .. import report as _report
 from ..reports import history as _history
@@ -100,6 +99,7 @@ class ReportsPlugin:
         return out
 
     def _flight_pictures(self, name, result) -> list[dict]:
+        from .. import plots       # lazy: numpy, and matplotlib (see tests/test_architecture.py)
         if not plots.available():
             return []
         key = id(result)

@@ -8,10 +8,6 @@ import os
 
 import pytest
 
-from ..airframe import drone as _make_drone
-from ..control.pilots import Hover
-from ..mission import Mission
-
 DEFAULT_DRONE = "dji-mavic-2-pro"
 
 
@@ -33,7 +29,8 @@ def drone(request):
     path or a Drone), else ``fa.drone("dji-mavic-2-pro")``."""
     value = setting(request, "drone", DEFAULT_DRONE)
     if isinstance(value, (str, os.PathLike)):
-        return _make_drone(value)
+        from ..airframe import drone as make_drone     # lazy: the core loads on first use
+        return make_drone(value)
     return value
 
 
@@ -48,6 +45,7 @@ def pilot(request):
     """The flight plan: ``@pytest.mark.flockai(pilot=...)``, else
     ``fa.pilots.Hover(altitude=10.0, duration=30.0)``."""
     value = setting(request, "pilot", None)
+    from ..control.pilots import Hover                 # lazy: the core loads on first use
     return Hover(altitude=10.0, duration=30.0) if value is None else value
 
 
@@ -68,6 +66,7 @@ def mission(request, drone, pilot, world, tasks, probes):
     """The Mission assembled from the fixtures and the ``flockai`` marker (not flown).
 
     ``pytest_flockai_adjust_mission(mission, item)`` hooks run on it last."""
+    from ..mission import Mission                      # lazy: the core loads on first use
     m = Mission(drone, pilot, world=world, tasks=tasks, probes=probes,
                 wind=setting(request, "wind", None), seed=setting(request, "seed", 0),
                 until=setting(request, "until", "landed"), name=setting(request, "name", None))

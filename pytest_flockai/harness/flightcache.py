@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from ..cache import MODES, FlightCache, caching
+from ..cache import MODES, Deferred, caching
 from .options import option
 from .session import SESSION
 
@@ -61,12 +61,12 @@ class CachePlugin:
         if not config.pluginmanager.has_plugin("cacheprovider"):
             self.off_reason = "pytest's cacheprovider is disabled (-p no:cacheprovider)"
         self.directory = cache_dir(config) if self.off_reason is None else None
-        self._caches: dict[str, FlightCache] = {}
+        self._caches: dict[str, Deferred] = {}
         config.addinivalue_line("markers", f"{MARKER}(mode): flight cache mode for this test "
                                            f"({', '.join(MODES)}; pytest-flockai)")
         if config.getoption("flockai_cache_clear", False) and not self.worker \
                 and self.directory is not None:
-            FlightCache(self.directory).clear()
+            Deferred(self.directory).open().clear()
 
     def mode_for(self, item) -> tuple[str, str | None]:
         """(mode, error) for one test: its flockai_cache marker, else off for a
@@ -82,14 +82,14 @@ class CachePlugin:
             return "off", None
         return self.mode, None
 
-    def cache_for(self, item) -> FlightCache | None:
+    def cache_for(self, item) -> Deferred | None:
         if self.off_reason is not None:
             return None
         mode, _ = self.mode_for(item)
         if mode == "off":
             return None
         if mode not in self._caches:
-            self._caches[mode] = FlightCache(self.directory, mode)
+            self._caches[mode] = Deferred(self.directory, mode)
         return self._caches[mode]
 
     @pytest.hookimpl(tryfirst=True)

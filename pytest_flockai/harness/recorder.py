@@ -15,14 +15,13 @@ fixture that returned the flight, else ``"flight"``; repeats get ``-2``,
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 
 import pytest
 
 from .. import report as _report
 from ..errors import ConfigError
-from ..result import FlightResult
-from ..sweeps import envelope as _envelope
 from .markers import Markers
 
 STATE = pytest.StashKey["TestState"]()
@@ -123,7 +122,7 @@ class TestState:
         flown before this test (module- or session-scoped fixtures)."""
         mine = {id(f.result): f for f in self.flights}
         for argname, value in (getattr(self.item, "funcargs", None) or {}).items():
-            if not isinstance(value, FlightResult):
+            if not _is_flight_result(value):
                 continue
             f = mine.get(id(value))
             if f is None:
@@ -174,7 +173,8 @@ class TestState:
         if self.hypothesis is not None:
             out["hypothesis"] = self.hypothesis
         if self.sweep is not None:
-            out["sweep"] = _envelope.summary(self.sweep, self.sweep_files)
+            from ..sweeps import envelope     # lazy: a sweep flew, so it is loaded already
+            out["sweep"] = envelope.summary(self.sweep, self.sweep_files)
         return _report.jsonable(out)
 
 
@@ -190,3 +190,10 @@ def _add_derived(result, extra) -> None:
             raise ConfigError(f"pytest_flockai_derived_kpis: {key!r} = {value!r} is not "
                               f"allowed; expected a str name and a number")
         result.kpis[key] = float(value)
+
+
+def _is_flight_result(value) -> bool:
+    """``value`` is a FlightResult, found without importing ``result`` (pandas): while
+    the module was never imported, no value can be one."""
+    mod = sys.modules.get("pytest_flockai.result")
+    return mod is not None and isinstance(value, mod.FlightResult)

@@ -18,7 +18,6 @@ import pytest
 from .. import budgets as _budgets
 from .. import report as _report
 from ..errors import ConfigError
-from ..sweeps import envelope, runner
 from .ci_reports import PICTURE_PROPERTY
 from .recorder import STATE
 
@@ -50,6 +49,7 @@ def flockai_sweep(request, mission):
                     f"(payload_kg=[0.0, 0.2])", pytrace=False)
     st = request.node.stash[STATE]
     budgets = {fb.budget.kpi: fb.budget.text for fb in st.markers.budgets if fb.flight is None}
+    from ..sweeps import runner        # lazy: the core loads on first use
     try:
         df = runner.sweep(mission, budgets=budgets or None, **mark.kwargs)
     except ConfigError as exc:
@@ -70,6 +70,7 @@ def check(item, st) -> str | None:
                            f"sweep checks its budgets on every variant; flight = {named[0]!r} is "
                            f"not allowed with @pytest.mark.{MARKER}")
     budgets = [x.budget for x in st.markers.budgets if x.flight is None]
+    from ..sweeps import envelope      # lazy: a sweep flew, so it is loaded already
     st.verdicts, broken, errors = [], [], []
     for _, row in df.iterrows():
         name = envelope.label(row, axes)
@@ -109,6 +110,7 @@ def write_envelope(item, st, artifacts) -> None:
     axes = df.attrs.get("axes", [])
     kpi = next((x.budget.kpi for x in st.markers.budgets), "flight_time_s")
     x, y = (axes + axes)[:2] if axes else ("", "")
+    from ..sweeps import envelope      # lazy: a sweep flew, so it is loaded already
     try:
         folder = Path(artifacts) / _report.safe_name(item.nodeid)   # the flights' folder
         folder.mkdir(parents=True, exist_ok=True)

@@ -53,8 +53,7 @@ class FlightBook(Clocked):
         bdt = t - self._t_book
         self._t_book = t
         if not self.every_tick:
-            self._t_next += self.period_s
-            self.next_due = self._t_next - CLOCK_EPS
+            self.advance_clock()
         v = s.v
         vx, vy, vz = v[0], v[1], v[2]
         if s.airborne:

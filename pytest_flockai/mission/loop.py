@@ -1,18 +1,27 @@
-"""The flight loop: one simulated clock, clocked components, MuJoCo physics.
+"""The flight loop of 1..N drones: one simulated clock, one MuJoCo model,
+clocked components per drone. A single Mission is a flight of one drone; a
+fleet flies N in the same loop.
 
-Each control tick: read the state, step every component that is due (in the
-order ``Run`` built them: sensors, tasks, navigation, stages, control, wind,
-radio, energy, book, probes, telemetry, user components, end conditions),
-then advance MuJoCo ``substeps`` physics steps in one C call and check for
-contact crashes and unstable physics. No pandas, dicts or numpy allocation
-per tick: the components keep preallocated buffers and Python floats.
+Each control tick: for every drone still flying, read its state from its slice
+of the MjData (``t q v speed``) and step its components that are due, in the
+order ``assemble.Run`` built them (sensors, tasks, navigation, stages, control,
+wind, rotor drag, radio, energy, book, probes, telemetry, user components, end
+conditions); a drone whose flight ended (landed, battery, time, stopped) is
+finished at that time and its motors stay off. Then the flight-wide steps that
+are due (a fleet's offload and separation: ``step(t, drones)``), then MuJoCo
+advances ``substeps`` physics steps in one C call, and the contacts are checked:
+a drone touching another drone has crashed (both have); a drone flipped over, or
+touching anything else faster than ``CRASH_SPEED`` (not while still on its pad at
+take-off), has crashed. The loop ends when every drone has ended. No pandas,
+dicts or numpy allocation per tick: the components keep preallocated buffers
+and Python floats.
 """
 
 from __future__ import annotations
 
 import math
 
-import mujoco
+from .._mujoco import mujoco
 
 from ..control.stages import DONE, STAGES, TAKEOFF
 from ..errors import SimulationError
@@ -20,50 +29,81 @@ from ..errors import SimulationError
 CRASH_SPEED = 2.0        # m/s: touching anything faster than this is a crash
 
 
-def fly(run) -> None:
-    """Fly ``run`` (an ``assemble.Run``) until a component ends it."""
-    model, d, s = run.model, run.data, run.vehicle
-    comps, nsub, step = run.components, run.plan.substeps, mujoco.mj_step
-    qpos, qvel, sqrt = d.qpos, d.qvel, math.sqrt
+class Member:
+    """A drone of the loop: its run, state, data, body and component lists
+    (``ticking``: every-tick components; ``ordered``: (component, step) pairs)."""
+
+    __slots__ = ("run", "s", "data", "body", "comps", "ticking", "clocked", "ordered",
+                 "next_any", "qpos", "qvel", "active", "t_end")
+
+    def __init__(self, run):
+        self.run, self.s, self.data, self.body = run, run.vehicle, run.data, run.body
+        self.comps = comps = run.components
+        self.ticking, self.clocked, self.ordered = schedule(comps)
+        self.next_any = min([c.next_due for c in self.clocked], default=math.inf)
+        self.qpos, self.qvel = run.data.qpos, run.data.qvel
+        self.active = True
+        self.t_end = 0.0
+
+
+def fly(flight, steps=()) -> list:
+    """Fly every drone of ``flight`` (an ``assemble.Flight``) until each has ended;
+    ``steps``: flight-wide steps (``next_due``, ``step(t, drones)``) after the drones'
+    components. Sets each run's ``t_end``; returns the loop's drones (``Member``)."""
+    model, data, runs = flight.model, flight.data, flight.runs
+    nsub = runs[0].plan.substeps
+    members = [Member(r) for r in runs]
+    live = list(members)                 # the drones still flying, in the given order
+    body_of = {m.body: i for i, m in enumerate(members)}
+    step, sqrt = mujoco.mj_step, math.sqrt
     half_tick = 0.5 * nsub * model.opt.timestep      # a tick advances time by nsub steps
-    ticking, clocked, ordered = schedule(comps)
-    next_any = min([c.next_due for c in clocked], default=math.inf)
-    while True:
-        t = d.time
-        s.q = q = qpos.tolist()
-        s.v = v = qvel.tolist()
-        z, vx, vy, vz = q[2], v[0], v[1], v[2]
-        if not (z == z and abs(z) < 1e5 and vx == vx):
-            raise SimulationError(
-                f"simulation diverged at t = {t:.3f} s (position or velocity not finite: "
-                f"z = {z!r}, vx = {vx!r}); check the blueprint's inertia and rotor "
-                f"coefficients or lower the physics timestep")
-        s.speed = sqrt(vx * vx + vy * vy + vz * vz)
-        s.qc = q                     # the truth, unless a Navigation estimate replaces it
-        s.vc = v
-        if t >= next_any:
-            for c, c_step in ordered:
-                if t >= c.next_due:
+    next_step = min([st.next_due for st in steps], default=math.inf)
+    while live:
+        t = data.time
+        ended = False
+        for m in live:
+            s = m.s
+            s.q = q = m.qpos.tolist()
+            s.v = v = m.qvel.tolist()
+            z, vx, vy, vz = q[2], v[0], v[1], v[2]
+            if not (z == z and abs(z) < 1e5 and vx == vx):
+                raise SimulationError(
+                    f"simulation diverged at t = {t:.3f} s for {s.name} (position or velocity "
+                    f"not finite: z = {z!r}, vx = {vx!r}); check the blueprint's inertia and "
+                    f"rotor coefficients or lower the physics timestep")
+            s.speed = sqrt(vx * vx + vy * vy + vz * vz)
+            s.qc = q                     # the truth, unless a Navigation estimate replaces it
+            s.vc = v
+            if t >= m.next_any:
+                for c, c_step in m.ordered:
+                    if t >= c.next_due:
+                        c_step(t)
+                m.next_any = min([c.next_due for c in m.clocked], default=math.inf)
+            else:
+                for c_step in m.ticking:
                     c_step(t)
-            next_any = min([c.next_due for c in clocked], default=math.inf)
-        else:
-            for c_step in ticking:
-                c_step(t)
-        if s.end_reason is not None:
-            break
-        step(model, d, nsub)
-        if d.ncon > 0 and s.stage != DONE and _impact(d, s):
-            s.crashed = True
-            s.end_reason = "crashed"
-            run.events.add(d.time, "crash", speed=s.speed)
-            break
-        if d.time < t + half_tick:                    # MuJoCo reset the state inside mj_step
+            if s.end_reason is not None:
+                _end(m, t)
+                ended = True
+        if ended:
+            live = [m for m in live if m.active]
+            if not live:
+                break
+        if t >= next_step:
+            for st in steps:
+                if t >= st.next_due:
+                    st.step(t, members)
+            next_step = min([st.next_due for st in steps])
+        step(model, data, nsub)
+        if data.ncon > 0:
+            _contacts(model, data, members, body_of)
+            if not all(m.active for m in live):
+                live = [m for m in live if m.active]
+        if data.time < t + half_tick:                    # MuJoCo reset the state inside mj_step
             raise SimulationError(
                 f"MuJoCo reset the simulation at t = {t:.3f} s (unstable physics: "
-                f"{_warnings(d)}); check the blueprint or lower the physics timestep")
-    t = d.time
-    for c in comps:
-        c.finish(t)
+                f"{_warnings(data)}); check the blueprint or lower the physics timestep")
+    return members
 
 
 def schedule(comps) -> tuple[list, list, list]:
@@ -75,10 +115,45 @@ def schedule(comps) -> tuple[list, list, list]:
     return ticking, clocked, [(c, c.step) for c in comps]
 
 
-def _impact(d, s) -> bool:
-    """Flipped over, or touched anything faster than CRASH_SPEED (not while
-    still sitting on the pad at take-off)."""
-    if d.xmat[1][8] < 0.0:
+def _end(m, t) -> None:
+    """A drone's flight ended at ``t``: motors off, finish its components."""
+    m.active = False
+    m.t_end = m.run.t_end = t
+    m.data.ctrl[:] = 0.0
+    for c in m.comps:
+        c.finish(t)
+
+
+def _contacts(model, data, members, body_of) -> None:
+    """Crashes from this step's contacts (see the module docstring)."""
+    bodies = model.geom_bodyid[data.contact.geom[:data.ncon]].tolist()
+    hit = set()
+    for b1, b2 in bodies:
+        i1, i2 = body_of.get(b1), body_of.get(b2)
+        if i1 is not None and i2 is not None:           # drone on drone: both crash
+            for i in (i1, i2):
+                hit.add((i, "drone"))
+        else:
+            for i in (i1, i2):
+                if i is not None:
+                    hit.add((i, "other"))
+    for i, what in sorted(hit):
+        m = members[i]
+        s = m.s
+        if not m.active or s.stage == DONE or s.end_reason is not None:
+            continue
+        if what == "drone" or _impact(data, m):
+            s.crashed = True
+            s.end_reason = "crashed"
+            m.run.events.add(data.time, "crash", speed=s.speed, against=what)
+            _end(m, data.time)
+
+
+def _impact(data, m) -> bool:
+    """Flipped over (the body's z axis points below the horizon), or touched
+    anything faster than CRASH_SPEED (not while still sitting on the pad at take-off)."""
+    s = m.s
+    if data.xmat[m.body][8] < 0.0:
         return True
     if s.stage == TAKEOFF and s.q[2] < s.home[2] + 0.05:
         return False
@@ -92,4 +167,4 @@ def _warnings(d) -> str:
     return ", ".join(hits) or "no MuJoCo warning recorded"
 
 
-__all__ = ["CRASH_SPEED", "STAGES", "fly", "schedule"]
+__all__ = ["CRASH_SPEED", "STAGES", "Member", "fly", "schedule"]

@@ -2,11 +2,12 @@
 
 ``Mission(...)`` validates its inputs and resolves them into a flight plan at
 once (every ``ConfigError`` is raised here, before anything flies);
-``run()`` builds the flight (``assemble.Run``), flies it (``loop.fly``) and
-returns the ``FlightResult`` (``result.build``). It also hands the result to
-the recording sink of the current context (``pytest_flockai.recording``), so
-the pytest plugin sees every flight flown inside a test, also one that ended
-in a ``SimulationError`` (then with the partial result).
+``run()`` builds the flight, a flight of one drone (``assemble.Flight``), flies
+it (``loop.fly``) and returns the ``FlightResult`` (``collect.flight_result``).
+It also hands the result to the recording sink of the current context
+(``pytest_flockai.recording``), so the pytest plugin sees every flight flown
+inside a test, also one that ended in a ``SimulationError`` (then with the
+partial result).
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ from ..result import FlightResult
 from ..sensors import Conditions
 from ..world import World
 from ..world.wind import Wind
-from . import loop, result
-from .assemble import Run
+from . import collect, loop
+from .assemble import Flight
 from .plan import check_components, check_sensors, check_tasks, check_until, resolve
 from .plan import computers as _computers
 
@@ -135,16 +136,17 @@ class Mission:
             publish(found.result, self)
             return found.result
         wall0 = _time.perf_counter()
-        run = Run(resolve(self), self, self.subscribers, self.probes)
+        flight = Flight([resolve(self)], [self])
+        run = flight.runs[0]
         try:
-            loop.fly(run)
+            loop.fly(flight)
         except SimulationError as exc:
-            exc.result = result.build(run, self, _time.perf_counter() - wall0, run.data.time,
-                                      getattr(exc, "end_reason", "diverged"))
+            exc.result = collect.flight_result(run, self, _time.perf_counter() - wall0,
+                                               run.data.time, getattr(exc, "end_reason", "diverged"))
             publish(exc.result, self)
             raise
-        res = result.build(run, self, _time.perf_counter() - wall0, run.data.time,
-                           run.vehicle.end_reason)
+        res = collect.flight_result(run, self, _time.perf_counter() - wall0, run.t_end,
+                                    run.vehicle.end_reason)
         if found is not None and found.status != "off":
             found.store(res)            # before publish: derived KPIs of a test stay out
         publish(res, self)

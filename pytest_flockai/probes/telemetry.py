@@ -123,8 +123,7 @@ class TelemetryStep(Clocked):
         self.next_due = -CLOCK_EPS
 
     def step(self, t: float) -> None:
-        self._t_next += self.period_s
-        self.next_due = self._t_next - CLOCK_EPS
+        self.advance_clock()
         s = self.st
         self.rec.record(t, s.q, s.v, s.sp, s.w, s.phase, s.stage, s.power, s.energy_j, s.e_usable)
 

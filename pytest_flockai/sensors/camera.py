@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 
-import mujoco
+from .._mujoco import mujoco
 import numpy as np
 
 from .. import _check

@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-import mujoco
+from .._mujoco import mujoco
 import numpy as np
 
 from .. import memo

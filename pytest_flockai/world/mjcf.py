@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import mujoco
+from .._mujoco import mujoco
 import numpy as np
 
 

@@ -15,7 +15,7 @@ the sun as the conditions say (``sun_azimuth_deg``, ``sun_elevation_deg``).
 
 from __future__ import annotations
 
-import mujoco
+from .._mujoco import mujoco
 import numpy as np
 
 from . import figures as _fig

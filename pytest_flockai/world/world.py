@@ -30,10 +30,11 @@ the axis-aligned boxes that hide people from a camera.
 
 from __future__ import annotations
 
+import hashlib
 import os
 from numbers import Integral, Real
 
-import mujoco
+from .._mujoco import mujoco
 import numpy as np
 
 from .. import _check, limits
@@ -238,6 +239,26 @@ class World:
         spec.attach(child, frame=frame, prefix="scene/")
         # static bodies of the scene are fused into the world body: the drone stays body 1
         spec.compiler.fusestatic = True
+
+    def fingerprint(self) -> str:
+        """A digest of the world's content: every public attribute (arrays by their
+        bytes) and, for ``from_mjcf``, the scene file's size and modification time.
+        Worlds with the same fingerprint add the same model (``add_to_spec``); it keys
+        the compiled models (``airframe.model_cache``)."""
+        h = hashlib.sha256(type(self).__qualname__.encode())
+        for k, v in sorted(vars(self).items()):
+            if k.startswith("_") and k != "_info":      # caches derived from the rest
+                continue
+            h.update(k.encode())
+            if isinstance(v, np.ndarray):
+                h.update(f"{v.dtype}{v.shape}".encode())
+                h.update(np.ascontiguousarray(v).tobytes())
+            else:
+                h.update(repr(v).encode())
+        if self.path is not None and os.path.isfile(self.path):
+            st = os.stat(self.path)
+            h.update(f"{st.st_size}:{st.st_mtime_ns}".encode())
+        return h.hexdigest()
 
     @property
     def clothes(self) -> np.ndarray:

@@ -1,5 +1,6 @@
-"""The FlightResult of a flown (or failed) Run: KPIs from the probes, telemetry
-with the probes' metrics and the camera truth merged in, events, scenario."""
+"""Collect a flown (or failed) drone's ``Run`` into its FlightResult: KPIs from
+the probes, telemetry with the probes' metrics and the camera truth merged in,
+events, scenario. (The ``FlightResult`` class itself is ``pytest_flockai.result``.)"""
 
 from __future__ import annotations
 
@@ -11,7 +12,8 @@ from ..result import FlightResult
 from ..sensors import export_dataset
 
 
-def build(run, mission, wall_s: float, t_final: float, end_reason: str) -> FlightResult:
+def flight_result(run, mission, wall_s: float, t_final: float, end_reason: str) -> FlightResult:
+    """The FlightResult of ``run`` (a drone of ``mission``) ended at ``t_final``."""
     plan, st = run.plan, run.vehicle
     tel = run.telemetry.frame()
     d = run.data
