@@ -1,14 +1,24 @@
 """Atomic file writes: a temporary file in the same folder, flushed, then renamed.
 
 The file gets the mode any new file of this process gets (0666 less the
-umask), not the 0600 of the temporary file it was written as.
+umask), not the 0600 of the temporary file it was written as. Only a regular
+file is ever replaced: a folder, a device (``/dev/full``), a FIFO or a socket at
+``path`` is refused, as is a missing folder; any failure (a full disk, a
+read-only folder) raises ``WriteError`` naming ``path`` (never the temporary
+file), and leaves the old file as it was and no temporary file behind.
+
+Also two helpers for what is read and printed: ``json_depth`` (nesting, counted
+without recursion) and ``printable`` (control characters escaped for a terminal).
 """
 
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
+
+from .errors import WriteError
 
 
 def _umask() -> int:
@@ -18,10 +28,40 @@ def _umask() -> int:
     return mask
 
 
+def _failed(path, exc: OSError) -> WriteError:
+    err = WriteError(f"cannot write {str(path)!r}: {exc.strerror or exc}")
+    err.errno = exc.errno
+    return err
+
+
+def check_target(path) -> Path:
+    """``path`` as a Path; WriteError unless a regular file may be put there (its
+    folder exists; nothing but a regular file, or a link to one, is there now)."""
+    path = Path(path)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise _failed(path, exc) from None
+    if st is not None and stat.S_ISDIR(st.st_mode):
+        raise WriteError(f"cannot write {str(path)!r}: it is a folder; give a file path")
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        raise WriteError(f"cannot write {str(path)!r}: it is a device, a FIFO or a socket, "
+                         f"which would be replaced; give the path of a regular file")
+    if not path.parent.is_dir():
+        raise WriteError(f"cannot write {str(path)!r}: folder {str(path.parent)!r} does not "
+                         f"exist")
+    return path
+
+
 def atomic_write(path, write, *, text: bool = True) -> Path:
     """Call ``write(fh)`` on a temporary file next to ``path``, then ``os.replace`` it."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    path = check_target(path)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    except OSError as exc:
+        raise _failed(path, exc) from None
     try:
         with os.fdopen(fd, "w" if text else "wb", **({"encoding": "utf-8"} if text else {})) as fh:
             os.fchmod(fh.fileno(), 0o666 & ~_umask())
@@ -29,10 +69,54 @@ def atomic_write(path, write, *, text: bool = True) -> Path:
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(exc, OSError) and not isinstance(exc, WriteError):
+            raise _failed(path, exc) from None
         raise
     return path
+
+
+def replace_from(tmp, path) -> Path:
+    """Move a finished temporary file ``tmp`` over ``path`` (checked like
+    ``atomic_write``); ``tmp`` is removed when that fails."""
+    try:
+        check_target(path)
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(exc, WriteError):
+            raise
+        raise _failed(path, exc) from None
+    return Path(path)
+
+
+def json_depth(data, stop: int = 1 << 30) -> int:
+    """How deeply lists and dicts nest in ``data`` (0 for a plain value), counted
+    without recursion and not past ``stop`` + 1."""
+    deepest, stack = 0, [(data, 1)]
+    while stack:
+        obj, d = stack.pop()
+        if isinstance(obj, dict):
+            obj = list(obj.values())
+        if isinstance(obj, list):
+            deepest = max(deepest, d)
+            if d <= stop:
+                stack.extend((v, d + 1) for v in obj if isinstance(v, (dict, list)))
+    return deepest
+
+
+_CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x00, 0x20), *range(0x7f, 0xa0)]}
+_CONTROL_KEEP_NL = {c: v for c, v in _CONTROL.items() if c != 0x0a}
+
+
+def printable(text, *, newlines: bool = False) -> str:
+    """``text`` with control characters (ANSI escapes, carriage returns, ...) shown as
+    ``\\xNN``, safe to print on a terminal; ``newlines`` keeps line breaks."""
+    return str(text).translate(_CONTROL_KEEP_NL if newlines else _CONTROL)

@@ -23,6 +23,12 @@ class SimulationError(FlockAIError, RuntimeError):
     """The simulation itself failed (diverged, produced NaN, ...)."""
 
 
+class WriteError(FlockAIError, OSError):
+    """A file could not be written (a full disk, a read-only or missing folder, a
+    folder or a device where the file should be): the message names the file. Also
+    an ``OSError``, so callers that catch I/O errors keep working."""
+
+
 def close_matches(word: str, choices: Iterable[str], n: int = 3) -> str:
     """' (did you mean: a, b?)' or '' when nothing is close."""
     hits = difflib.get_close_matches(str(word), list(choices), n=n, cutoff=0.5)

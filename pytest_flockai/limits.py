@@ -44,6 +44,45 @@ MAX_EXTENT_M = 100_000.0
 #: m/s: the strongest mean wind. The strongest gust ever measured at the surface is
 #: 113.3 m/s (WMO Archive of Weather and Climate Extremes, Barrow Island, 1996)
 MAX_WIND_MPS = 113.0
+#: bytes: the largest flight-cache entry file read (a bigger one is refused unread, as
+#: is anything but a regular file); a flight at MAX_TELEMETRY_ROWS packs to ~100 MiB
+MAX_CACHE_ENTRY_BYTES = 512 * 2**20
+#: bytes: the most a cache entry may unpack to, summed over its arrays, checked on the
+#: sizes the entry declares before anything is decompressed (a "zip bomb" is refused)
+MAX_CACHE_UNPACKED_BYTES = 1024 * 2**20
+#: bytes: the flight cache's size on disk; past it, the least recently used entries are
+#: removed after a write (``flockai cache prune`` does the same by hand)
+MAX_CACHE_BYTES = 2 * 2**30
+#: Hz: the slowest ``Mission(energy_hz=...)``. The energy integrator holds each power
+#: sample for one period: at 1 Hz a 50 s Mavic flight's energy is within 0.3 % of 200 Hz,
+#: at 0.5 Hz 0.8 % low, at 0.1 Hz 4.8 % low (benchmarks/limits.py ``rates``)
+MIN_ENERGY_HZ = 1.0
+#: m/s: the slowest ``Mission(climb_speed=..., descent_speed=...)``: slower, a 30 m climb
+#: takes over 5 min and a drone that never leaves the ground looks like one still climbing
+MIN_VERTICAL_SPEED_MPS = 0.1
+#: m/s: the fastest speed a pilot may ask. The fastest quadcopter flown reached 480.2 km/h
+#: = 133 m/s (Guinness World Records, "fastest battery-powered remote-controlled
+#: quadcopter", 2024). Below it, a speed above the drone's own top speed (its drag at its
+#: tilt limit) is flown at that top speed and the flight logs a ``speed_capped`` event
+MAX_SPEED_MPS = 150.0
+#: s: the shortest ``Task(period_s=...)``. A task runs at most once per inference: with a
+#: period shorter than the model's latency it runs back to back (``inference_count`` says
+#: how often it ran); shorter than 1 ms is faster than any camera frame rate
+MIN_TASK_PERIOD_S = 1e-3
+#: nesting depth of a JSON report, baseline or history record (deeper is refused)
+MAX_JSON_DEPTH = 64
+
+
+def check_at_least(field: str, value: float, limit_name: str, *, where: str = "",
+                   unit: str = "", how: str = "") -> None:
+    """ConfigError naming ``field``, ``value`` and the limit when ``value`` is below it."""
+    limit = globals()[limit_name]
+    if value < limit:
+        pre = f"{where}: " if where else ""
+        raise ConfigError(f"{pre}{field} = {value:g}{unit} is below the limit "
+                          f"pytest_flockai.limits.{limit_name} = {limit:g}{unit}"
+                          f"{'; ' + how if how else ''} (lower the limit at your own risk: "
+                          f"fa.limits.{limit_name} = ...)")
 
 
 def check_at_most(field: str, value: float, limit_name: str, *, where: str = "",

@@ -62,6 +62,7 @@ import math
 import os
 import platform
 import re
+import stat
 import sys
 import tempfile
 import warnings
@@ -69,7 +70,8 @@ from importlib import metadata
 from pathlib import Path
 
 from . import kpis as _kpis
-from ._io import atomic_write
+from . import limits
+from ._io import atomic_write, json_depth, printable, replace_from
 from .errors import ConfigError
 
 SCHEMA = "pytest-flockai/1"
@@ -149,6 +151,42 @@ def check_writable(path: Path, what: str) -> None:
         raise ReportError(f"{what} {str(path)!r} exists and is not writable")
 
 
+def read_json(path, what: str):
+    """The JSON document in ``path``; ReportError naming ``what`` and the file when it
+    is missing, a folder, not a regular file (a FIFO is never opened: it would block),
+    unreadable, not JSON, or nested deeper than ``limits.MAX_JSON_DEPTH``."""
+    path = Path(path)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise ReportError(f"{what} {str(path)!r} does not exist") from None
+    except OSError as exc:
+        raise ReportError(f"{what} {str(path)!r} cannot be read: {exc.strerror or exc}") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ReportError(f"{what} {str(path)!r} is a folder; expected a JSON file")
+    if not stat.S_ISREG(st.st_mode):
+        raise ReportError(f"{what} {str(path)!r} is not a regular file (a device, a FIFO or "
+                          f"a socket); expected a JSON file")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ReportError(f"{what} {str(path)!r} cannot be read: {exc}") from None
+    try:
+        data = json.loads(text)
+    except RecursionError:
+        data = _TOO_DEEP
+    except ValueError as exc:
+        raise ReportError(f"{what} {str(path)!r} is not valid JSON: {exc}") from None
+    limit = limits.MAX_JSON_DEPTH
+    if data is _TOO_DEEP or json_depth(data, limit) > limit:
+        raise ReportError(f"{what} {str(path)!r} is nested deeper than "
+                          f"pytest_flockai.limits.MAX_JSON_DEPTH = {limits.MAX_JSON_DEPTH}")
+    return data
+
+
+_TOO_DEEP = object()
+
+
 def write_json_atomic(path: Path, data) -> None:
     """Write ``data`` as JSON to ``path`` through a temporary file and ``os.replace``."""
     path = Path(path)
@@ -191,23 +229,18 @@ def load_baseline(path: Path) -> dict:
 
     Raises ReportError for a missing, unreadable or malformed file."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists() and not path.is_symlink():
         raise ReportError(f"baseline file {str(path)!r} does not exist (write one with "
                           f"--flockai-save PATH)")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ReportError(f"baseline file {str(path)!r} cannot be read: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise ReportError(f"baseline file {str(path)!r} is not valid JSON: {exc}") from None
+    data = read_json(path, "baseline file")
     if isinstance(data, dict) and data.get("schema") == SCHEMA:       # a JSON report
         tests = data.get("tests")
         if not isinstance(tests, list):
             raise ReportError(f"baseline file {str(path)!r}: 'tests' must be a list")
         try:
-            data = {t["nodeid"]: {f["name"]: f["kpis"] for f in t.get("flights", ())}
+            data = {_nodeid(t): {f["name"]: f["kpis"] for f in t.get("flights", ())}
                     for t in tests}
-        except (KeyError, TypeError) as exc:
+        except (KeyError, TypeError, AttributeError) as exc:
             raise ReportError(f"baseline file {str(path)!r}: malformed report ({exc})") from None
     elif isinstance(data, dict) and "schema" in data:
         if data["schema"] != BASELINE_SCHEMA:
@@ -231,6 +264,14 @@ def load_baseline(path: Path) -> dict:
                         f"= {v!r} is not allowed; expected a finite number (or null for a KPI "
                         f"that is not compared)")
     return data
+
+
+def _nodeid(test) -> str:
+    """A report entry's node id; TypeError unless the entry is a dict with a str id."""
+    nodeid = test.get("nodeid") if isinstance(test, dict) else None
+    if not isinstance(nodeid, str):
+        raise TypeError(f"a test entry without a string 'nodeid': {str(test)[:60]}")
+    return nodeid
 
 
 def regressions(flights: dict, base: dict, max_regression_pct: float, *,
@@ -283,17 +324,31 @@ def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
     ``directory/<nodeid>/``; returns that folder."""
     folder = Path(directory) / safe_name(nodeid)
     folder.mkdir(parents=True, exist_ok=True)
-    result.telemetry.to_csv(folder / f"{safe_name(flight)}.telemetry.csv")
-    write_json_atomic(folder / f"{safe_name(flight)}.json", result.to_dict())
+    name = safe_name(flight)
+    atomic_write(folder / f"{name}.telemetry.csv", lambda fh: result.telemetry.to_csv(fh))
+    write_json_atomic(folder / f"{name}.json", result.to_dict())
     from . import plots           # lazy: numpy, and matplotlib (see tests/test_architecture.py)
     if plots.available():
-        plots.energy_figure(result, folder / f"{safe_name(flight)}.energy.png")
-        plots.path_figure(result, folder / f"{safe_name(flight)}.path.png")
+        _picture(plots.energy_figure, result, folder / f"{name}.energy.png")
+        _picture(plots.path_figure, result, folder / f"{name}.path.png")
     else:
         warnings.warn("pytest-flockai: matplotlib is not installed, so --flockai-artifacts writes "
                       "telemetry and JSON but no pictures (pip install 'pytest-flockai[plots]')",
                       stacklevel=2)
     return folder
+
+
+def _picture(draw, result, path: Path) -> None:
+    """``draw(result, tmp)`` into a temporary PNG beside ``path``, then renamed over it
+    (a full disk leaves the old picture or none, never a cut-off one)."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp.png")
+    os.close(fd)
+    try:
+        draw(result, Path(tmp))
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    replace_from(tmp, path)
 
 
 # -- text ------------------------------------------------------------------------------------------
@@ -333,4 +388,5 @@ def table(headers: list[str], rows: list[list[str]], indent: str = "  ") -> str:
 
 __all__ = ["BASELINE_SCHEMA", "SCHEMA", "ReportError", "baseline_from_tests", "build_report",
            "check_writable", "environment", "format_kpi", "jsonable", "load_baseline",
-           "regressions", "safe_name", "table", "write_artifacts", "write_json_atomic"]
+           "printable", "read_json", "regressions", "safe_name", "table", "write_artifacts",
+           "write_json_atomic"]

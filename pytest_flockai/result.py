@@ -24,7 +24,7 @@ from pathlib import Path
 import pandas as pd
 
 from ._io import atomic_write
-from .errors import ConfigError
+from .errors import ConfigError, WriteError
 from .phases import PHASES, STAGES
 
 # The default C parser of pandas before 3.1 (2.1 and 3.0 measured) is off by an ulp on some
@@ -108,7 +108,14 @@ class FlightResult:
         ext = p.suffix.lower()
         if ext not in (".csv", ".parquet", ".jsonl"):
             raise ConfigError(f"FlightResult.save: path {str(p)!r} must end in .csv, .parquet or .jsonl")
-        p.parent.mkdir(parents=True, exist_ok=True)
+        if p.is_dir():
+            raise ConfigError(f"FlightResult.save: path {str(p)!r} is a folder; expected a "
+                              f"file path ending in .csv, .parquet or .jsonl")
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise WriteError(f"FlightResult.save: cannot create folder {str(p.parent)!r} for "
+                             f"{str(p)!r}: {exc.strerror or exc}") from None
         _remove_stale_temps(p)
         if ext == ".jsonl":
             lines = _jsonl_rows(self.telemetry)

@@ -50,7 +50,8 @@ LAZY_LOADS = {
 #: imports between two different names of one layer (importer, imported): each is a
 #: decision, so a new one fails until it is added here
 SAME_LAYER = {
-    ("_check", "errors"), ("kpis", "errors"), ("limits", "errors"), ("recording", "errors"),
+    ("_check", "errors"), ("_io", "errors"), ("kpis", "errors"), ("limits", "errors"),
+    ("recording", "errors"),
     ("result", "_io"), ("result", "errors"), ("result", "phases"),
     ("ml", "control"),
     ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),

@@ -18,8 +18,10 @@ from pathlib import Path
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai import budgets, report
-from pytest_flockai.errors import ConfigError
+from pytest_flockai import budgets, cli, report
+from pytest_flockai.cache import FlightCache, default_key
+from pytest_flockai.cache.entry import CorruptEntry, read_entry, unseal
+from pytest_flockai.errors import ConfigError, WriteError
 from pytest_flockai.ml import OnnxModel, OpenCVModel, PythonModel
 from pytest_flockai.probes import EnergyProbe
 
@@ -63,6 +65,16 @@ class Ctx:
         text = BLUEPRINT.read_text()
         assert old in text
         return self.file(name, text.replace(old, new, 1))
+
+    def fifo(self, name: str) -> Path:
+        p = self.tmp / name
+        os.mkfifo(p)
+        return p
+
+    def link(self, name: str, target) -> Path:
+        p = self.tmp / name
+        os.symlink(target, p)
+        return p
 
     def folder(self, name: str) -> Path:
         p = self.tmp / name
@@ -343,6 +355,46 @@ CASES = [
     ("load-jsonl-header-list", lambda c: fa.FlightResult.load(c.file("f.jsonl", "[1, 2]\n")), ("header", "f.jsonl")),
     ("load-jsonl-garbage", lambda c: fa.FlightResult.load(c.file("f.jsonl", "garbage\n")), ("cannot read", "f.jsonl")),
     ("load-jsonl-not-utf8", lambda c: fa.FlightResult.load(c.file("f.jsonl", b"\xff\xfe\n")), ("cannot read", "f.jsonl")),
+    # -- issue 28: rates, speeds, periods the simulation cannot honour; raw errors left ---------------
+    ("m-energy-hz-slow", lambda c: M(energy_hz=0.01), ("energy_hz", "0.01")),
+    ("m-energy-hz-tiny", lambda c: M(energy_hz=1e-9), ("MIN_ENERGY_HZ", "1e-09")),
+    ("m-climb-crawl", lambda c: M(climb_speed=1e-6), ("climb_speed", "1e-06")),
+    ("m-descent-crawl", lambda c: M(descent_speed=0.01), ("descent_speed", "0.01")),
+    ("wp-speed-1e4", lambda c: fa.pilots.Waypoints([(1, 1, 1)], speed=1e4), ("speed", "10000")),
+    ("zz-speed-1e9", lambda c: fa.pilots.ZigZag(AREA, speed=1e9), ("speed", "1e+09")),
+    ("orbit-speed-huge", lambda c: fa.pilots.Orbit((0, 0), 10, 10, speed=1e3), ("speed", "1000")),
+    ("task-period-tiny", lambda c: T(period_s=1e-6), ("period_s", "1e-06")),
+    ("bp-usable-fraction-tiny", lambda c: fa.drone("crazyflie-2-1", usable_fraction=1e-300), ("usable_fraction", "1e-300")),
+    ("drone-battery-none", lambda c: setattr(fa.drone("crazyflie-2-1"), "battery", None), ("battery", "None")),
+    ("drone-rotor-string", lambda c: setattr(fa.drone("crazyflie-2-1"), "rotor", "big"), ("rotor", "'big'")),
+    ("fleet-name-fleet", lambda c: fa.FleetDrone("fleet", CF, HOVER), ("name", "'fleet'")),
+    ("fleet-name-ground", lambda c: fa.FleetDrone("ground", CF, HOVER), ("name", "'ground'")),
+    ("fleet-name-link", lambda c: fa.FleetDrone("Link", CF, HOVER), ("name", "'Link'")),
+    ("fleet-pad-in-building", lambda c: fa.Fleet([fa.FleetDrone("a", CF, HOVER, pad=(0, 0))], world=fa.World.scene(buildings=[(0, 0, 5, 5, 6.5)])), ("pad = (0, 0)", "inside")),
+    ("fleet-pad-roof-edge", lambda c: fa.Fleet([fa.FleetDrone("a", CF, HOVER, pad=(5.5, 0))], world=fa.World.scene(buildings=[(0, 0, 5, 5, 6.5)])), ("pad = (5.5, 0)", "0.50 m from the wall")),
+    ("survey-world-string", lambda c: fa.fleet.survey(AREA, 2, world="city"), ("world", "'city'")),
+    ("base-deep", lambda c: report.load_baseline(c.file("deep.json", "[" * 10**5 + "]" * 10**5)), ("MAX_JSON_DEPTH", "deep.json")),
+    ("base-fifo", lambda c: report.load_baseline(c.fifo("b.json")), ("not a regular file", "b.json")),
+    ("base-report-nodeid-int", lambda c: report.load_baseline(c.baseline({"schema": "pytest-flockai/1", "tests": [{"nodeid": 3}]})), ("malformed report", "nodeid")),
+    ("save-onto-folder", lambda c: c.flown.save(c.folder("f.csv")), ("is a folder", "f.csv")),
+    ("report-path-device", lambda c: report.check_writable(Path("/dev/null"), "--flockai-md"), ("--flockai-md", "/dev/null")),
+    ("cache-mode", lambda c: FlightCache(c.tmp, "sometimes"), ("mode", "'sometimes'")),
+    ("cache-key-empty", lambda c: FlightCache(c.tmp, key=""), ("key", "''")),
+    ("cache-max-bytes", lambda c: FlightCache(c.tmp, max_bytes=-1), ("max_bytes", "-1")),
+    ("cache-verify-fraction", lambda c: FlightCache(c.tmp, verify_fraction=2), ("verify_fraction", "2")),
+    ("cli-max-size", lambda c: cli.parse_size("lots"), ("--max-size", "'lots'")),
+]
+
+#: bad files and places a write or a cache read meets: a documented error naming the file
+#: (WriteError, an OSError and a FlockAIError; the cache's CorruptEntry is a miss)
+IO_CASES = [
+    ("write-device", lambda c: report.write_json_atomic(Path("/dev/full"), {}), WriteError, "/dev/full"),
+    ("write-folder", lambda c: report.write_json_atomic(c.folder("r.json"), {}), WriteError, "r.json"),
+    ("write-no-folder", lambda c: report.write_json_atomic(c.tmp / "no" / "r.json", {}), WriteError, "does not exist"),
+    ("save-under-a-file", lambda c: c.flown.save(c.file("x", "") / "s" / "r.csv"), WriteError, "cannot create folder"),
+    ("cache-entry-fifo", lambda c: read_entry(c.fifo("e.flight")), CorruptEntry, "not a regular file"),
+    ("cache-entry-dev-zero", lambda c: read_entry(c.link("e.flight", "/dev/zero")), CorruptEntry, "symlink"),
+    ("cache-entry-garbage", lambda c: unseal(b"garbage", "k", default_key()), CorruptEntry, "bad magic"),
 ]
 
 
@@ -358,6 +410,14 @@ def test_bad_input_gives_a_config_error_naming_field_and_value(case, tmp_path, f
         call(Ctx(tmp_path, flown))
     msg = str(info.value)
     assert field in msg and value in msg, msg
+
+
+@pytest.mark.parametrize("case", IO_CASES, ids=[c[0] for c in IO_CASES])
+def test_bad_files_give_a_documented_error_naming_them(case, tmp_path, flown):
+    _, call, kind, words = case
+    with pytest.raises(kind) as info:
+        call(Ctx(tmp_path, flown))
+    assert words in str(info.value), str(info.value)
 
 
 def test_the_corpus_is_large_and_covers_every_entry_point():

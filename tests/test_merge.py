@@ -37,7 +37,7 @@ def test_merge_rejects_a_corrupt_input(tmp_path, capsys):
     bad = tmp_path / "bad.json"
     bad.write_text("{not json")
     assert main(["merge", str(tmp_path / "o.json"), str(bad)]) == 2
-    assert "cannot read report" in capsys.readouterr().err
+    assert "bad.json' is not valid JSON" in capsys.readouterr().err
     other = tmp_path / "other.json"
     other.write_text(json.dumps({"schema": "something-else"}))
     try:

@@ -110,9 +110,11 @@ class Drone:
             value = _check.non_negative("payload_kg", value, where=self.name)
         elif name == "device":
             value = _check_str("device", value, getattr(self, "name", ""))
-        elif name in _SECTIONS and value is not None and not isinstance(value, _SECTIONS[name]):
-            raise ConfigError(f"{self.name}: {name} must be a {_SECTIONS[name].__name__} section, "
-                              f"got {type(value).__name__}")
+        elif name in _SECTIONS and not isinstance(value, _SECTIONS[name]) and not (
+                value is None and name == "camera"):          # only the camera is optional
+            raise ConfigError(f"{self.name}: {name} = {value!r} is not allowed; expected a "
+                              f"{_SECTIONS[name].__name__} section"
+                              f"{' or None' if name == 'camera' else ''}")
         object.__setattr__(self, name, value)
 
     # derived quantities -------------------------------------------------

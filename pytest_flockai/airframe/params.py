@@ -212,7 +212,9 @@ class Battery(Section):
                                    doc="terminal voltage under load that ends the flight; "
                                        "default: the chemistry's datasheet cut-off"),
         "usable_fraction": Field("frac01", 1.0, doc="share of the charge that can be drawn "
-                                 "(the battery management system's 0 %)"),
+                                 "(the battery management system's 0 %)",
+                                 bounds=(0.01, 1.0, "a pack that lets less than 1 % of its "
+                                                    "charge be drawn cannot fly")),
         "reserve_fraction": Field("reserve", 0.15, doc="state of charge that triggers return home"),
     }
 

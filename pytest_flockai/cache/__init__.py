@@ -12,6 +12,9 @@ settings: pads, area, swath, offload)::
 The pytest plugin opens one per test under pytest's cache directory
 (``--flockai-cache``). A result read from the cache compares equal to the one
 flown (KPIs, telemetry, events, probe samples); ``result.cache`` says where it
+came from (``{"status": "hit" | "stored" | "flown" | "bypass" | "replaced" | "verified",
+...}``). Entries are authenticated with an HMAC (``auth.py``: ``FLOCKAI_CACHE_KEY``)
+and read within limits (``entry.py``); docs/how-to/ci-cache.md has the threat model.
 came from (``{"status": "hit" | "stored" | "flown" | "bypass" | "replaced", ...}``).
 
 Importing this package is cheap (the pytest plugin opens a cache around every
@@ -30,12 +33,15 @@ from importlib import import_module as _import_module
 from .. import memo as _memo
 from ..errors import ConfigError
 
-MODES = ("off", "read", "write", "readwrite")
+MODES = ("off", "read", "write", "readwrite", "verify")
+#: the share of hits ``verify`` flies again unless told
+VERIFY_FRACTION = 0.1
 
 #: public name -> its module in this package, imported on first use
 _LAZY = {"CacheWarning": ".store", "CorruptEntry": ".store", "FlightCache": ".store",
          "Lookup": ".store", "MemoStore": ".memo", "Uncacheable": ".key", "cacheable": ".key",
-         "flight_key": ".key", "memo_key": ".key"}
+         "flight_key": ".key", "memo_key": ".key", "CacheKey": ".auth", "default_key": ".auth",
+         "NotAuthentic": ".entry", "CacheMismatch": ".store"}
 
 _ACTIVE: ContextVar = ContextVar("pytest_flockai_flight_cache", default=None)
 
@@ -45,17 +51,17 @@ class Deferred:
     (its store, NumPy and pandas loaded) when a flight or a memoised computation of
     the context first asks; a context that asks nothing loads nothing."""
 
-    def __init__(self, directory, mode: str = "readwrite"):
+    def __init__(self, directory, mode: str = "readwrite", **options):
         if mode not in MODES:
             raise ConfigError(f"FlightCache: mode = {mode!r} is not allowed; allowed: "
                               f"{', '.join(MODES)}")
-        self.directory, self.mode = directory, mode
+        self.directory, self.mode, self.options = directory, mode, options
         self._cache = None
 
     def open(self):
-        """The ``FlightCache`` (built on the first call)."""
+        """The ``FlightCache`` (built on the first call, with the options given)."""
         if self._cache is None:
-            self._cache = __getattr__("FlightCache")(self.directory, self.mode)
+            self._cache = __getattr__("FlightCache")(self.directory, self.mode, **self.options)
         return self._cache
 
     def recall(self, kind, inputs, compute, pack, unpack):
@@ -110,6 +116,6 @@ def __getattr__(name: str):
     return value
 
 
-__all__ = ["CacheWarning", "CorruptEntry", "Deferred", "FlightCache", "Lookup", "MODES",
-           "MemoStore", "Uncacheable", "active", "cacheable", "caching", "flight_key", "lookup",
-           "memo_key"]
+__all__ = ["CacheKey", "CacheMismatch", "CacheWarning", "CorruptEntry", "Deferred", "FlightCache",
+           "Lookup", "MODES", "MemoStore", "NotAuthentic", "Uncacheable", "VERIFY_FRACTION",
+           "active", "cacheable", "caching", "default_key", "flight_key", "lookup", "memo_key"]

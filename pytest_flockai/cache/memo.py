@@ -1,8 +1,8 @@
 """The memo store of the flight cache: computations memoised through
 ``pytest_flockai.memo`` (rendered views, detection scores, envelopes), stored in
 the flight cache's directory under ``memo/`` with the same checks as a flight
-(the entry names its key, its payload's size and SHA-256; an .npz loaded without
-pickle), the same modes and the same atomic writes. A truncated, tampered or
+(the entry names its key, its payload's size, SHA-256 and HMAC; an .npz read
+without pickle, within the limits), the same modes and the same atomic writes. A truncated, tampered or
 unreadable entry is never trusted: the value is computed again and the entry
 rewritten. ``counts`` says what happened, per status.
 """
@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .._io import atomic_write
+from . import disk as _disk
 from . import key as _key
 from .entry import read_entry, seal, unseal
 
@@ -45,7 +46,7 @@ class MemoStore:
             try:
                 data = read_entry(self.path(key))
                 if data is not None:
-                    value = unpack(_plain(*unseal(data, key, MAGIC)))
+                    value = unpack(_plain(*unseal(data, key, cache.key, MAGIC)))
                     self.counts["hit"] += 1
                     return value
             except Exception:           # corrupt, or sealed but unusable by unpack(): not trusted
@@ -59,16 +60,18 @@ class MemoStore:
             return False
         arrays: dict = {}
         try:
-            blob = seal(key, arrays, _header(pack(value), arrays), MAGIC)
+            blob = seal(key, arrays, _header(pack(value), arrays), self.cache.key, MAGIC)
         except (TypeError, ValueError):        # not plain data: computed, not stored
             return False
         p = self.path(key)
         try:
             p.parent.mkdir(parents=True, exist_ok=True)
+            _disk.clear_for_write(p)
             atomic_write(p, lambda fh: fh.write(blob), text=False)
         except OSError as exc:
             self.cache.write_failed(exc)
             return False
+        self.cache.wrote(len(blob))
         return True
 
 

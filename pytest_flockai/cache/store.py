@@ -10,12 +10,21 @@ rewritten. Writers never hold a lock: each writes a temporary file and renames
 it over the entry, so concurrent pytest-xdist workers (or runs) at worst fly
 the same flight twice and write the same bytes.
 
+Entries are sealed with an HMAC keyed by the cache's secret (``auth.py``): an entry
+written by someone without the key (a forged one, or one from a CI cache of another
+branch with another key) is "replaced", with the reason "not authentic". Reading is
+bounded (``entry.py``), and the folder is kept under ``max_bytes`` by evicting the
+least recently used entries (``disk.py``).
+
 Modes: ``"off"``, ``"read"`` (use entries, write none), ``"write"`` (fly every
-flight, store it), ``"readwrite"``.
+flight, store it), ``"readwrite"``, and ``"verify"``: readwrite, but a sample of
+the hits (``verify_fraction``, chosen by key, so the same flights each run) is flown
+again and compared with the entry; a mismatch raises ``CacheMismatch``.
 """
 
 from __future__ import annotations
 
+import math
 import shutil
 import threading
 import warnings
@@ -25,13 +34,21 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .. import limits
 from .._io import atomic_write
-from ..errors import ConfigError
+from ..errors import ConfigError, FlockAIError
 from ..result import FlightResult
-from . import MODES  # the light package module defines them
+from . import MODES, VERIFY_FRACTION  # the light package module defines them
+from . import auth as _auth
+from . import disk as _disk
 from . import key as _key
 from . import memo as _memo_store
-from .entry import MAGIC, CorruptEntry, read_entry, seal, unseal
+from .entry import MAGIC, CorruptEntry, NotAuthentic, read_entry, seal, unseal
+
+
+class CacheMismatch(FlockAIError):
+    """``verify`` flew a cached flight again and got another result: the entry is not
+    to be trusted (forged with the key, or the key misses something that shapes it)."""
 
 
 class CacheWarning(UserWarning):
@@ -42,19 +59,31 @@ class CacheWarning(UserWarning):
 class Lookup:
     """What the cache said about one flight: ``status`` is "hit", "stored",
     "flown" (not stored: read-only mode or the write failed), "bypass" (cannot be
-    keyed: ``reason`` says why) or "replaced" (a corrupt entry, flown and rewritten)."""
+    keyed: ``reason`` says why), "replaced" (a corrupt or not authentic entry, flown
+    and rewritten: ``reason`` says why) or "verified" (a hit flown again, equal)."""
 
     status: str
     key: str | None = None
     reason: str | None = None
     result: FlightResult | None = None
     cache: "FlightCache | None" = field(default=None, repr=False)
+    cached: FlightResult | None = field(default=None, repr=False)   # verify: the entry
 
     def to_dict(self) -> dict:
         return {"status": self.status, "key": self.key, "reason": self.reason}
 
     def store(self, result: FlightResult) -> None:
-        """Store a freshly flown result under this lookup's key (if the mode writes)."""
+        """Store a freshly flown result under this lookup's key (if the mode writes);
+        ``verify``: compare it with the entry, CacheMismatch when they differ."""
+        if self.cached is not None:
+            self.status = "verified"
+            result.cache = self.to_dict()
+            why = mismatch(self.cached, result)
+            if why:
+                raise CacheMismatch(f"cache entry not authentic: flown again by "
+                                    f"--flockai-cache=verify, {why} (entry "
+                                    f"{self.cache.path(self.key) if self.cache else self.key})")
+            return
         if self.cache is not None and self.key is not None:
             self.status = self.cache.put(self.key, result, replaced=self.status == "replaced")
         result.cache = self.to_dict()
@@ -63,23 +92,45 @@ class Lookup:
 class FlightCache:
     """Completed flights under ``directory``, keyed by ``key.flight_key``."""
 
-    def __init__(self, directory, mode: str = "readwrite"):
+    def __init__(self, directory, mode: str = "readwrite", *, key=None,
+                 max_bytes: int | None = None, verify_fraction: float = VERIFY_FRACTION):
         if mode not in MODES:
             raise ConfigError(f"flight cache: mode = {mode!r} is not allowed; allowed: "
                               f"{', '.join(MODES)}")
+        if max_bytes is not None and (isinstance(max_bytes, bool) or
+                                      not isinstance(max_bytes, int) or max_bytes < 0):
+            raise ConfigError(f"flight cache: max_bytes = {max_bytes!r} is not allowed; "
+                              f"expected an integer >= 0 (bytes) or None")
+        if isinstance(verify_fraction, bool) or not isinstance(verify_fraction, (int, float)) \
+                or not 0 <= verify_fraction <= 1:
+            raise ConfigError(f"flight cache: verify_fraction = {verify_fraction!r} is not "
+                              f"allowed; expected a number in [0, 1]")
         self.directory = Path(directory)
         self.mode = mode
+        self.key = _auth.default_key() if key is None else _auth.from_secret(key)
+        self.max_bytes = max_bytes
+        self.verify_fraction = float(verify_fraction)
+        self._usage: int | None = None              # bytes on disk, as last counted
         self.write_error: str | None = None        # set once a write failed (warned once)
         self._lock = threading.Lock()               # guards write_error only, never a flight
         self._memo = None
 
     @property
     def reads(self) -> bool:
-        return self.mode in ("read", "readwrite")
+        return self.mode in ("read", "readwrite", "verify")
 
     @property
     def writes(self) -> bool:
-        return self.mode in ("write", "readwrite") and self.write_error is None
+        return self.mode in ("write", "readwrite", "verify") and self.write_error is None
+
+    @property
+    def limit(self) -> int:
+        """The folder's size limit in bytes (``limits.MAX_CACHE_BYTES`` unless given)."""
+        return limits.MAX_CACHE_BYTES if self.max_bytes is None else self.max_bytes
+
+    def verifies(self, key: str) -> bool:
+        """Whether ``verify`` flies this hit again (the same keys every run)."""
+        return self.mode == "verify" and int(key[:8], 16) < self.verify_fraction * 2**32
 
     @property
     def memo(self):
@@ -110,29 +161,64 @@ class FlightCache:
                 res = self.get(key, result_type)
             except CorruptEntry as exc:
                 return Lookup("replaced", key, str(exc), cache=self)
+            if res is not None and self.verifies(key):
+                return Lookup("verify", key, cache=self, cached=res)
             if res is not None:
                 res.cache = {"status": "hit", "key": key, "reason": None}
                 return Lookup("hit", key, result=res, cache=self)
         return Lookup("flown", key, cache=self)
 
     def get(self, key: str, result_type=FlightResult) -> FlightResult | None:
-        """The entry of ``key``, None when there is none; CorruptEntry when it is unusable."""
-        data = read_entry(self.path(key))
-        return None if data is None else decode(data, key, result_type)
+        """The entry of ``key``, None when there is none; CorruptEntry when it is unusable
+        (``NotAuthentic`` when it was not sealed with this cache's key)."""
+        p = self.path(key)
+        data = read_entry(p)
+        if data is None:
+            return None
+        out = decode(data, key, result_type, self.key)
+        _disk.touch(p)
+        return out
 
     def put(self, key: str, result: FlightResult, *, replaced: bool = False) -> str:
         """Store ``result``; returns the Lookup status ("stored", "replaced" or "flown")."""
         if not self.writes:
             return "replaced" if replaced else "flown"
         try:
-            blob = encode(key, result)
+            blob = encode(key, result, self.key)
             p = self.path(key)
             p.parent.mkdir(parents=True, exist_ok=True)
+            _disk.clear_for_write(p)
             atomic_write(p, lambda fh: fh.write(blob), text=False)
         except OSError as exc:
             self.write_failed(exc)
             return "replaced" if replaced else "flown"
+        self.wrote(len(blob))
         return "replaced" if replaced else "stored"
+
+    def wrote(self, nbytes: int) -> None:
+        """Count a written entry; past the limit, evict the least recently used."""
+        with self._lock:
+            if self._usage is None:
+                self._usage = sum(e.size for e in _disk.scan(self.directory))
+            else:
+                self._usage += nbytes
+            if self._usage <= self.limit:
+                return
+            _disk.prune(self.directory, self.limit)
+            self._usage = sum(e.size for e in _disk.scan(self.directory))
+
+    def info(self) -> dict:
+        """What ``flockai cache info`` prints: entries, bytes, the limit, the key's source."""
+        return {**_disk.info(self.directory), "limit_bytes": self.limit,
+                "key_source": self.key.source}
+
+    def prune(self, max_bytes: int | None = None, older_than_s: float | None = None):
+        """Evict down to ``max_bytes`` (default: the limit) and entries unused for
+        ``older_than_s``; returns (entries removed, bytes freed)."""
+        with self._lock:
+            self._usage = None
+            return _disk.prune(self.directory, self.limit if max_bytes is None else max_bytes,
+                               older_than_s=older_than_s, low_water=1.0)
 
     def write_failed(self, exc: OSError) -> None:
         """Stop writing for the rest of the run; warn the first time."""
@@ -146,7 +232,28 @@ class FlightCache:
 
 
 # -- the entry format ----------------------------------------------------------------------------
-def encode(key: str, result: FlightResult) -> bytes:
+def mismatch(cached: FlightResult, flown: FlightResult) -> str | None:
+    """What differs between a cached result and the same flight flown again (KPIs,
+    end reason, events), or None."""
+    if cached.end_reason != flown.end_reason:
+        return f"end reason {cached.end_reason!r} cached, {flown.end_reason!r} flown"
+    for name in sorted(set(cached.kpis) | set(flown.kpis)):
+        a, b = cached.kpis.get(name), flown.kpis.get(name)
+        if not _same(a, b):
+            return f"KPI {name} = {a!r} cached, {b!r} flown"
+    if len(cached.events) != len(flown.events):
+        return f"{len(cached.events)} events cached, {len(flown.events)} flown"
+    return None
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return (math.isnan(a) and math.isnan(b)) or math.isclose(a, b, rel_tol=1e-9,
+                                                                   abs_tol=1e-12)
+    return a == b
+
+
+def encode(key: str, result: FlightResult, secret=None) -> bytes:
     """A flight's entry; a fleet's (a result with ``drones``) holds each drone's too."""
     arrays: dict = {}
     header = _arrays(result, "", arrays)
@@ -154,11 +261,11 @@ def encode(key: str, result: FlightResult) -> bytes:
     if drones is not None:
         header["drones"] = [{"name": name, **_arrays(r, f"d{i}_", arrays)}
                             for i, (name, r) in enumerate(drones.items())]
-    return seal(key, arrays, header)
+    return seal(key, arrays, header, secret or _auth.default_key())
 
 
-def decode(data: bytes, key: str, result_type=FlightResult) -> FlightResult:
-    header, arrays = unseal(data, key)
+def decode(data: bytes, key: str, result_type=FlightResult, secret=None) -> FlightResult:
+    header, arrays = unseal(data, key, secret or _auth.default_key())
     try:
         out = _result(header, "", arrays, result_type)
         if "drones" in header:
@@ -233,5 +340,6 @@ def entries(directory) -> list[Path]:
     return sorted(d.glob("*/*.flight")) if d.is_dir() else []
 
 
-__all__ = ["CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MAGIC", "MODES", "decode",
-           "encode", "entries"]
+__all__ = ["CacheMismatch", "CacheWarning", "CorruptEntry", "FlightCache", "Lookup", "MAGIC",
+           "MODES", "NotAuthentic", "VERIFY_FRACTION", "decode", "encode", "entries",
+           "mismatch"]

@@ -76,7 +76,9 @@ def _extent(field, value, who):
 
 
 def _speed(value, who):
-    return _check.positive("speed", value, where=who)
+    v = _check.positive("speed", value, where=who)
+    limits.check_at_most("speed", v, "MAX_SPEED_MPS", where=who, unit=" m/s")
+    return v
 
 
 class Hover(Pilot):

@@ -21,6 +21,23 @@ TAKEOFF, PILOT, RETURN, LAND, DONE = (int(s) for s in Stage)
 TOUCHDOWN_SPEED = 0.3
 #: m: how far below the ground the descent leg aims, so the drone settles with contact
 LANDING_OVERSHOOT = 0.5
+#: a take-off whose climb leg is over with the drone below this share of the climb waits
+#: ``CLIMB_GRACE_S`` more; still below it then, the flight ends "takeoff_failed" (blocked
+#: by an obstacle above or around the pad, or too weak to lift off). A drone that climbs
+#: is well above half way when its leg ends, so a normal flight never waits
+CLIMB_FRACTION = 0.5
+#: s: how long a slow climb may lag behind its leg before it counts as failed
+CLIMB_GRACE_S = 10.0
+
+
+def top_speed(drone, rho: float, g: float = 9.81) -> float:
+    """m/s: the level speed in still air where the drag along the body's x axis equals
+    the thrust's horizontal part at the tilt limit: sqrt(2 m g tan(tilt) / (rho CdA))
+    (the relation the blueprints' drag areas were estimated from)."""
+    af = drone.airframe
+    mass = float(getattr(drone, "mass_kg", af.mass_kg))     # payload included
+    return math.sqrt(2.0 * mass * g * math.tan(math.radians(af.max_tilt_deg))
+                     / (rho * af.drag_area_m2[0]))
 
 
 class StageMachine(Clocked):
@@ -29,7 +46,7 @@ class StageMachine(Clocked):
     every_tick = True
 
     def __init__(self, state, pilot, events, data, *, accel: float, climb_speed: float,
-                 descent_speed: float, return_home: bool):
+                 descent_speed: float, return_home: bool, top_speed: float | None = None):
         self.st, self.pilot, self.events, self.data = state, pilot, events, data
         self.accel = accel
         self.climb_speed, self.descent_speed = climb_speed, descent_speed
@@ -39,8 +56,14 @@ class StageMachine(Clocked):
         state.sp[:] = [home[0], home[1], home[2], 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         self.path = Path([Leg(home, (home[0], home[1], float(pilot.altitude)), climb_speed, accel)])
         self.t_stage = 0.0
+        self._t_climb_end = None                  # when the climb leg ended below half way
         self._pupdate = pilot.update
         events.add(0.0, "stage", stage="takeoff")
+        asked = getattr(pilot, "speed", None)
+        if top_speed is not None and asked is not None and asked > top_speed:
+            events.add(0.0, "speed_capped", asked_mps=float(asked), top_mps=float(top_speed),
+                       reason=f"the pilot asks {asked:g} m/s; the drone's drag at its tilt "
+                              f"limit allows about {top_speed:.1f} m/s in still air")
 
     def step(self, t: float) -> None:
         s = self.st
@@ -52,7 +75,8 @@ class StageMachine(Clocked):
         elif stage != DONE:
             if self.path.fill(t - self.t_stage, s.sp):
                 if stage == TAKEOFF:
-                    self._start_pilot(t)
+                    if self._climbed(t):
+                        self._start_pilot(t)
                 elif stage == RETURN:
                     self._land(t)
         if s.stage == LAND and self.data.ncon > 0 and abs(s.v[2]) < TOUCHDOWN_SPEED:
@@ -64,6 +88,26 @@ class StageMachine(Clocked):
     def go_home(self, t: float) -> None:
         """Leave the pilot's plan now: return home (if away) and land."""
         self._after_pilot(t, force_home=True)
+
+    def _climbed(self, t) -> bool:
+        """Whether the drone rose enough to start the pilot's plan; ends the flight
+        "takeoff_failed" once it lagged ``CLIMB_GRACE_S`` past its climb leg."""
+        s = self.st
+        home_z, target = s.home[2], float(self.pilot.altitude)
+        climbed = s.qc[2] - home_z
+        if climbed >= CLIMB_FRACTION * (target - home_z):
+            return True
+        if self._t_climb_end is None:
+            self._t_climb_end = t
+        elif t - self._t_climb_end >= CLIMB_GRACE_S:
+            s.stage = DONE
+            s.end_reason = "takeoff_failed"
+            self.events.add(t, "takeoff_failed", climbed_m=float(climbed),
+                            target_m=float(target - home_z), contacts=int(self.data.ncon),
+                            reason=f"rose {climbed:.2f} m of {target - home_z:.2f} m in "
+                                   f"{t:.1f} s: blocked (an obstacle above or around the "
+                                   f"pad) or too weak to lift off")
+        return False
 
     # -- transitions -----------------------------------------------------------
     def _start_pilot(self, t):

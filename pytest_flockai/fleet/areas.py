@@ -16,6 +16,8 @@ import math
 from .. import _check
 from ..control.pilots import ZigZag
 from ..errors import ConfigError
+from ..world import World
+from . import pads as _pads
 from .fleet import PAD_CLEARANCE_M, MAX_DRONES
 
 
@@ -45,17 +47,31 @@ def strips(area, n: int, spacing: float) -> list:
 
 
 def survey(area, n: int, *, altitude: float = 30.0, spacing: float = 15.0, speed: float = 8.0,
-           pad_offset_m: float = 5.0) -> list:
+           pad_offset_m: float = 5.0, world=None) -> list:
     """``n`` (pilot, pad) pairs covering ``area``: ``ZigZag`` over each strip and a pad
-    ``pad_offset_m`` before the strip's first corner (x0 - offset, strip's y0)."""
+    ``pad_offset_m`` before the strip's first corner (x0 - offset, strip's y0). With
+    ``world``, a pad that would stand in or against a building is moved to the nearest
+    free ground (``pads.free_pad``); pass the world the fleet flies in."""
     pad_offset_m = _check.positive("pad_offset_m", pad_offset_m, where="survey")
+    if world is not None and not isinstance(world, World):
+        raise ConfigError(f"survey: world = {world!r} is not allowed; expected None or a "
+                          f"fa.World")
     parts = strips(area, n, spacing)
-    out = []
+    obs = _pads.obstacles(world)
+    out: list = []
     for k, sub in enumerate(parts):
         (x0, lo), _ = sub
         pad = (x0 - pad_offset_m, lo)
         if k and math.dist(pad, out[-1][1]) < PAD_CLEARANCE_M:
             raise ConfigError(f"survey: strips of area = {area!r} are closer than the pads' "
                               f"{PAD_CLEARANCE_M:g} m; allowed: fewer drones or a larger area")
+        if len(obs):
+            free = _pads.free_pad(obs, pad, [p for _, p in out], PAD_CLEARANCE_M)
+            if free is None:
+                raise ConfigError(f"survey: no free ground within "
+                                  f"{_pads.SEARCH_RADIUS_M:g} m of drone {k}'s pad "
+                                  f"({pad[0]:g}, {pad[1]:g}); allowed: an area with open "
+                                  f"ground beside it")
+            pad = free
         out.append((ZigZag(sub, altitude=altitude, spacing=spacing, speed=speed), pad))
     return out

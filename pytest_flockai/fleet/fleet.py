@@ -25,11 +25,14 @@ from ..recording import publish
 from ..world import World
 from . import result
 from .offload import Offload, OffloadStep, share_ground
+from . import pads as _pads
 
 #: m: two pads closer than this are "one pad" (a drone's footprint is < 1 m)
 PAD_CLEARANCE_M = 2.0
 #: at most this many drones in one fleet (the loop's cost grows with N)
 MAX_DRONES = 64
+#: drone names that would collide with the fleet's own KPI prefixes
+RESERVED_NAMES = ("fleet", "ground", "link")
 
 
 class FleetDrone:
@@ -42,6 +45,10 @@ class FleetDrone:
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "./ "):
             raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; expected a non-empty "
                               f"str without '.', '/' or spaces (it prefixes the drone's KPIs)")
+        if name.lower() in RESERVED_NAMES:
+            raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; it is the prefix of "
+                              f"the fleet's own KPIs ({', '.join(RESERVED_NAMES)}: "
+                              f"fleet.energy_total_j, link.*, ground.*); choose another name")
         if not isinstance(drone, Drone):
             raise ConfigError(f"FleetDrone {name!r}: drone = {drone!r} is not a Drone; use "
                               f"fa.drone(name)")
@@ -106,6 +113,7 @@ class Fleet:
         _check_unique(drones)
         if world is not None and not isinstance(world, World):
             raise ConfigError(f"Fleet: world = {world!r} is not allowed; expected None or a fa.World")
+        _check_pads(drones, world)
         if offload is not None and not isinstance(offload, Offload):
             raise ConfigError(f"Fleet: offload = {offload!r} is not allowed; expected None or "
                               f"fa.fleet.Offload(...)")
@@ -191,6 +199,17 @@ def _check_unique(drones) -> None:
                     f"Fleet: drones[{i}].pad = {tuple(a.pad)} ({a.name!r}) is {gap:.2f} m from "
                     f"drones[{j}].pad = {tuple(b.pad)} ({b.name!r}); two drones at one pad; "
                     f"allowed: pads at least {PAD_CLEARANCE_M:g} m apart")
+
+
+def _check_pads(drones, world) -> None:
+    """A pad inside a building or against its wall: the drone could not take off."""
+    obs = _pads.obstacles(world)
+    for fd in drones:
+        why = _pads.problem(obs, fd.pad)
+        if why is not None:
+            raise ConfigError(f"Fleet: drone {fd.name!r} pad = ({fd.pad[0]:g}, {fd.pad[1]:g}) is "
+                              f"{why}; a drone cannot take off there: allowed: a pad on free "
+                              f"ground (fa.fleet.survey(..., world=world) picks free pads)")
 
 
 def _check_remote(drones, offload) -> list:

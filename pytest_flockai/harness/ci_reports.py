@@ -132,8 +132,8 @@ class ReportsPlugin:
         if self.md is not None or self.step_summary:
             text = _markdown.job_summary(doc)
             if self.md is not None:
-                atomic_write(self.md, lambda fh: fh.write(text))
-                self.written.append(f"Markdown summary written to {self.md}")
+                self._write("Markdown summary", self.md,
+                            lambda p: atomic_write(p, lambda fh: fh.write(text)))
             if self.step_summary:
                 try:
                     with open(self.step_summary, "a", encoding="utf-8") as fh:
@@ -142,17 +142,30 @@ class ReportsPlugin:
                 except OSError as exc:
                     self.written.append(f"GITHUB_STEP_SUMMARY not written: {exc}")
         if self.html is not None:
-            _html.write(self.html, doc, pictures=self.pictures,
-                        baseline=flock.baseline if flock else None,
-                        threshold_pct=flock.max_regression if flock else 5.0)
-            self.written.append(f"HTML dashboard written to {self.html}")
+            self._write("HTML dashboard", self.html, lambda p: _html.write(
+                p, doc, pictures=self.pictures, baseline=flock.baseline if flock else None,
+                threshold_pct=flock.max_regression if flock else 5.0))
         if self.history is not None:
             try:
                 p = _history.record(self.history, entries, self.config.invocation_params.dir)
                 self.written.append(f"KPIs kept in the history as {p}")
             except OSError as exc:
-                self.written.append(f"history not written to {self.history}: {exc}")
+                self.written.append(f"WARNING: history not written to {self.history}: "
+                                    f"{exc.strerror or exc}")
+
+    def _write(self, what: str, path, write) -> None:
+        """Write one report; a failure (a full disk, its folder gone) is a warning in the
+        terminal summary: pytest's exit status stays what the tests made it."""
+        try:
+            write(path)
+        except OSError as exc:
+            self.written.append(f"WARNING: the {what} could not be written to {path} "
+                                f"({exc.strerror or exc}); the previous file, if any, is "
+                                f"left as it was")
+            return
+        self.written.append(f"{what} written to {path}")
 
     def pytest_terminal_summary(self, terminalreporter, exitstatus, config):
         for line in self.written:
-            terminalreporter.write_line(f"flockai: {line}")
+            warn = line.startswith("WARNING")
+            terminalreporter.write_line(f"flockai: {line}", yellow=warn, bold=warn)

@@ -2,8 +2,9 @@
 cache directory (``<cache_dir>/d/flockai-flights``, shared by pytest-xdist
 workers and kept across runs), opened around every test.
 
-``--flockai-cache=off|read|write|readwrite`` (default ``readwrite``) sets the
-mode; flights inside hypothesis tests are not cached unless the test asks with
+``--flockai-cache=off|read|write|readwrite|verify`` (default ``readwrite``) sets
+the mode (``verify``: a sample of the hits, ``--flockai-cache-verify=FRACTION``,
+default 0.1, is flown again and a test fails when it differs from its entry); flights inside hypothesis tests are not cached unless the test asks with
 ``@pytest.mark.flockai_cache("readwrite")`` (the marker sets any test's mode).
 ``--flockai-cache-clear`` empties the flight cache before the run. The cache is
 off when pytest's cacheprovider plugin is (``-p no:cacheprovider``).
@@ -11,13 +12,14 @@ off when pytest's cacheprovider plugin is (``-p no:cacheprovider``).
 
 from __future__ import annotations
 
+import math
 import os
 from collections import Counter
 from pathlib import Path
 
 import pytest
 
-from ..cache import MODES, Deferred, caching
+from ..cache import MODES, VERIFY_FRACTION, Deferred, caching
 from .options import option
 from .session import SESSION
 
@@ -30,8 +32,12 @@ def add_options(parser) -> None:
     group.addoption("--flockai-cache", dest="flockai_cache", metavar="MODE", default=None,
                     choices=MODES,
                     help="reuse completed flights from pytest's cache directory when nothing "
-                         "that shapes them changed: off, read, write or readwrite (default: "
-                         "readwrite; hypothesis tests: off unless marked flockai_cache)")
+                         "that shapes them changed: off, read, write, readwrite or verify "
+                         "(default: readwrite; hypothesis tests: off unless marked "
+                         "flockai_cache). Entries are authenticated with FLOCKAI_CACHE_KEY")
+    group.addoption("--flockai-cache-verify", dest="flockai_cache_verify", metavar="FRACTION",
+                    default=None, help="with --flockai-cache=verify: the share of cache hits "
+                                       "flown again and compared (default 0.1)")
     parser.addini("flockai_cache", "ini form of --flockai-cache", type="string", default="")
     group.addoption("--flockai-cache-clear", dest="flockai_cache_clear", action="store_true",
                     default=False, help="remove every cached flight before the run")
@@ -57,6 +63,7 @@ class CachePlugin:
             raise pytest.UsageError(f"flockai_cache = {mode!r} is not allowed; allowed: "
                                     f"{', '.join(MODES)}")
         self.mode = mode or "readwrite"
+        self.verify_fraction = _fraction(config.getoption("flockai_cache_verify", None))
         self.off_reason = None
         if not config.pluginmanager.has_plugin("cacheprovider"):
             self.off_reason = "pytest's cacheprovider is disabled (-p no:cacheprovider)"
@@ -89,7 +96,8 @@ class CachePlugin:
         if mode == "off":
             return None
         if mode not in self._caches:
-            self._caches[mode] = Deferred(self.directory, mode)
+            self._caches[mode] = Deferred(self.directory, mode,
+                                          verify_fraction=self.verify_fraction)
         return self._caches[mode]
 
     @pytest.hookimpl(tryfirst=True)
@@ -109,6 +117,20 @@ class CachePlugin:
         line = summary_line(_flights(config), self.off_reason)
         if line:
             terminalreporter.write_line(line)
+
+
+def _fraction(raw) -> float:
+    """--flockai-cache-verify's value: a number in [0, 1] (UsageError otherwise)."""
+    if raw is None:
+        return VERIFY_FRACTION
+    try:
+        v = float(raw)
+    except ValueError:
+        v = math.nan
+    if not 0 <= v <= 1:
+        raise pytest.UsageError(f"--flockai-cache-verify = {raw!r} is not allowed; expected "
+                                f"a fraction in [0, 1], e.g. 0.1")
+    return v
 
 
 def _flights(config) -> list[dict]:
@@ -131,11 +153,12 @@ def summary_line(flights: list[dict], off_reason: str | None = None) -> str | No
     statuses.pop(None, None)
     if not statuses:
         return None
-    words = {"hit": "from the cache", "stored": "flown and stored", "flown": "flown, not stored",
-             "replaced": "flown, corrupt entry replaced", "bypass": "not cacheable"}
+    words = {"hit": "from the cache", "verified": "from the cache, flown again and verified",
+             "stored": "flown and stored", "flown": "flown, not stored",
+             "replaced": "flown, untrusted entry replaced", "bypass": "not cacheable"}
     parts = [f"{statuses[k]} {w}" for k, w in words.items() if statuses.get(k)]
     reasons = sorted({(f.get("cache") or {}).get("reason") for f in flights
-                      if (f.get("cache") or {}).get("status") == "bypass"})
+                      if (f.get("cache") or {}).get("status") in ("bypass", "replaced")})
     reasons = [r for r in reasons if r]
     shown = "; ".join(r if len(r) <= 120 else r[:117] + "..." for r in reasons[:3])
     more = f"; and {len(reasons) - 3} more (flights[].cache in --flockai-json)" \

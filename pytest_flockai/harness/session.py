@@ -79,15 +79,19 @@ class FlockSession:
             self._sigterm = signals.install_sigterm()
 
     def _check_distinct(self) -> None:
-        """Two report options naming one file would overwrite each other."""
+        """Two report options naming one file would overwrite each other (the JSON
+        report, the baseline saved, the Markdown summary, the dashboard, JUnit XML);
+        links are followed, so two names of one file are caught too."""
         xml = getattr(self.config.option, "xmlpath", None)
         named = [("--flockai-json", self.json_path), ("--flockai-save", self.save_path),
+                 ("--flockai-md", path_option(self.config, "md")),
+                 ("--flockai-html", path_option(self.config, "html")),
                  ("--junitxml", Path(os.path.expanduser(xml)) if xml else None)]
         seen: dict = {}
         for what, p in named:
             if p is None:
                 continue
-            key = os.path.abspath(p)
+            key = os.path.realpath(p)
             if key in seen:
                 raise pytest.UsageError(f"pytest-flockai: {what} and {seen[key]} name the same "
                                         f"file {str(p)!r}; give each report its own path")

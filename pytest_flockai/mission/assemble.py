@@ -23,7 +23,7 @@ from ..airframe.rotor_drag import RotorDrag
 from ..clock import Clocked
 from ..comm.traffic import Heartbeats, Traffic
 from ..control.estimator import NavEstimator
-from ..control.stages import StageMachine
+from ..control.stages import StageMachine, top_speed
 from ..control.steps import Control, Navigation
 from ..energy.integrator import EnergyIntegrator
 from ..ml.scheduler import DatasetRecorder, TaskScheduler, memory_utilization
@@ -202,7 +202,8 @@ class Run:
         accel = parts.trajectory_accel(plan, self.controller)
         self.stages = StageMachine(st, copy.deepcopy(plan.pilot), self.events, d, accel=accel,
                                    climb_speed=plan.climb_speed, descent_speed=plan.descent_speed,
-                                   return_home=plan.return_home)
+                                   return_home=plan.return_home,
+                                   top_speed=top_speed(drone, plan.atmosphere.density))
         recorder = DatasetRecorder(plan.dataset_period_s) if plan.dataset_dir is not None else None
         seeds = seed_sequence(plan.seed, "tasks").spawn(len(plan.tasks)) if plan.tasks else []
         self.scheduler = TaskScheduler(st, plan.tasks, seeds, self.suite, d, recorder=recorder,

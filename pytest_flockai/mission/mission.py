@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import _check
 from .. import cache as _cache
+from .. import limits
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
@@ -88,8 +89,13 @@ class Mission:
         self.max_time_s = _check.positive("max_time_s", max_time_s, where="Mission")
         self.telemetry_hz = _check.positive("telemetry_hz", telemetry_hz, where="Mission")
         self.energy_hz = _check.positive("energy_hz", energy_hz, where="Mission")
+        limits.check_at_least("energy_hz", self.energy_hz, "MIN_ENERGY_HZ", where="Mission",
+                              unit=" Hz", how="slower sampling misses the power's changes")
         self.climb_speed = _check.positive("climb_speed", climb_speed, where="Mission")
         self.descent_speed = _check.positive("descent_speed", descent_speed, where="Mission")
+        for field, v in (("climb_speed", self.climb_speed), ("descent_speed", self.descent_speed)):
+            limits.check_at_least(field, v, "MIN_VERTICAL_SPEED_MPS", where="Mission",
+                                  unit=" m/s")
         self.name = name
         self.fly_on = _check.choice("fly_on", fly_on, ("truth", "estimate"), where="Mission")
         self.dataset_dir = dataset_dir

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from numbers import Integral
 
-from .. import _check
+from .. import _check, limits
 from ..comm.link import link as _link
 from ..compute.devices import Device
 from ..compute.latency import LATENCY_MODES, resolve_device
@@ -81,6 +81,8 @@ class Task:
                               f"such as 'camera'")
         self.sensor = sensor
         self.period_s = _check.positive("period_s", period_s, where=where)
+        limits.check_at_least("period_s", self.period_s, "MIN_TASK_PERIOD_S", where=where,
+                              unit=" s")
         self.execution = _check.choice("execution", execution, EXECUTIONS, where=where)
         self.device = None if device is None else self._device("device", device, where)
         self.ground_device = self._device("ground_device", ground_device, where)

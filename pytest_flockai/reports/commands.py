@@ -38,15 +38,13 @@ def _compare_cmd(a) -> int:
     try:
         threshold = _compare.parse_threshold(a.threshold)
     except ValueError:
-        print(f"flockai compare: --threshold = {a.threshold!r} is not allowed; expected a "
-              f"percentage >= 0, e.g. 5%", file=sys.stderr)
+        print(f"flockai compare: --threshold = {_report.printable(repr(a.threshold))} is not "
+              f"allowed; expected a percentage >= 0, e.g. 5%", file=sys.stderr)
         return 2
-    try:
-        cmp = _compare.compare_files(a.base, a.new, threshold)
-    except _report.ReportError as exc:
-        print(f"flockai compare: {exc}", file=sys.stderr)
-        return 2
-    print(_compare.render(cmp, show_all=a.all))
+    if a.json is not None:
+        _report.check_writable(a.json, "flockai compare --json")
+    cmp = _compare.compare_files(a.base, a.new, threshold)   # ReportError: exit 2 (cli.py)
+    print(_report.printable(_compare.render(cmp, show_all=a.all), newlines=True))
     if a.json is not None:
         _report.write_json_atomic(a.json, {"threshold_pct": threshold,
                                            "deltas": [d.to_dict() for d in cmp.deltas],
@@ -55,15 +53,18 @@ def _compare_cmd(a) -> int:
 
 
 def _history_cmd(a) -> int:
-    try:
-        runs = _history.load(a.directory)
-        print(_history.render(runs, a.kpi, a.test))
-        if a.plot is not None:
-            _history.plot(runs, a.kpi, a.plot, a.test)
-            print(f"trend drawn to {a.plot}")
-    except _report.ReportError as exc:
-        print(f"flockai history: {exc}", file=sys.stderr)
-        return 2
+    if a.plot is not None:
+        if a.plot.suffix.lower() != ".png":
+            raise _report.ReportError(f"flockai history --plot {str(a.plot)!r}: expected a "
+                                      f"file path ending in .png")
+        _report.check_writable(a.plot, "flockai history --plot")
+    skipped: list = []
+    runs = _history.load(a.directory, skipped)
+    for path, why in skipped:
+        print(_report.printable(f"flockai history: WARNING: skipped {path}: {why}"),
+              file=sys.stderr)
+    print(_report.printable(_history.render(runs, a.kpi, a.test), newlines=True))
+    if a.plot is not None:
+        _history.plot(runs, a.kpi, a.plot, a.test)
+        print(_report.printable(f"trend drawn to {a.plot}"))
     return 0
-
-

@@ -18,13 +18,13 @@ matplotlib).
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import os
 import re
 import subprocess
 from pathlib import Path
 
 from .. import report as _report
+from .._io import atomic_write
 
 SCHEMA = "pytest-flockai-history/1"
 
@@ -67,9 +67,10 @@ def record(directory, entries: list[dict], cwd) -> Path:
     return path
 
 
-def load(directory) -> list[dict]:
-    """Every run recorded in ``directory``, oldest first (files that are not
-    history records are skipped)."""
+def load(directory, skipped: list | None = None) -> list[dict]:
+    """Every run recorded in ``directory``, oldest first. JSON files of another kind
+    are passed over; a history record that cannot be read or is malformed is skipped
+    and, when ``skipped`` is given, added to it as ``(path, why)``."""
     runs = []
     d = Path(directory)
     if not d.is_dir():
@@ -77,14 +78,39 @@ def load(directory) -> list[dict]:
                                   f"--flockai-history DIR)")
     for p in sorted(d.glob("*.json")):
         try:
-            doc = json.loads(p.read_text(encoding="utf-8"))
-        except (OSError, ValueError):
+            doc = _report.read_json(p, "history record")
+        except _report.ReportError as exc:
+            if skipped is not None:
+                skipped.append((p, str(exc)))
             continue
-        if isinstance(doc, dict) and doc.get("schema") == SCHEMA and isinstance(
-                doc.get("tests"), dict):
+        if not isinstance(doc, dict) or doc.get("schema") != SCHEMA:
+            continue
+        why = malformed(doc)
+        if why is None:
             runs.append(doc)
+        elif skipped is not None:
+            skipped.append((p, why))
     runs.sort(key=lambda r: str(r.get("created")))
     return runs
+
+
+def malformed(doc: dict) -> str | None:
+    """Why a history record cannot be used, or None."""
+    for field in ("commit", "branch", "created"):
+        if doc.get(field) is not None and not isinstance(doc.get(field), str):
+            return f"{field} = {doc.get(field)!r} is not a string"
+    tests = doc.get("tests")
+    if not isinstance(tests, dict):
+        return f"'tests' must map test ids to flights, not {type(tests).__name__}"
+    for nodeid, flights in tests.items():
+        if not isinstance(flights, dict) or not all(isinstance(k, dict)
+                                                    for k in flights.values()):
+            return f"test {nodeid!r} must map flight names to {{kpi: number}}"
+        for kp in flights.values():
+            for kpi, v in kp.items():
+                if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                    return f"test {nodeid!r} KPI {kpi!r} = {v!r} is not a number"
+    return None
 
 
 def series(runs: list[dict], kpi: str, test: str | None = None) -> dict:
@@ -142,6 +168,8 @@ def plot(runs: list[dict], kpi: str, path, test: str | None = None) -> Path:
         ax.legend(fontsize=7)
     fig.tight_layout()
     p = Path(path)
-    fig.savefig(p, dpi=100)
-    plt.close(fig)
+    try:
+        atomic_write(p, lambda fh: fig.savefig(fh, dpi=100, format="png"), text=False)
+    finally:
+        plt.close(fig)
     return p

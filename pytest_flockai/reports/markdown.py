@@ -8,11 +8,15 @@ budgeted one, one row per flight).
 
 from __future__ import annotations
 
+from .. import report as _report
 from . import summary as _s
 
 
 def _esc(text) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
+    """A table cell: no raw HTML (a test id such as ``test[<img src=x>]`` is shown, not
+    rendered), no control characters, pipes escaped, one line."""
+    text = str(text).replace("<", "&lt;")      # no tag can open; ">" alone is plain text
+    return _report.printable(text.replace("|", "\\|").replace("\n", " "))
 
 
 def _table(headers, rows) -> list[str]:

@@ -1,0 +1,125 @@
+"""The key that authenticates flight-cache entries (an HMAC-SHA256 over each entry).
+
+Entries are sealed with a secret key, so that whoever can write the cache folder
+(a CI cache restored from another branch or pull request, a shared runner, a
+copied folder) but does not hold the key cannot make an entry the cache trusts.
+
+Where the key comes from, first match:
+
+1. ``FLOCKAI_CACHE_KEY`` (the environment): the key itself, e.g. a CI secret;
+2. ``FLOCKAI_CACHE_KEY_FILE``: a file holding the key;
+3. a random key kept in ``$XDG_CONFIG_HOME/pytest-flockai/cache-key`` (default
+   ``~/.config/...``), created on first use with mode 0600: entries are then trusted
+   only by this user on this machine;
+4. none can be read or created: a key of this process only (nothing is reused
+   across runs; ``source`` says so).
+
+An entry sealed under another key, or under none (an older format), is flown again
+and rewritten, and the run reports it ("not authentic").
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import os
+import secrets
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import ConfigError
+
+ENV_KEY = "FLOCKAI_CACHE_KEY"
+ENV_KEY_FILE = "FLOCKAI_CACHE_KEY_FILE"
+_PROCESS_KEY = secrets.token_bytes(32)
+
+
+@dataclass(frozen=True)
+class CacheKey:
+    """A secret (never shown) and where it came from (shown in ``flockai cache info``)."""
+
+    secret: bytes
+    source: str
+
+    def mac(self, *parts: bytes) -> str:
+        """HMAC-SHA256 (hex) of ``parts``, each length-prefixed (no two splits collide)."""
+        h = hmac.new(self.secret, digestmod=hashlib.sha256)
+        for p in parts:
+            h.update(len(p).to_bytes(8, "big"))
+            h.update(p)
+        return h.hexdigest()
+
+    def verify(self, mac, *parts: bytes) -> bool:
+        """True when ``mac`` is this key's HMAC of ``parts`` (constant-time compare)."""
+        return isinstance(mac, str) and hmac.compare_digest(mac, self.mac(*parts))
+
+    def __repr__(self) -> str:
+        return f"CacheKey(source={self.source!r})"
+
+
+def key_file() -> Path:
+    """Where the per-user key is kept (``FLOCKAI_CACHE_KEY_FILE`` or the config folder)."""
+    named = os.environ.get(ENV_KEY_FILE)
+    if named:
+        return Path(os.path.expanduser(named))
+    base = os.environ.get("XDG_CONFIG_HOME") or os.path.join(os.path.expanduser("~"), ".config")
+    return Path(base) / "pytest-flockai" / "cache-key"
+
+
+def from_secret(secret) -> CacheKey:
+    """A key given in code (``FlightCache(dir, key=b"...")``)."""
+    if isinstance(secret, CacheKey):
+        return secret
+    if isinstance(secret, str):
+        secret = secret.encode("utf-8")
+    if not isinstance(secret, (bytes, bytearray)) or not secret:
+        raise ConfigError(f"flight cache: key = {secret!r} is not allowed; expected a "
+                          f"non-empty str or bytes")
+    return CacheKey(bytes(secret), "given in code")
+
+
+def default_key() -> CacheKey:
+    """The key of this environment (see the module doc for the order)."""
+    env = os.environ.get(ENV_KEY)
+    if env:
+        return CacheKey(env.encode("utf-8"), f"${ENV_KEY}")
+    path = key_file()
+    secret = _read_or_create(path)
+    if secret is not None:
+        return CacheKey(secret, str(path))
+    return CacheKey(_PROCESS_KEY, f"this process only ({path} cannot be read or created)")
+
+
+def _read_or_create(path: Path) -> bytes | None:
+    try:
+        return _read(path)
+    except FileNotFoundError:
+        pass
+    except OSError:
+        return None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+        with os.fdopen(fd, "w") as fh:
+            fh.write(secrets.token_hex(32) + "\n")
+    except FileExistsError:
+        pass                                 # another process made it first: read theirs
+    except OSError:
+        return None
+    try:
+        return _read(path)
+    except OSError:
+        return None
+
+
+def _read(path: Path) -> bytes | None:
+    fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    with os.fdopen(fd, "rb") as fh:
+        if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+            return None
+        data = fh.read(4096).strip()
+    return data or None
+
+
+__all__ = ["ENV_KEY", "ENV_KEY_FILE", "CacheKey", "default_key", "from_secret", "key_file"]
