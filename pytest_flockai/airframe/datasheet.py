@@ -16,7 +16,9 @@ derived one ("fields a user knows better").
   Profile power sigma C_d / 8 with a section drag that falls with the blade's
   Reynolds number at 0.75 R in hover, C_d ~ Re^-1/2 (laminar skin friction,
   Blasius; the regime of small propellers, Lissaman, Annu. Rev. Fluid Mech. 15,
-  1983). The figure of merit follows: FM = C_T^1.5 / sqrt(2) / C_P.
+  1983) up to Re 1e5, C_d ~ Re^-1/5 above (turbulent skin friction: the rotors of
+  large drones; ``section_drag``). The figure of merit follows: FM = C_T^1.5 /
+  sqrt(2) / C_P.
 - Motor: the DC motor model (Kv, winding resistance Rm, no-load current I0),
   eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover (the energy
   model recomputes it at every operating point, energy/rotors.py Motors). Without Rm or
@@ -24,6 +26,8 @@ derived one ("fields a user knows better").
   motors of 18-360 g (Km = Kt / sqrt(Rm) ~ m^0.92, no-load loss ~ m^1.25 omega^1.5), for
   motors weighing MOTOR_MASS_SHARE of the take-off mass they are sized for.
 - Body: drag areas from the top speed, inertia from a box and rotor masses.
+- Avionics (flight controller, video link, camera, small sensors) by drone class
+  (``avionics``), unless the blueprint's ``[energy]`` gives a flight controller power.
 """
 
 from __future__ import annotations
