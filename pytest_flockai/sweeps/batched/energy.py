@@ -20,7 +20,7 @@ from ...clock import CLOCK_EPS
 from ...comm.traffic import ACK_BYTES
 from ...control.stages import LAND, PILOT, TAKEOFF
 from ...energy.battery import CUTOFF_HOLD_S
-from ...energy.rotors import VRS_K
+from ...energy.rotors import VRS_K, wake_immersion
 from ...mission.book import ACCEL_SMOOTHING_S, ACCEL_THRESHOLD, HOVER_SPEED
 from ...world.wind import FT
 from .control import rotation
@@ -126,14 +126,15 @@ def motors(p, thrust, vrel, vi):
     n = thrust.shape[0]
     vps = jnp.where(vpar > 0.1, vpar, 1.0)
     vi_mean = wake_vi / n
-    skew = (vpar / jnp.sqrt(vpar2 + (vax + vi_mean) ** 2)) ** 2
     ws = jnp.maximum(0.0, -(p["m_dirs"][:, 0] * vx / vps + p["m_dirs"][:, 1] * vy / vps))
     tot = jnp.sum(ws)
-    scale = p["m_wake"] * vi_mean * skew * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
+    scale = p["m_wake"] * vi_mean * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
     use = (p["m_wake"] > 0.0) & (vpar > 0.1) & (wake_vi > 0.0) & (tot > 0.0)
-    induced = induced + jnp.where(use, jnp.sum(ws * thrust) * scale, 0.0)
-    shaft = jnp.where(on, p["m_kappa"] * T * v + T * vax + p0 + jnp.where(use, ws * thrust * scale,
-                                                                         0.0), 0.0)
+    # the aft rotors' immersion in the fore wake: the core's own formula, on arrays
+    extra = jnp.where(use, ws * thrust * scale * wake_immersion(
+        p["m_L2"] * ws, vax + vi_mean, vpar, p["m_D"], jnp.maximum, jnp.minimum), 0.0)
+    induced = induced + jnp.sum(extra)
+    shaft = jnp.where(on, p["m_kappa"] * T * v + T * vax + p0 + extra, 0.0)
     total = induced + profile + axial
     inv_eta = jnp.where(p["m_model"] & (total >= 0.0) & (total > 1e-12),
                         _electrical(p, shaft, jnp.where(on, omega, 0.0))

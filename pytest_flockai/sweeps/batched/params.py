@@ -102,6 +102,7 @@ def _energy(meter) -> tuple[tuple, dict]:
     num["const_w"] = np.asarray(num["const_w"], dtype=float)
     if motors is not None:
         num.update(m_inv2rhoA=motors._inv2rhoA, m_c0=motors._c0, m_R=motors._R,
+                   m_D=motors._D, m_L2=motors._L2,
                    m_inv_kf=motors._inv_kf, m_inv_eta=motors._inv_eta, m_hk=motors._hk,
                    m_kappa=motors.induced_power_factor, m_wake=motors.wake_interference,
                    m_dirs=np.asarray(motors._dirs, dtype=float),
