@@ -60,6 +60,21 @@ r = fa.Mission(d, fa.pilots.Hover(10.0), until="battery_depleted").run()
 what = (f"Mavic hover until the battery is depleted: {r.sim_time_s / 60:.1f} min simulated, "
         f"{len(r.telemetry):,} telemetry rows")
 """,
+    "sweep": """
+# a sweep at limits.MAX_VARIANTS: its plan (random design, three axes) and one row per
+# variant (a real flight's row, copied), turned into the DataFrame with a budget; flying
+# them all would take hours
+from pytest_flockai.sweeps import design, runner
+from pytest_flockai import budgets
+L = fa.limits
+plan, _ = design.variants({"payload_kg": (0.0, 0.01), "wind_mps": (0.0, 5.0),
+                           "mission_seed": (0, 1000)}, "random", L.MAX_VARIANTS, 0)
+m = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(1.0, 1.0))
+row = runner.sweep(m, payload_kg=[0.0], workers=1).iloc[0].to_dict()
+rows = [{**row, **v} for v in plan]
+df = runner.frame(rows, list(plan[0]), budgets.parse_many({"flight_time_s": ">= 1 s"}))
+what = f"sweep at limits.MAX_VARIANTS: {len(df):,} variants' plan, rows and DataFrame"
+""",
 }
 
 CHILD = """

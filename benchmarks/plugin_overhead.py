@@ -4,7 +4,8 @@ the same run with ``-p no:flockai``.
 
 Runs ``python -m pytest -q -p no:cacheprovider test_one.py`` in a fresh process,
 alternating the two forms (--repeat times each), and prints the median wall
-time of each and their difference, beside the load average. Then, in one more
+time and CPU time (user + system, less sensitive to other jobs on a shared
+machine) of each and their differences, beside the load average. Then, in one more
 run with the plugin, lists which heavy libraries the run imported (none is the
 goal: MuJoCo, pandas, NumPy, ONNX Runtime and OpenCV load on a flight's first use).
 
@@ -29,11 +30,17 @@ PROBE = ("import sys, pytest\n"
          "print('HEAVY', ' '.join(m for m in {heavy!r} if m in sys.modules))\n")
 
 
-def run(folder: Path, extra: list) -> float:
+def run(folder: Path, extra: list) -> tuple[float, float]:
+    """(wall s, CPU s: user + system of the pytest process) of one run."""
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *extra,
-                    "test_one.py"], cwd=folder, check=True, capture_output=True)
-    return time.perf_counter() - t0
+    p = subprocess.Popen([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *extra,
+                          "test_one.py"], cwd=folder, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL)
+    _, status, usage = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode != 0:
+        raise RuntimeError(f"pytest {' '.join(extra)} exited with {p.returncode}")
+    return time.perf_counter() - t0, usage.ru_utime + usage.ru_stime
 
 
 def heavy_imports(folder: Path) -> str:
@@ -57,12 +64,13 @@ def main(argv=None):
             on.append(run(folder, []))
             off.append(run(folder, ["-p", "no:flockai"]))
         heavy = heavy_imports(folder)
-    m_on, m_off = statistics.median(on), statistics.median(off)
     print(f"plugin overhead: one trivial test, median of {a.repeat} interleaved runs each; "
           f"load average {load0:.2f} -> {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
-    print(f"{'with the plugin (s)':34s} {m_on:8.3f}")
-    print(f"{'with -p no:flockai (s)':34s} {m_off:8.3f}")
-    print(f"{'difference (s)':34s} {m_on - m_off:8.3f}")
+    print(f"{'':26s} {'wall s':>8s} {'CPU s':>8s}")
+    med = [[statistics.median(x[k] for x in runs) for k in (0, 1)] for runs in (on, off)]
+    print(f"{'with the plugin':26s} {med[0][0]:8.3f} {med[0][1]:8.3f}")
+    print(f"{'with -p no:flockai':26s} {med[1][0]:8.3f} {med[1][1]:8.3f}")
+    print(f"{'difference':26s} {med[0][0] - med[1][0]:8.3f} {med[0][1] - med[1][1]:8.3f}")
     print(f"heavy libraries imported by a run that flies nothing: {heavy}")
 
 

@@ -111,7 +111,9 @@ def test_detector_envelope_over_weather_shadows_and_rolling_shutter(fixed_views,
     severity keeps recall >= 0.55 (0.70 in ideal light); rain breaks it from severity 1
     and water on the lens from severity 3; a low sun's shadows break it (each figure
     gets a dark twin), while its direction alone costs less; a 60 ms rolling-shutter
-    readout at 16 m/s costs at most 0.1."""
+    readout at 16 m/s costs at most 0.12 (0.11: the skew is the ground's under the image
+    centre for every view since one distance rule serves blur and skew; 0.08 when a view's
+    skew followed a rooftop's depth)."""
     rows = []
     for weather in ("rain", "snow", "spatter"):
         for sev in range(1, 6):
@@ -133,4 +135,4 @@ def test_detector_envelope_over_weather_shadows_and_rolling_shutter(fixed_views,
     ideal = _kpis(det_model, fixed_views.ideal())["recall"]
     skewed = _kpis(det_model, fixed_views.under(fa.Conditions(readout_s=0.06),
                                                 velocity=(16.0, 0.0, 0.0), seed=1))["recall"]
-    assert skewed >= ideal - 0.1
+    assert skewed >= ideal - 0.12

@@ -13,6 +13,7 @@ them. MuJoCo is imported through the GL guard of ``_mujoco.py``.
 """
 
 from importlib import import_module as _import_module
+from typing import TYPE_CHECKING
 
 from . import kpis, limits
 from .clock import Clocked
@@ -20,6 +21,20 @@ from .errors import ConfigError, FlockAIError, SimulationError
 from .recording import recording
 
 __version__ = "0.1.0"
+
+if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type checkers and docs
+    from . import comm, fleet, ml, probes, sensors
+    from .airframe import Drone, blueprints, drone
+    from .compute import devices
+    from .control import pilots
+    from .energy import EnergyModel
+    from .fleet import Fleet, FleetDrone, FleetResult
+    from .mission import Mission
+    from .ml import Task
+    from .result import FlightResult
+    from .sensors import Conditions
+    from .sweeps import sweep
+    from .world import Atmosphere, Wind, World
 
 #: public name -> (module, attribute in it; None: the module itself), imported on first use
 _LAZY = {

@@ -74,6 +74,15 @@ _ROWS = [
     ("recall", "fraction", "higher", "objects matched by a detection at the score threshold"),
     ("objects_missed", "fraction", "lower", "objects in view never detected"),
     ("accuracy", "fraction", "higher", "frames whose predicted classes are exactly right"),
+    ("images_scored", "count", None, "frames (images) a detection or classification task scored"),
+    # ML: per-task energy (ml/task_energy.py); each as '<task>.<kpi>'
+    ("energy_j", "J", "lower", "energy the task cost the battery: compute_energy_j + radio_energy_j"),
+    ("compute_energy_j", "J", "lower", "on-board computer's busy time the task caused, at its "
+     "active-over-idle power"),
+    ("radio_energy_j", "J", "lower", "the radio's energy for the bytes and packets the task sent and "
+     "received"),
+    ("energy_untasked_j", "J", None, "proc and comm energy not caused by a task (flight controller, "
+     "idle computer and radio, sensors, telemetry)"),
     # fleet (fa.Fleet); each drone's own KPIs are '<drone name>.<kpi>'
     ("fleet.drones", "count", None, "drones in the fleet"),
     ("fleet.makespan_s", "s", "lower", "time until the last drone's flight ended"),

@@ -41,6 +41,11 @@ MAX_WAYPOINTS = 100_000
 #: m: how far from home (horizontally or in altitude) a pilot may send the drone
 #: (a Mavic on one battery covers about 15 km)
 MAX_EXTENT_M = 100_000.0
+#: variants of one sweep (``fa.sweep``: a grid's combinations, or ``samples``). A variant
+#: holds its values and its row of KPIs until the DataFrame is built, ~2.4 KiB each: at the
+#: limit a 238 MiB Python peak, 506 MiB RSS with the package loaded (benchmarks/limits.py
+#: sweep); a 10 s Crazyflie hover takes ~0.05 s of wall time, so ~40 min on 2 cores
+MAX_VARIANTS = 100_000
 #: m/s: the strongest mean wind. The strongest gust ever measured at the surface is
 #: 113.3 m/s (WMO Archive of Weather and Climate Extremes, Barrow Island, 1996)
 MAX_WIND_MPS = 113.0

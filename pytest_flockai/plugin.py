@@ -62,7 +62,7 @@ from .harness import sweeps as _sweeps
 from .harness import tracebacks as _tracebacks
 from .harness import verdicts as _verdicts
 from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, world  # noqa: F401
-from .harness.sweeps import flockai_sweep  # noqa: F401
+from .harness.sweeps import flockai_sweep, flockai_sweep_executor  # noqa: F401
 from .harness.recorder import STATE, TestState
 from .harness.session import SESSION, FlockSession
 from .recording import recording
@@ -95,9 +95,11 @@ def pytest_configure(config):
         "markers", "flockai(drone=, pilot=, world=, tasks=, probes=, seed=, until=, wind=, "
         "name=, max_regression=): quick settings for the pytest-flockai fixtures")
     config.addinivalue_line(
-        "markers", "flockai_sweep(**axes, samples=None, method='grid', seed=0, workers=None): "
+        "markers", "flockai_sweep(**axes, samples=None, method='grid', seed=0, workers=None, "
+        "executor=None, batch_size=None, progress=None): "
         "fly a sweep of the mission fixture; kpi budgets are checked on every variant")
     session = FlockSession(config)   # raises UsageError before anything flies
+    _sweeps.configure(config)
     config.stash[SESSION] = session
     config.pluginmanager.register(session, "flockai-session")
     config.pluginmanager.register(_flightcache.CachePlugin(config), "flockai-cache")

@@ -320,13 +320,17 @@ def safe_name(name: str) -> str:
 
 
 def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
-    """Telemetry CSV and the flight's JSON (scenario, KPIs, events) under
-    ``directory/<nodeid>/``; returns that folder."""
+    """Telemetry CSV and the flight's JSON (scenario, KPIs, events), and per detection task
+    its COCO truth and results files, under ``directory/<nodeid>/``; returns that folder."""
     folder = Path(directory) / safe_name(nodeid)
     folder.mkdir(parents=True, exist_ok=True)
     name = safe_name(flight)
     atomic_write(folder / f"{name}.telemetry.csv", lambda fh: result.telemetry.to_csv(fh))
     write_json_atomic(folder / f"{name}.json", result.to_dict())
+    for task, (truth, predictions) in (getattr(result, "ml_coco", None) or {}).items():
+        # a detection task's frames as COCO files (pycocotools, FiftyOne): truth and results
+        write_json_atomic(folder / f"{name}.{safe_name(task)}.truth.json", truth)
+        write_json_atomic(folder / f"{name}.{safe_name(task)}.results.json", predictions)
     from . import plots           # lazy: numpy, and matplotlib (see tests/test_architecture.py)
     if plots.available():
         _picture(plots.energy_figure, result, folder / f"{name}.energy.png")

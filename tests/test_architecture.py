@@ -28,7 +28,7 @@ PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
 #: function-level imports that are fine: optional extras, GL backends loaded on demand, and
 #: scipy.stats (a dependency, but ~1 s to import: only the Latin-hypercube design needs it)
 OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
-            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats"}
+            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats", "distributed"}
 #: the import-time MuJoCo/GL guard (``_mujoco.py``, see its docstring), and the
 #: sweep runner loading the batched backend, whose modules import JAX (the optional
 #: extra ``mjx``), only when ``backend="mjx"`` is asked for
@@ -42,6 +42,7 @@ LAZY_LOADS = {
     ("harness/fixtures.py", "..control.pilots", "Hover"): "the pilot fixture: the core",
     ("harness/fixtures.py", "..mission", "Mission"): "the mission fixture: the core",
     ("harness/sweeps.py", "..sweeps", "runner"): "the flockai_sweep fixture: the core",
+    ("harness/sweeps.py", "..sweeps", "executors"): "--flockai-sweep-executor given: the core",
     ("harness/sweeps.py", "..sweeps", "envelope"): "after a sweep flew (loaded then)",
     ("harness/recorder.py", "..sweeps", "envelope"): "after a sweep flew (loaded then)",
     ("report.py", ".", "plots"): "pictures of --flockai-artifacts: NumPy, matplotlib",
@@ -55,7 +56,7 @@ SAME_LAYER = {
     ("result", "_io"), ("result", "errors"), ("result", "phases"),
     ("ml", "control"),
     ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
-    ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
+    ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
     ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
     ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),
     ("report", "plots"), ("reports", "report"), ("strategies", "budgets"), ("sweeps", "budgets"),

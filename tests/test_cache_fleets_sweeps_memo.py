@@ -12,7 +12,7 @@ import pytest
 import pytest_flockai as fa
 from pytest_flockai.cache import FlightCache, caching, flight_key, memo_key
 from pytest_flockai.cache import key as cache_key
-from pytest_flockai.cache.memo import MAGIC as MEMO_MAGIC
+from pytest_flockai.cache.memo_store import MAGIC as MEMO_MAGIC
 from pytest_flockai.cache.store import entries
 from pytest_flockai.fleet.result import FleetResult
 from pytest_flockai.ml.envelope import envelope

@@ -150,6 +150,7 @@ def test_render_views_builds_training_data(tmp_path):
     # the folder replays with its truth
     rc = ReplayCamera(tmp_path / "ds", rate_hz=1.0)
     rc.bind(None, None, np.random.default_rng(0))
+    rc.read(0.0)                                       # the recording starts at the first read
     f = rc.read(1.2)
     assert np.array_equal(f, views[1][0])            # PNG is lossless
     assert rc.last_truth.count == views[1][1].count
@@ -179,8 +180,9 @@ def test_replay_folder_in_order_at_the_stated_rate(tmp_path):
     assert rc.frames == 7 and rc.last_t == 2.0
     once = ReplayCamera(tmp_path / "seq", rate_hz=2.0, loop=False)
     once.bind(None, None, np.random.default_rng(0))
-    assert tuple(once.read(1.2)[0, 0]) == B
-    assert once.read(1.5) is None and once.ended
+    # the recording starts at the first read (a task's first tick, after take-off)
+    assert [tuple(once.read(t)[0, 0]) for t in (1.2, 1.5, 2.0)] == [R, G, B]
+    assert once.read(2.5) is None and once.ended
 
 
 def test_replay_video(tmp_path):

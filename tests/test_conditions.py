@@ -74,7 +74,9 @@ def test_the_blur_in_the_image_has_the_length_of_the_kernel():
 
 
 def test_kernels_and_vectors():
-    assert motion_kernel(0.2, 0.1) is None
+    assert motion_kernel(0.005, 0.0) is None                 # under MIN_BLUR_PX
+    sub = motion_kernel(0.7, 0.0)                            # sub-pixel: applied, not a delta
+    assert sub.shape == (3, 3) and sub.sum() == pytest.approx(1.0) and sub.max() < 0.9
     k = motion_kernel(6.0, 0.0)
     assert k.sum() == pytest.approx(1.0) and k.shape[1] >= 7
     pos, mat = fa.sensors.gimbal_pose((0, 0, 20), 0.0, -90.0)

@@ -23,10 +23,9 @@ from __future__ import annotations
 import copy
 import threading
 from collections import OrderedDict
-from typing import Callable
+from collections.abc import Callable
 
 from .._mujoco import mujoco
-
 from ..physics import RHO_SEA_LEVEL
 from .model import world_spec
 

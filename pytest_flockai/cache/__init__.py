@@ -39,7 +39,7 @@ VERIFY_FRACTION = 0.1
 
 #: public name -> its module in this package, imported on first use
 _LAZY = {"CacheWarning": ".store", "CorruptEntry": ".store", "FlightCache": ".store",
-         "Lookup": ".store", "MemoStore": ".memo", "Uncacheable": ".key", "cacheable": ".key",
+         "Lookup": ".store", "MemoStore": ".memo_store", "Uncacheable": ".key", "cacheable": ".key",
          "flight_key": ".key", "memo_key": ".key", "CacheKey": ".auth", "default_key": ".auth",
          "NotAuthentic": ".entry", "CacheMismatch": ".store"}
 

@@ -42,7 +42,7 @@ from . import MODES, VERIFY_FRACTION  # the light package module defines them
 from . import auth as _auth
 from . import disk as _disk
 from . import key as _key
-from . import memo as _memo_store
+from . import memo_store as _memo_store
 from .entry import MAGIC, CorruptEntry, NotAuthentic, read_entry, seal, unseal
 
 
@@ -134,7 +134,7 @@ class FlightCache:
 
     @property
     def memo(self):
-        """The memo store beside the flights (``pytest_flockai.cache.memo``)."""
+        """The memo store beside the flights (``pytest_flockai.cache.memo_store``)."""
         if self._memo is None:
             self._memo = _memo_store.MemoStore(self)
         return self._memo

@@ -25,6 +25,7 @@ from .._io import atomic_write
 from .. import report as _report
 from ..reports import history as _history
 from ..reports import html as _html
+from ..reports import ml_gallery as _ml_gallery
 from ..reports import markdown as _markdown
 from . import html_extras as _html_extras
 from .options import path_option
@@ -100,8 +101,9 @@ class ReportsPlugin:
 
     def _flight_pictures(self, name, result) -> list[dict]:
         from .. import plots       # lazy: numpy, and matplotlib (see tests/test_architecture.py)
+        gallery = _ml_gallery.pictures(name, result)      # drawn with OpenCV, no matplotlib
         if not plots.available():
-            return []
+            return gallery
         key = id(result)
         if key not in self._pictures:
             pics = []
@@ -112,7 +114,8 @@ class ReportsPlugin:
                     draw(result, p)
                     pics.append((kind, base64.b64encode(p.read_bytes()).decode()))
             self._pictures[key] = pics
-        return [{"title": f"{name}: {kind}", "data": data} for kind, data in self._pictures[key]]
+        return [{"title": f"{name}: {kind}", "data": data}
+                for kind, data in self._pictures[key]] + gallery
 
     # -- on the controller -------------------------------------------------------------------------
     def pytest_runtest_logreport(self, report):

@@ -20,6 +20,10 @@ OPTIONS = [
                               "(default: 5)"),
     ("artifacts", "DIR", "write each flight's telemetry (CSV) and result (JSON) under "
                          "DIR/<test nodeid>/"),
+    ("sweep-executor", "ADDRESS", "fly the variants of @pytest.mark.flockai_sweep on the Dask "
+                                  "scheduler at ADDRESS (tcp://host:8786; needs "
+                                  "pytest-flockai[dask]) instead of this machine's processes; a "
+                                  "marker's own executor= wins"),
     ("missing-baseline", "{warn,fail}", "what a test with flights but no entry in the "
                                        "--flockai-baseline file (or a flight the entry does "
                                        "not name) does: warn (default: noted in the terminal "

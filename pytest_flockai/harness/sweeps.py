@@ -1,4 +1,5 @@
-"""``@pytest.mark.flockai_sweep(**axes, samples=, method=, seed=, workers=)``: the
+"""``@pytest.mark.flockai_sweep(**axes, samples=, method=, seed=, workers=, executor=,
+batch_size=, progress=)``: the
 test flies a sweep of the ``mission`` fixture (``fa.sweep``) through the
 ``flockai_sweep`` fixture (requested for every marked test; ask for it to get
 the DataFrame). The test's ``@pytest.mark.kpi`` budgets are checked on every
@@ -7,6 +8,13 @@ KPI). The JSON report gets the sweep's rows under ``"sweep"``; with
 ``--flockai-artifacts DIR`` the envelope is written there as
 ``<test>/sweep.csv`` and ``sweep.png`` (a KPI over the first two axes), and the
 picture goes to the HTML reports.
+
+``--flockai-sweep-executor ADDRESS`` (ini ``flockai_sweep_executor``) sends the
+variants of every marked sweep to the Dask scheduler at ``ADDRESS``: one
+``distributed.Client`` per pytest process (the ``flockai_sweep_executor``
+fixture, session-scoped), connected at the first sweep and closed at the end.
+A sweep interrupted by Ctrl-C fails its test with the rows finished so far (the
+others ``interrupted``), which go to the reports, and stops the run after it.
 """
 
 from __future__ import annotations
@@ -19,9 +27,41 @@ from .. import budgets as _budgets
 from .. import report as _report
 from ..errors import ConfigError
 from .ci_reports import PICTURE_PROPERTY
+from .options import option
 from .recorder import STATE
 
 MARKER = "flockai_sweep"
+
+
+def configure(config) -> None:
+    """A UsageError for a ``--flockai-sweep-executor`` that is no scheduler address."""
+    address, from_ini = option(config, "sweep-executor")
+    if address is None or getattr(config.option, "help", False):
+        return
+    what = "flockai_sweep_executor (ini)" if from_ini else "--flockai-sweep-executor"
+    from ..sweeps import executors     # lazy: only a run that asks for a cluster loads the core
+    try:
+        executors.check_address(address, what)
+    except ConfigError as exc:
+        raise pytest.UsageError(f"pytest-flockai: {exc}") from None
+
+
+@pytest.fixture(scope="session")
+def flockai_sweep_executor(pytestconfig):
+    """The Dask client of ``--flockai-sweep-executor`` (None without the option)."""
+    address, _ = option(pytestconfig, "sweep-executor")
+    if address is None:
+        yield None
+        return
+    from ..sweeps import executors     # lazy: only a run that asks for a cluster loads the core
+    try:
+        client = executors.connect(address)
+    except ConfigError as exc:
+        pytest.fail(f"pytest-flockai: --flockai-sweep-executor: {exc}", pytrace=False)
+    try:
+        yield client
+    finally:
+        client.close()
 
 
 def marked(item) -> bool:
@@ -36,7 +76,7 @@ def request_fixture(item) -> None:
 
 
 @pytest.fixture
-def flockai_sweep(request, mission):
+def flockai_sweep(request, mission, flockai_sweep_executor):
     """The sweep of ``@pytest.mark.flockai_sweep`` flown from the ``mission`` fixture:
     a DataFrame, one row per variant, with the test's kpi budgets as ``ok_*``/``ok``."""
     mark = request.node.get_closest_marker(MARKER)
@@ -49,13 +89,19 @@ def flockai_sweep(request, mission):
                     f"(payload_kg=[0.0, 0.2])", pytrace=False)
     st = request.node.stash[STATE]
     budgets = {fb.budget.kpi: fb.budget.text for fb in st.markers.budgets if fb.flight is None}
+    kwargs = dict(mark.kwargs)
+    if flockai_sweep_executor is not None:
+        kwargs.setdefault("executor", flockai_sweep_executor)
     from ..sweeps import runner        # lazy: the core loads on first use
     try:
-        df = runner.sweep(mission, budgets=budgets or None, **mark.kwargs)
+        df = runner.sweep(mission, budgets=budgets or None, **kwargs)
     except ConfigError as exc:
         pytest.fail(f"pytest-flockai: bad @pytest.mark.{MARKER} on {request.node.nodeid}: {exc}",
                     pytrace=False)
     st.sweep = df
+    if df.attrs.get("interrupted"):     # the test fails with the rows so far; the run stops
+        request.session.shouldstop = (f"pytest-flockai: the sweep of {request.node.nodeid} was "
+                                      f"interrupted; its finished rows are in the reports")
     return df
 
 

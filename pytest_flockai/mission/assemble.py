@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import copy
 
-from .._mujoco import mujoco
 import numpy as np
 
+from .._mujoco import mujoco
 from ..airframe import model_cache
 from ..airframe.model import add_drone
 from ..airframe.rotor_drag import RotorDrag
@@ -30,8 +30,7 @@ from ..ml.scheduler import DatasetRecorder, TaskScheduler, memory_utilization
 from ..probes.builtin import TaskProbe
 from ..probes.hub import ProbeHub, RunView
 from ..probes.telemetry import TelemetryRecorder, TelemetryStep
-from ..sensors import (IMU, GPS, Barometer, BatterySensor, Camera, Compass, Rangefinder,
-                       SensorSuite)
+from ..sensors import GPS, IMU, Barometer, BatterySensor, Camera, Compass, Rangefinder, SensorSuite
 from ..sensors.base import Sensing
 from ..world.wind import WindStep
 from . import parts

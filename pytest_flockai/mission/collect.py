@@ -20,6 +20,7 @@ def flight_result(run, mission, wall_s: float, t_final: float, end_reason: str) 
     stage = DONE if st.t_land else PILOT
     kpis = run.probing.final(t_final, d.qpos.tolist(), d.qvel.tolist(), stage)
     kpis.update(run.scheduler.evaluation_kpis())
+    kpis.update(run.scheduler.energy_kpis(run.meter))
     frames = run.hub.frames()
     _merge_probe_columns(tel, frames)
     scen = mission.scenario()
@@ -31,14 +32,17 @@ def flight_result(run, mission, wall_s: float, t_final: float, end_reason: str) 
     events = sorted(run.events.items + run.hub.errors + sched.inference_events(),
                     key=lambda e: e["t"])
     if sched.in_view and len(tel):
-        iv = pd.DataFrame(sched.in_view, columns=["t", "people_in_view"]).drop_duplicates("t")
-        merged = pd.merge_asof(tel[[]].reset_index(), iv, on="t", direction="nearest",
-                               tolerance=0.5 / plan.telemetry_hz)
-        tel["people_in_view"] = merged["people_in_view"].to_numpy(dtype=float)
+        iv = pd.DataFrame(sched.in_view, columns=["t", "people_in_view", "blur_px"])
+        merged = pd.merge_asof(tel[[]].reset_index(), iv.drop_duplicates("t"), on="t",
+                               direction="nearest", tolerance=0.5 / plan.telemetry_hz)
+        for c in ("people_in_view", "blur_px"):
+            tel[c] = merged[c].to_numpy(dtype=float)
     if sched.recorder is not None and sched.recorder.records:
         export_dataset(sched.recorder.records, plan.dataset_dir)
     res = FlightResult(kpis, tel, events, scen, run.meter.breakdown(), end_reason, wall_s,
                        probe_samples=frames, probe_errors=list(run.hub.errors))
+    res.ml_gallery = sched.galleries()          # the detection tasks' worst frames, drawn
+    res.ml_coco = sched.coco_pairs()            # and their truth and predictions (COCO)
     w = plan.world
     res.people = np.asarray(w.people) if w is not None and hasattr(w, "people") else np.zeros((0, 3))
     return res

@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 
 from .._mujoco import mujoco
-
 from ..control.stages import DONE, STAGES, TAKEOFF
 from ..errors import SimulationError
 

@@ -7,7 +7,12 @@
 - ``Task`` and ``TaskRunner``: what runs where, executed on the simulated clock;
 - ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
   into one shape; ``evaluation``: COCO detection metrics and classification;
-- ``count_macs``: MACs and parameters of an ONNX graph.
+- ``count_macs``: MACs and parameters of an ONNX graph;
+- ``evaluate_dataset``: a task's model over a labelled folder, each image once,
+  offline; ``analyse``: PR curves, per-class AP, confusion matrix, F1-best
+  threshold from COCOeval's arrays;
+- ``shipped("detector")``: the models shipped in the package; ``compare_models``:
+  several models on the same frames, accuracy next to latency, energy, endurance.
 """
 
 from .macs import MacReport, count_macs
@@ -15,12 +20,18 @@ from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord
+from .analysis import analyse, write_coco_pair
+from .dataset_eval import DatasetEvaluation, evaluate_dataset
+from .shipped import SHIPPED, shipped, shipped_path
+from .compare import compare_models
 from .jpeg import decode_jpeg, encode_jpeg
 from .runner import DeviceClock, InferenceEvent, TaskRunner
 from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
-__all__ = ["Classifier", "Clusterer", "Counter", "Detections", "Detector", "DeviceClock",
+__all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detections", "Detector",
+           "DeviceClock", "SHIPPED", "analyse", "compare_models", "evaluate_dataset", "shipped", "shipped_path",
+           "write_coco_pair",
            "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
            "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]

@@ -37,6 +37,7 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,7 +57,9 @@ MAX_DETS = (10, 100, 1000)
 class FrameRecord:
     """One frame a task scored: its truth objects, what the model found (None:
     the inference failed or the frame was dropped), the drone's altitude and the
-    frame size; ``prediction`` is the raw model output (custom evaluators)."""
+    frame size; ``prediction`` is the raw model output (custom evaluators);
+    ``file``: the replayed image (None: rendered); ``blur_px``: the frame's motion
+    blur length; ``t``: the capture time."""
 
     index: int
     truth: object                  # world.truth.Objects
@@ -65,6 +68,10 @@ class FrameRecord:
     width: int
     height: int
     prediction: object = None
+    file: str | None = None
+    blur_px: float = 0.0
+    t: float = math.nan
+    image: bytes | None = None       # a rendered frame as JPEG (the gallery draws it)
 
 
 def _band(lo, hi, unit):
@@ -88,10 +95,22 @@ def detection_kpis(records, classes, *, score_threshold: float, min_visible: flo
 
 
 def _detection_kpis(recs, classes, score_threshold: float, min_visible: float) -> dict:
-    gt, dts, info = _coco_inputs(recs, classes, min_visible)
-    if not gt["annotations"]:
+    ev, gt, dts, info = run_cocoeval(recs, classes, min_visible)
+    if ev is None:
         return {"map50": math.nan, "map50_95": math.nan, "recall": math.nan,
                 "precision": _precision_without_truth(recs, score_threshold)}
+    out = _average_precision(ev, classes)
+    out.update(_at_threshold(ev, recs, classes, info, dts, score_threshold))
+    return out
+
+
+def run_cocoeval(recs, classes, min_visible: float, *, use_cats: bool = True):
+    """(COCOeval evaluated and accumulated, ground truth dict, detections list, info per
+    annotation id) of frames whose inference ran; (None, gt, dts, info) without truth.
+    ``use_cats=False``: class-agnostic matching (a confusion matrix's)."""
+    gt, dts, info = _coco_inputs(recs, classes, min_visible)
+    if not gt["annotations"]:
+        return None, gt, dts, info
     with contextlib.redirect_stdout(io.StringIO()):      # pycocotools prints progress
         coco_gt = COCO()
         coco_gt.dataset = gt
@@ -104,18 +123,18 @@ def _detection_kpis(recs, classes, score_threshold: float, min_visible: float) -
         ev = COCOeval(coco_gt, coco_dt, "bbox")
         ev.params.maxDets = list(MAX_DETS)
         ev.params.areaRng, ev.params.areaRngLbl = [[0, 1e10]], ["all"]
+        ev.params.useCats = int(use_cats)
         ev.evaluate()
         ev.accumulate()
-    out = _average_precision(ev, classes)
-    out.update(_at_threshold(ev, recs, classes, info, dts, score_threshold))
-    return out
+    return ev, gt, dts, info
 
 
 def _coco_inputs(recs, classes, min_visible):
     images, anns, dts, info = [], [], [], {}
     for r in recs:
         iid = r.index + 1
-        images.append({"id": iid, "width": int(r.width), "height": int(r.height)})
+        images.append({"id": iid, "width": int(r.width), "height": int(r.height),
+                       "file_name": os.path.basename(r.file) if r.file else f"frame_{r.index:05d}"})
         o = r.truth
         for j in range(len(o) if o is not None else 0):
             x0, y0, x1, y1 = (float(v) for v in o.boxes[j])

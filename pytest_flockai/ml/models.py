@@ -149,6 +149,7 @@ class OnnxModel(Model):
                               f"expected an .onnx file")
         # by path, never by bytes: external data (weights.bin beside the model) then
         # resolves from the model's folder, not from the working directory
+        self._providers, self._threads = tuple(providers), int(threads)
         self.session = self._session(self.path, providers, threads)
         self._layout_arg = layout
         if postprocess is not None and not callable(postprocess):
@@ -159,6 +160,19 @@ class OnnxModel(Model):
         self.input_size = self._input_size(input_size, dims, shp, hi, wi, where, inp.name)
         self._normalisation(scale, mean, std, where, inp.name)
         self._costs(macs, where)
+
+    def __getstate__(self) -> dict:
+        """Pickled/deep-copied (sweeps, workers) without the session: re-opened from the path."""
+        state = self.__dict__.copy()
+        state["session"] = None
+        state["_proto"] = self._proto is not None
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        had_proto = state.pop("_proto")
+        self.__dict__.update(state)
+        self.session = self._session(self.path, self._providers, self._threads)
+        self._proto = self._load_proto(self.path) if had_proto else None
 
     def _session(self, path, providers, threads):
         opts = ort.SessionOptions()

@@ -27,10 +27,8 @@ simulated timeline:
 
 SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and
 alerts (``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight.
-
-A model raising during inference gives a failed inference (``ok=False``, the exception
-text in ``error``, ``inference_failures``); the flight goes on.
-A link out of range fails a remote inference the same way.
+A model raising (or a link out of range) gives a failed inference (``ok=False``, the text
+in ``error``, ``inference_failures``); the flight goes on.
 """
 
 from __future__ import annotations
@@ -55,7 +53,6 @@ from .templates import Template
 
 _ZERO_USAGE = (0.0, 0, 0, 0, 0)
 _NO_EVENTS: tuple = ()
-
 #: the computer of a TaskRunner bound outside a Mission (FlockAI's drone carries a Pi 4)
 STANDALONE_DEVICE = "raspberry-pi-4"
 
@@ -130,6 +127,11 @@ class TaskRunner:
     def due(self, t: float) -> bool:
         return t >= self._next_frame_t - 1e-9
 
+    def skip(self, t: float) -> None:
+        """No frame at t (a replay is over): wait for the next sample time, no inference."""
+        k = math.floor((t - self._t0) / self.task.period_s + 1e-9)
+        self._next_frame_t = max(self._next_frame_t, self._t0 + (k + 1) * self.task.period_s)
+
     def on_frame(self, t: float, frame, truth=None, drone_pos=(0.0, 0.0, 0.0)) -> None:
         """A frame from the task's sensor at time t. Frames before ``next_frame_t``
         are ignored, so the loop may pass every sensor frame."""
@@ -141,7 +143,7 @@ class TaskRunner:
         self._next_frame_t = self._t0 + (k + 1) * task.period_s
         idx = self.frames
         self.frames += 1
-        tc = self.scorer.frame(idx, frame, truth, drone_pos)
+        tc = self.scorer.frame(idx, frame, truth, drone_pos, t)
         if self._free_at > t + 1e-12:      # this task's model is still busy
             if task.on_busy == "drop":
                 self.frames_dropped += 1
@@ -179,8 +181,7 @@ class TaskRunner:
             ev = pend.pop(0)[2]
             out.append(ev)
             self.events.append(ev)
-            if not ev.ok:
-                self.inference_failures += 1
+            self.inference_failures += not ev.ok
             self.scorer.finished(ev)
         self._next_done = pend[0][0] if pend else math.inf
         return out
@@ -372,8 +373,7 @@ class TaskRunner:
             "inference_failures": float(self.inference_failures),
             "cpu_time_s": self.cpu_time_s(),
         }
-        out.update(self.scorer.count_kpis())
-        return out
+        return {**out, **self.scorer.count_kpis()}
 
     def evaluation(self) -> dict:
         """The end-of-flight accuracy KPIs (``Scorer.evaluation``)."""
@@ -391,8 +391,8 @@ class TaskRunner:
             out.update(crowd_encounters=m["crowd_encounters"], crowds_missed=m["crowds_missed"])
         if self._wall:
             w = np.asarray(self._wall)
-            out["measured_wall_s"] = {"median": float(np.median(w)), "p10": float(np.percentile(w, 10)),
-                                      "p90": float(np.percentile(w, 90)), "n": int(w.size)}
+            p10, p50, p90 = (float(x) for x in np.percentile(w, (10, 50, 90)))
+            out["measured_wall_s"] = {"median": p50, "p10": p10, "p90": p90, "n": int(w.size)}
             out["calibration"] = self.calibration.to_dict()
         return out
 

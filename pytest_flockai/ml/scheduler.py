@@ -17,9 +17,14 @@ import numpy as np
 
 from ..clock import CLOCK_EPS, Clocked
 from ..control.stages import PILOT, RETURN
+from .analysis import coco_pair
+from .gallery import worst_frames
 from .metrics import percentile
 from .runner import DeviceClock, TaskRunner
+from .task_energy import task_energy_kpis
 
+#: frames a detection task's gallery shows
+GALLERY_FRAMES = 6
 #: MB: estimate of Raspberry Pi OS Lite + flight software resident set
 OS_MEMORY_MB = 250.0
 
@@ -47,6 +52,9 @@ class DatasetRecorder:
     def due(self, t: float) -> bool:
         return t >= self.next_frame_t - CLOCK_EPS
 
+    def skip(self, t: float) -> None:
+        self.on_frame(t, None, None, None)
+
     def on_frame(self, t, frame, truth, pos):
         if frame is not None:
             self.records.append((t, frame, truth))
@@ -71,8 +79,10 @@ class TaskScheduler(Clocked):
         self.consumers = self.runners + ([recorder] if recorder is not None else [])
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
         self.cpu_time_s = 0.0
-        self.in_view: list = []          # (t, people in view) at every frame read
+        self.in_view: list = []          # (t, people in view, blur px) at every frame read
         self.capture_pos: dict = {}      # t -> drone (x, y, z) at captures
+        #: per task: [busy s, tx bytes, tx packets, rx bytes, rx packets] charged to the energy
+        self.charged = [[0.0, 0, 0, 0, 0] for _ in self.runners]
 
     def step(self, t: float) -> None:
         stage = self.st.stage
@@ -89,6 +99,9 @@ class TaskScheduler(Clocked):
                 cache[name] = self._read(name, t)
                 self.capture_pos[round(t, 6)] = pos
             value, truth = cache[name]
+            if value is None and getattr(self.suite[name], "ended", False):
+                c.skip(t)           # a replay without loop is over: no frame, no inference
+                continue
             c.on_frame(t, value, truth, pos)
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
 
@@ -98,7 +111,8 @@ class TaskScheduler(Clocked):
         value = self.suite.read(name, t, self.data)
         truth = getattr(self.suite[name], "last_truth", None)
         if truth is not None:
-            self.in_view.append((t, truth.count))
+            du, dv = getattr(truth, "blur_px", (0.0, 0.0))
+            self.in_view.append((t, truth.count, math.hypot(du, dv)))
         return value, truth
 
     def take_usage(self, t: float):
@@ -106,9 +120,15 @@ class TaskScheduler(Clocked):
         since the last call, after advancing each task to t."""
         busy = 0.0
         tb = tp = rb = rp = 0
-        for r in self.runners:
+        for r, ch in zip(self.runners, self.charged):
             r.advance(t)
             b, a1, a2, a3, a4 = r.take_usage()
+            if b or a1 or a3:
+                ch[0] += b
+                ch[1] += a1
+                ch[2] += a2
+                ch[3] += a3
+                ch[4] += a4
             busy += b
             tb += a1
             tp += a2
@@ -131,6 +151,23 @@ class TaskScheduler(Clocked):
                 "inference_failures": sum(k["inference_failures"] for k in by.values())}
         return comb, by
 
+    def energy_kpis(self, meter) -> dict:
+        """``<task>.energy_j`` and its parts, and ``energy_untasked_j`` (``task_energy``)."""
+        if not self.runners:
+            return {}
+        return task_energy_kpis([r.task.name for r in self.runners], self.charged, meter)
+
+    def coco_pairs(self) -> dict:
+        """{task: (COCO ground truth, COCO results)} of the detection tasks (``analysis``)."""
+        return {r.task.name: coco_pair(r.scorer.records.values(), r.task.classes,
+                                       min_visible=r.task.min_visible)
+                for r in self.runners if r.task.evaluate == "detection" and r.scorer.records}
+
+    def galleries(self, n: int = GALLERY_FRAMES) -> dict:
+        """{task: its worst frames drawn (``gallery.worst_frames``)} of the detection tasks."""
+        return {r.task.name: worst_frames(r.scorer.records.values(), r.task, n)
+                for r in self.runners if r.task.evaluate == "detection" and r.scorer.records}
+
     def evaluation_kpis(self) -> dict:
         """The accuracy KPIs of the detection, classification and custom tasks, as
         ``<task>.<kpi>`` and, with a single task, also unprefixed."""
@@ -143,7 +180,9 @@ class TaskScheduler(Clocked):
         return out
 
     def inference_events(self) -> list[dict]:
-        """Every inference as an event dict, with the drone's position at capture."""
+        """Every inference as an event dict, with the drone's position and the frame's
+        motion blur length (``blur_px``) at capture."""
+        self._blur = {round(t, 6): b for t, _, b in self.in_view}
         out = []
         for r in self.runners:
             thr = r.task.crowd_threshold
@@ -153,6 +192,9 @@ class TaskScheduler(Clocked):
                 pos = self.capture_pos.get(round(float(e.t_capture), 6))
                 if pos is not None:
                     d["x"], d["y"], d["z"] = pos
+                blur = self._blur.get(round(float(e.t_capture), 6))
+                if blur is not None:
+                    d["blur_px"] = blur
                 d["detected"] = bool(e.ok and e.count is not None and e.count >= thr)
                 out.append(d)
         return out

@@ -16,9 +16,14 @@ import math
 import numpy as np
 
 from ..errors import ConfigError
+from ..sensors.classnames import to_task_classes
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord, classification_kpis, detection_kpis
+from .jpeg import encode_jpeg, is_image
 from .metrics import crowd_metrics, truth_count
+
+#: JPEG quality of the rendered frames a detection task keeps for its gallery
+GALLERY_JPEG_QUALITY = 85
 
 
 class Scorer:
@@ -29,17 +34,25 @@ class Scorer:
         self.records: dict = {}             # frame index -> FrameRecord
         self._dets: dict = {}               # frame index -> Detections parsed for the count
         self.parse_error: str | None = None  # why the last prediction could not be parsed
+        self._maps: dict = {}               # the labels' class names -> the task's, by name
 
-    def frame(self, idx: int, frame, truth, drone_pos) -> float | None:
+    def frame(self, idx: int, frame, truth, drone_pos, t: float = math.nan) -> float | None:
         """A frame the task took; returns its true people count (None: unknown)."""
         tc = truth_count(truth)
         self.truth.append(math.nan if tc is None else tc)
         self.pred.append(math.nan)
         if self.task.evaluate != "count" and hasattr(truth, "objects"):
             shape = np.shape(frame)
-            self.records[idx] = FrameRecord(idx, truth.objects, None, float(drone_pos[2]),
+            tk = self.task
+            objs = to_task_classes(truth.objects, tk.classes, f"task {tk.name!r}", self._maps)
+            blur = getattr(truth, "blur_px", (0.0, 0.0))
+            self.records[idx] = FrameRecord(idx, objs, None, float(drone_pos[2]),
                                             int(shape[1]) if len(shape) > 1 else 0,
-                                            int(shape[0]) if len(shape) else 0)
+                                            int(shape[0]) if len(shape) else 0,
+                                            file=getattr(truth, "file", None),
+                                            blur_px=float(np.hypot(*blur)), t=float(t))
+            if tk.evaluate == "detection" and self.records[idx].file is None and is_image(frame):
+                self.records[idx].image = encode_jpeg(frame, GALLERY_JPEG_QUALITY)
         return tc
 
     def count(self, pred, idx, frame):
@@ -109,9 +122,11 @@ class Scorer:
         recs = [self.records[k] for k in sorted(self.records)
                 if self.records[k].prediction is not None or self.records[k].detections is not None]
         if callable(t.evaluate):
-            return {str(k): float(v) for k, v in (t.evaluate(recs) or {}).items()}
-        if t.evaluate == "detection":
-            return detection_kpis(recs, t.classes, score_threshold=t.score_threshold,
-                                  min_visible=t.min_visible)
-        return classification_kpis(recs, t.classes, score_threshold=t.score_threshold,
-                                   min_visible=t.min_visible, where=f"task {t.name!r}")
+            out = {str(k): float(v) for k, v in (t.evaluate(recs) or {}).items()}
+        elif t.evaluate == "detection":
+            out = detection_kpis(recs, t.classes, score_threshold=t.score_threshold,
+                                 min_visible=t.min_visible)
+        else:
+            out = classification_kpis(recs, t.classes, score_threshold=t.score_threshold,
+                                      min_visible=t.min_visible, where=f"task {t.name!r}")
+        return {**out, "images_scored": float(len(recs))} if recs else out

@@ -18,6 +18,7 @@ import html as _html
 import math
 
 from .._io import atomic_write
+from . import ml_gallery as _ml_gallery
 from . import summary as _s
 from .compare import compare as _compare
 from .compare import format_change
@@ -164,6 +165,9 @@ def _pictures(doc, pictures: dict) -> str:
                             f'{_e(seen[key])}</a>{cap}</figure>')
                 continue
             seen[key] = t["nodeid"]
+            if "gallery" in p:                          # a detection task's worst frame
+                figs.append(_ml_gallery.figure(p, key))
+                continue
             figs.append(f'<figure id="pic-{key}"><img alt="{_e(p["title"])}" '
                         f'src="data:{_e(p.get("mime", "image/png"))};base64,{p["data"]}">'
                         f'{cap}</figure>')

@@ -305,8 +305,7 @@ class Camera(Sensor):
         """Light, haze, motion blur, exposure and noise (``sensors.conditions``)."""
         c = self.conditions
         dist = self._renderer.distance(self.fov_deg) if c.needs_depth else None
-        centre = (float(dist[self.height // 2, self.width // 2]) if dist is not None
-                  else ground_distance(cam_pos, cam_mat))
+        centre = ground_distance(cam_pos, cam_mat)    # one rule, haze or not (conditions)
         jitter = math.radians(c.gimbal_jitter_dps)
         blur = blur_vector(cam_pos, cam_mat, velocity, yaw_rate, c.exposure_s, self.lens.focal_px,
                            centre, jitter)

@@ -25,7 +25,11 @@ light reaches the sensor:
   exposure, from the simulated physics: the image displacement of the scene
   point at the image centre between the start and the end of the exposure
   (the drone's velocity, its yaw rate, and the gimbal's residual jitter
-  ``gimbal_jitter_dps``), applied as a linear kernel of that length. At hover
+  ``gimbal_jitter_dps``), applied as a linear kernel of that length, sub-pixel
+  lengths included (a 0.7 px smear spreads each pixel over its neighbours). The
+  scene point is where the optical axis meets the ground plane, whatever else
+  is on (haze renders a depth buffer, but a rooftop or a person under the image
+  centre would make the blur depend on it). At hover
   the blur is zero; a pass at speed ``v`` over flat ground at height ``h``
   blurs ``v * exposure_s * f / h`` pixels (``f`` the focal length in pixels);
 - **exposure and sensor noise**: auto-exposure (``auto_exposure``) brings the
@@ -53,6 +57,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from numbers import Real
 
 import cv2
 import numpy as np
@@ -95,7 +100,12 @@ class Conditions:
                               f"a shutter time in [0, 1] s (e.g. 1/500 = 0.002)")
         _check.number("sun_elevation_deg", self.sun_elevation_deg, where=w, minimum=0.0,
                       maximum=90.0)
-        if not (self.visibility_m > 0):
+        for name in ("auto_exposure", "noise", "shadows"):
+            if not isinstance(getattr(self, name), bool):
+                raise ConfigError(f"{w}: {name} = {getattr(self, name)!r} is not allowed; "
+                                  f"expected True or False")
+        if isinstance(self.visibility_m, bool) or not isinstance(self.visibility_m, Real) or not (
+                self.visibility_m > 0):
             raise ConfigError(f"{w}: visibility_m = {self.visibility_m!r} is not allowed; "
                               f"expected a distance > 0 m (inf: clear air)")
         if self.target_level is not None:
@@ -107,9 +117,6 @@ class Conditions:
         if self.sun_azimuth_deg is not None:
             _check.number("sun_azimuth_deg", self.sun_azimuth_deg, where=w, minimum=0.0,
                           maximum=360.0)
-        if not isinstance(self.shadows, bool):
-            raise ConfigError(f"{w}: shadows = {self.shadows!r} is not allowed; expected True "
-                              f"or False")
         _check.number("readout_s", self.readout_s, where=w, minimum=0.0, maximum=0.2)
         _weather.check(self.weather, self.severity, w)
 
@@ -169,12 +176,17 @@ def blur_vector(cam_pos, cam_mat, velocity, yaw_rate, exposure_s, focal_px, dist
     return float(du + j), float(dv + j)
 
 
+#: pixels: blur shorter than this is not applied (a smear of 1/100 px changes no uint8 pixel)
+MIN_BLUR_PX = 0.01
+
+
 def motion_kernel(du: float, dv: float) -> np.ndarray | None:
-    """A normalised line kernel of the blur (None when under half a pixel)."""
+    """A normalised line kernel of the blur, sub-pixel lengths included (None when
+    under ``MIN_BLUR_PX``): the line's samples are spread bilinearly over the pixels."""
     length = math.hypot(du, dv)
-    if length < 0.5:
+    if length < MIN_BLUR_PX:
         return None
-    n = int(math.ceil(length)) | 1
+    n = max(3, int(math.ceil(length)) | 1)
     k = np.zeros((n, n), np.float32)
     c = n // 2
     steps = max(2, int(math.ceil(length * 4)))

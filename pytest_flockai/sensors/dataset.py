@@ -9,7 +9,8 @@ each capture; or from ``render_views``) and writes
 - ``truth.csv``: one row per frame: ``frame, file, t, count, pixels`` (pixels
   as a JSON list of [u, v]),
 - ``truth.json``: ``{"frames": [{"frame", "file", "t", "count", "indices",
-  "pixels"}, ...]}``, which ``ReplayCamera(folder)`` replays as ``last_truth``;
+  "pixels", "cam_pos", "blur_px"}, ...]}`` (``blur_px``: the frame's motion blur
+  (du, dv) in pixels; its length is on each COCO image as ``blur_px``), which ``ReplayCamera(folder)`` replays as ``last_truth``;
 - ``annotations.json``: every object of every frame (people and vehicles: box,
   class, visible fraction, distance, ground sample distance) as a COCO
   detection dataset, so you can train on our renders with any COCO tooling
@@ -21,6 +22,7 @@ It flies nothing itself and returns the truth table as a pandas DataFrame.
 from __future__ import annotations
 
 import json
+import math
 import os
 
 import cv2
@@ -28,7 +30,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ConfigError
-from ..world.truth import Truth
+from ..world.truth import CLASSES, Truth
 from .annotations import coco_dataset
 
 FORMATS = ("png", "jpg")
@@ -42,7 +44,7 @@ def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame"):
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise ConfigError(f"export_dataset: folder = {folder!r} exists and is not a folder")
     os.makedirs(folder, exist_ok=True)
-    rows, frames_json, coco = [], [], []
+    rows, frames_json, coco, blur = [], [], [], []
     for i, rec in enumerate(records):
         try:
             t, frame, truth = rec
@@ -66,13 +68,15 @@ def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame"):
                      "pixels": json.dumps(pix)})
         frames_json.append({"frame": i, "file": name, "t": float(t), "count": truth.count,
                             "indices": [int(k) for k in truth.indices], "pixels": pix,
-                            "cam_pos": [round(float(x), 4) for x in truth.cam_pos]})
+                            "cam_pos": [round(float(x), 4) for x in truth.cam_pos],
+                            "blur_px": [round(float(x), 4) for x in truth.blur_px]})
         coco.append((name, frame.shape[1], frame.shape[0], truth.objects))
+        blur.append(math.hypot(*truth.blur_px))
     df = pd.DataFrame(rows, columns=["frame", "file", "t", "count", "pixels"])
     df.to_csv(os.path.join(folder, "truth.csv"), index=False)
     with open(os.path.join(folder, "truth.json"), "w") as f:
         json.dump({"frames": frames_json}, f)
     classes = records[0][2].objects.classes if len(coco) and records[0][2] is not None else None
     with open(os.path.join(folder, "annotations.json"), "w") as f:
-        json.dump(coco_dataset(coco, *([classes] if classes else [])), f)
+        json.dump(coco_dataset(coco, classes or CLASSES, blur=blur), f)
     return df

@@ -2,13 +2,19 @@
 
 ``ReplayCamera(path, rate_hz=1.0, loop=True)`` has the camera's interface
 (``read(t, data) -> frame``, ``last_frame``, ``last_truth``, ``on_demand``):
-frame k of the recording is the one shown for simulated times
-``k / rate_hz <= t < (k + 1) / rate_hz`` (the stated rate, whatever the
-video's own frame rate). With ``loop`` the recording starts again after its
+the recording starts at the first read (``t_start``: the first tick of the task
+that reads it, whenever the task starts after take-off): frame 0 is shown from
+then until the next whole frame period of the mission clock (``j / rate_hz``),
+frame k for the k-th period after it (the stated rate, whatever the video's own
+frame rate). A task with
+``period_s = 1 / rate_hz`` and ``loop=False`` scores every image exactly once, and
+after the last one the task stops taking frames (no inference, no failure). With ``loop`` the recording starts again after its
 last frame; without, ``read`` returns None after the end (``ended`` is True).
 
-Folder: the images (.png .jpg .jpeg .bmp .tif .tiff .webp) sorted by file
-name, decoded on demand (one frame cached). If the folder holds the
+Folder (or an Ultralytics data.yaml): the images (.png .jpg .jpeg .bmp .tif
+.tiff .webp) sorted by file name, decoded on demand (one frame cached), with
+their labels in any layout ``labelsets`` reads (COCO, YOLO flat or images/ +
+labels/, data.yaml with ``split``, VisDrone-DET); ``last_file`` is the image shown. If the folder holds the
 ``truth.json`` written by ``export_dataset``, ``last_truth`` replays it.
 Video: read in order with OpenCV; going back (a loop) reopens the file.
 Frames are RGB uint8 (OpenCV's BGR is converted), like the rendered camera.
@@ -23,30 +29,39 @@ import os
 import cv2
 import numpy as np
 
+from .. import _check
 from ..errors import ConfigError
-from ..world.truth import CLASSES, Objects, Truth
+from ..world.truth import Objects, Truth
+from . import replay_conditions as _conditions
 from .annotations import load_annotations, orphan_labels
-from .base import Sensor
+from .base import DroneBody, Sensor
+from .classnames import person_index
+from .labelsets import IMAGE_EXT, find_labelset
 
-IMAGE_EXT = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
+#: frames of slack when the clock picks a frame: a read a hair before a frame's
+#: start (floating-point sums of the tick) still shows it
+FRAME_TOL = 1e-6
 
 
 class ReplayCamera(Sensor):
     on_demand = True
 
     def __init__(self, path, rate_hz: float = 1.0, loop: bool = True, *, name: str = "camera",
-                 power_w: float = 0.9, annotations="auto", classes=None):
+                 power_w: float = 0.9, annotations="auto", classes=None, split=None,
+                 conditions=None, fov_deg: float = 51.0, body_name: str = "drone"):
         super().__init__(name, rate_hz=rate_hz, power_w=power_w)
-        self._cv2 = cv2
         w = f"ReplayCamera {name!r}"
+        self.conditions = _conditions.check(conditions, w)
+        self.fov_deg = _check.number("fov_deg", fov_deg, where=w, minimum=1.0, maximum=179.0)
+        self.body_name, self._body = body_name, None
         p = os.fspath(path)
         self.path, self.loop = p, bool(loop)
         self.files = None
         self._cap = None
         self._truth = None
-        if os.path.isdir(p):
-            self.files = sorted(os.path.join(p, f) for f in os.listdir(p)
-                                if f.lower().endswith(IMAGE_EXT))
+        if os.path.isdir(p) or p.lower().endswith((".yaml", ".yml")) and os.path.isfile(p):
+            ls = find_labelset(p, fmt=annotations, split=split, where=w)
+            self.files, self.labels = ls.images, ls
             if not self.files:
                 raise ConfigError(f"{w}: path = {p!r} holds no images; allowed extensions: "
                                   f"{', '.join(IMAGE_EXT)}")
@@ -58,7 +73,9 @@ class ReplayCamera(Sensor):
             tj = os.path.join(p, "truth.json")
             if os.path.isfile(tj):
                 self._truth = _load_truth(tj, w)
-            self._attach_objects(annotations, classes, w)
+            self._attach_objects(ls, classes, w)
+            for f, tr in zip(self.files, self._truth or ()):
+                tr.file = f         # the image a frame record shows (galleries, results)
         elif os.path.isfile(p):
             cap = cv2.VideoCapture(p)
             if not cap.isOpened():
@@ -70,36 +87,30 @@ class ReplayCamera(Sensor):
             cap.release()
             self.n_frames = n if n > 0 else None     # unknown: found at the end
         else:
-            raise ConfigError(f"{w}: path = {p!r}: no such folder or video file")
+            raise ConfigError(f"{w}: path = {p!r}: no such folder or video file (nor an Ultralytics data.yaml)")
         if self.width <= 0 or self.height <= 0:
             raise ConfigError(f"{w}: path = {p!r} has resolution {self.width}x{self.height}; "
                               f"expected width and height > 0")
-        self.last_frame = self.last_truth = self.last_t = None
+        self.last_frame = self.last_truth = self.last_t = self.last_file = None
         self.frames = 0
         self.ended = False
+        self.t_start = None     # the first read: the recording's frame 0
+        self.last_blur_px = (0.0, 0.0)
         self._k = -1            # index of the cached frame
         self._pos = 0           # next frame the video capture will decode
 
-    def _attach_objects(self, annotations, classes, where):
-        """Per-object truth of each image from COCO or YOLO labels (``annotations``:
-        "auto" finds them, "coco" / "yolo" insists, None ignores them)."""
-        if annotations is None:
+    def _attach_objects(self, ls, classes, where):
+        """Per-object truth of each image from its labels (``labelsets`` finds them)."""
+        if ls.fmt is None:
             return
-        if annotations not in ("auto", "coco", "yolo"):
-            raise ConfigError(f"{where}: annotations = {annotations!r} is not allowed; allowed: "
-                              f"'auto', 'coco', 'yolo' or None")
-        has_labels = any(f.endswith(".json") and (f == "annotations.json" or f.startswith("instances"))
-                         for f in os.listdir(self.path)) or orphan_labels(self.path, []) != []
-        if annotations == "auto" and not has_labels:
-            return
-        orphans = orphan_labels(self.path, self.files) if not os.path.isfile(
-            os.path.join(self.path, "annotations.json")) else []
+        orphans = orphan_labels(ls.label_dir, self.files) if ls.fmt != "coco" else []
         if orphans:
-            raise ConfigError(f"{where}: label file {orphans[0]!r} has no image in {self.path!r}")
+            raise ConfigError(f"{where}: label file {orphans[0]!r} has no image in "
+                              f"{ls.label_dir!r}")
         sizes = [_image_size(f, where) for f in self.files]
-        objs, _ = load_annotations(self.path, self.files, sizes, fmt=annotations, classes=classes)
+        objs, names = load_annotations(ls, sizes, classes=classes, where=where)
         if self._truth is None:
-            person = list(classes or CLASSES).index("person") if "person" in (classes or CLASSES) else -1
+            person = person_index(names)
             self._truth = [_truth_of(k, o, person) for k, o in enumerate(objs)]
         else:
             for tr, o in zip(self._truth, objs):
@@ -107,13 +118,18 @@ class ReplayCamera(Sensor):
 
     def bind(self, model, data, rng):
         super().bind(model, data, rng)
-        self.last_frame = self.last_truth = self.last_t = None
+        if self.conditions is not None and model is not None:
+            self._body = DroneBody(model, self.body_name, f"ReplayCamera {self.name!r}").id
+        self.last_frame = self.last_truth = self.last_t = self.last_file = None
         self.frames = 0
         self.ended = False
+        self.t_start = None
 
     def frame_index(self, t: float) -> int | None:
-        """Index of the recording's frame shown at time t (None: after the end, no loop)."""
-        k = int(math.floor(t * self.rate_hz + 1e-9))
+        """Index of the recording's frame shown at time t (None: after the end, no
+        loop); frame 0 at the first read (see the module docstring)."""
+        k0 = 0 if self.t_start is None else math.floor(self.t_start * self.rate_hz + FRAME_TOL)
+        k = int(math.floor(t * self.rate_hz + FRAME_TOL)) - k0
         k = max(k, 0)
         n = self.n_frames
         if n is None:
@@ -123,6 +139,8 @@ class ReplayCamera(Sensor):
         return k
 
     def read(self, t: float, data=None):
+        if self.t_start is None:
+            self.t_start = float(t)
         k = self.frame_index(t)
         if k is not None and self.files is None:
             frame = self._video_frame(k)
@@ -137,28 +155,31 @@ class ReplayCamera(Sensor):
             self.ended = True
             self.last_frame, self.last_t, self.last_truth = None, float(t), None
             return None
-        self.last_frame, self.last_t = frame, float(t)
         self.last_truth = None
         if self._truth is not None and k < len(self._truth):
             self.last_truth = self._truth[k]
+        if self.conditions is not None and self._body is not None and data is not None:
+            frame, self.last_blur_px = _conditions.condition(
+                frame, self.conditions, self.rng, data, self._body, self.fov_deg, self.last_truth)
+        self.last_frame, self.last_t = frame, float(t)
+        self.last_file = self.files[k] if self.files is not None else None
         self.frames += 1
         return frame
 
     # -- decoding -------------------------------------------------------------
     def _image(self, k):
         if k != self._k:
-            img = self._cv2.imread(self.files[k], self._cv2.IMREAD_COLOR)
+            img = cv2.imread(self.files[k], cv2.IMREAD_COLOR)
             if img is None:
                 raise ConfigError(f"ReplayCamera {self.name!r}: image {self.files[k]!r} cannot "
                                   f"be decoded")
-            self._frame = self._cv2.cvtColor(img, self._cv2.COLOR_BGR2RGB)
+            self._frame = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
             self._k = k
         return self._frame
 
     def _video_frame(self, k):
         if k == self._k:
             return self._frame
-        cv2 = self._cv2
         if self._cap is None or k < self._pos:
             if self._cap is not None:
                 self._cap.release()
@@ -189,7 +210,9 @@ class ReplayCamera(Sensor):
 
     def to_dict(self):
         return {**super().to_dict(), "path": self.path, "loop": self.loop,
-                "frames": self.n_frames, "width": self.width, "height": self.height}
+                "frames": self.n_frames, "width": self.width, "height": self.height,
+                **({"conditions": self.conditions.to_dict(), "fov_deg": self.fov_deg}
+                   if self.conditions is not None else {})}
 
     def __repr__(self):
         return f"ReplayCamera({self.path!r}, rate_hz={self.rate_hz:g}, loop={self.loop})"
@@ -202,9 +225,10 @@ def _image_size(path, where):
     return int(img.shape[1]), int(img.shape[0])
 
 
-def _truth_of(k, objs: Objects, person: int) -> Truth:
-    """A frame's Truth from its labels: the people are the 'person' boxes (centres)."""
-    mask = objs.cls == person
+def _truth_of(k, objs: Objects, person) -> Truth:
+    """A frame's Truth from its labels: the people are the 'person' boxes (and its
+    aliases: pedestrian, people), by their centres."""
+    mask = np.isin(objs.cls, person)
     b = objs.boxes[mask]
     centres = np.column_stack([(b[:, 0] + b[:, 2]) / 2, (b[:, 1] + b[:, 3]) / 2]) if len(b) else np.zeros((0, 2))
     return Truth(float(k), np.flatnonzero(mask), centres, objects=objs)
@@ -216,7 +240,8 @@ def _load_truth(path, where):
             rows = json.load(f)["frames"]
         return [Truth(float(r.get("t", 0.0)), np.array(r["indices"], dtype=int),
                       np.array(r["pixels"], dtype=float).reshape(-1, 2),
-                      np.array(r.get("cam_pos", (np.nan,) * 3), dtype=float)) for r in rows]
+                      np.array(r.get("cam_pos", (np.nan,) * 3), dtype=float),
+                      blur_px=tuple(r.get("blur_px", (0.0, 0.0)))) for r in rows]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise ConfigError(f"{where}: {path!r} is not a truth file written by export_dataset: "
                           f"{exc}") from None

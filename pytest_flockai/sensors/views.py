@@ -127,8 +127,7 @@ class ViewSet:
             frames, distances = self._render(conditions.needs_depth, conditions.sun_dir,
                                              conditions.shadows)
         for frame, truth, (pos, mat), dist in zip(frames, self.truths, self.poses, distances):
-            centre = (float(dist[cam.height // 2, cam.width // 2]) if dist is not None
-                      else ground_distance(pos, mat))
+            centre = ground_distance(pos, mat)        # the camera's rule (conditions)
             blur = blur_vector(pos, mat, velocity, 0.0, conditions.exposure_s, cam.lens.focal_px,
                                centre)
             skew = blur_vector(pos, mat, velocity, 0.0, conditions.readout_s, cam.lens.focal_px,

@@ -8,7 +8,8 @@ Latin hypercube (``scipy.stats.qmc.LatinHypercube``), from a seed.
   ``mission_seed``) or a list of choices (drawn with equal probability).
 
 Every bad axis raises a ``ConfigError`` naming the axis, the value and what is
-allowed. Same seed, same variants.
+allowed; so does a sweep of more than ``limits.MAX_VARIANTS`` variants, before
+any of them is made. Same seed, same variants.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from numbers import Integral, Real
 
 import numpy as np
 
+from .. import limits
 from ..errors import ConfigError
 from .axes import INTEGER_AXES
 
@@ -73,6 +75,15 @@ def check_samples(method, samples):
 
 def variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]:
     """(the variants as dicts {axis: value}, the values to check per axis)."""
+    try:
+        return _variants(axes, method, samples, seed)
+    except MemoryError:
+        raise ConfigError(f"sweep: the variants of method={method!r}, samples={samples!r} do not "
+                          f"fit in this machine's memory (was fa.limits.MAX_VARIANTS = "
+                          f"{limits.MAX_VARIANTS:,} raised?); sweep fewer") from None
+
+
+def _variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]:
     samples = check_samples(method, samples)
     if isinstance(seed, bool) or not isinstance(seed, Integral) or seed < 0:
         raise ConfigError(f"sweep: seed = {seed!r} is not allowed; expected an integer >= 0")
@@ -81,6 +92,8 @@ def variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]:
     names = list(axes)
     if method == "grid":
         levels = [_values(n, axes[n], method) for n in names]
+        check_count(math.prod(len(v) for v in levels),
+                    " x ".join(f"{len(v)} {n}" for n, v in zip(names, levels)))
         return ([dict(zip(names, combo)) for combo in itertools.product(*levels)],
                 dict(zip(names, levels)))
     specs, to_check = [], {}
@@ -92,6 +105,7 @@ def variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]:
         else:
             specs.append(("choice", _values(n, spec, method)))
             to_check[n] = specs[-1][1]
+    check_count(samples, f"samples = {samples:,}")
     rng = np.random.default_rng(seed)
     if method == "random":
         u = rng.random((samples, len(names)))
@@ -103,6 +117,15 @@ def variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]:
     for row in u:
         out.append({n: _pick(n, kind, spec, x) for n, (kind, spec), x in zip(names, specs, row)})
     return out, to_check
+
+
+def check_count(count: int, what: str) -> None:
+    """ConfigError when a sweep of ``count`` variants (``what`` makes them) is above the limit."""
+    if count > limits.MAX_VARIANTS:
+        raise ConfigError(f"sweep: {count:,} variants ({what}) is above the limit "
+                          f"pytest_flockai.limits.MAX_VARIANTS = {limits.MAX_VARIANTS:,}; "
+                          f"sweep fewer values or samples, or raise the limit at your own risk "
+                          f"(fa.limits.MAX_VARIANTS = {count})")
 
 
 def _pick(name, kind, spec, x):

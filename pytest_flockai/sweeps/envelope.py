@@ -64,7 +64,8 @@ def save(df, path, x: str, y: str, kpi: str) -> list[Path]:
 def summary(df, files=()) -> dict:
     """A sweep as plain JSON data: its settings, counts and every row."""
     rows = df.astype(object).where(df.notna(), None).to_dict("records")
-    keep = ("axes", "method", "samples", "seed", "budgets", "workers", "backend")
+    keep = ("axes", "method", "samples", "seed", "budgets", "workers", "backend", "executor",
+            "interrupted")
     return {**{k: df.attrs.get(k) for k in keep}, "variants": len(df),
             "broken": int((~df["ok"].astype(bool)).sum()) if "ok" in df else 0,
             "files": [str(f) for f in files], "rows": rows}

@@ -5,9 +5,13 @@ The per-flight core (``Mission.run``) flies every variant, in this process
 ``spawn`` start method, safe under pytest, threads and macOS). The base
 mission travels to each worker once (pickled, in the pool's initializer),
 the variants as small dicts; results come back in the variants' order, so
-the same seed gives the same DataFrame whatever the worker count. A
-variant that ends in a ``SimulationError`` (or a combination the mission
-rejects) is a row with its ``error``, not a lost sweep.
+the same seed gives the same DataFrame whatever the worker count or
+executor. A variant that raises (a ``SimulationError``, a combination the
+mission rejects, a bug in a probe) or kills its worker is a row with its
+``error``, never a lost sweep; an interrupt returns the rows finished so far.
+``executor=`` flies the variants elsewhere (any ``concurrent.futures.Executor``,
+a Dask cluster): ``executors.py``. A progress bar (``progress.py``) counts the
+drone-seconds done and to go.
 
 ``backend="mjx"`` flies every variant in one batch instead (MJX physics and
 the core's components in JAX, ``batched/``; ``pip install
@@ -26,10 +30,9 @@ counts the variants per cache status ("hit", "stored", ...).
 from __future__ import annotations
 
 import math
-import multiprocessing
 import os
-import pickle
 import time
+import warnings
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 
@@ -39,16 +42,23 @@ from .. import budgets as _budgets
 from .. import cache as _cache
 from ..errors import ConfigError, FlockAIError
 from ..mission import Mission
-from ..recording import recording
 from . import axes as _axes
 from . import design
+from . import executors as _executors
+from . import progress as _progress
+from . import worker as _worker
 from .batched import params as _batched
+from .worker import Outcome, row_of
 
 BACKENDS = ("process", "mjx")
 #: JAX platforms the mjx backend runs on (None: JAX's default device)
 DEVICES = (None, "cpu", "gpu", "cuda", "tpu")
-_BASE: list = []        # the base mission inside a worker process
-_CACHE: list = []       # the caller's flight cache, opened again inside a worker process
+#: variants per task on an executor with a batched backend (one compiled batch each)
+BATCHED_BATCH = 4096
+
+
+class SweepInterrupted(UserWarning):
+    """A sweep was interrupted: it returns the rows finished so far."""
 
 
 def default_workers() -> int:
@@ -59,7 +69,8 @@ def default_workers() -> int:
 
 
 def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, workers=None,
-          backend="process", device=None, **axes) -> pd.DataFrame:
+          backend="process", device=None, executor=None, batch_size=None, progress=None,
+          **axes) -> pd.DataFrame:
     """Fly ``base_mission`` once per variant of ``axes``; one DataFrame row per variant.
 
     Columns: the axes, ``end_reason``, ``error`` (None, or the failure of that
@@ -69,6 +80,16 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
     variant flew without error). ``df.attrs`` holds the sweep's settings and its
     wall time. ``backend="mjx"`` flies the variants in one JAX batch (``device``:
     "cpu", "gpu", or None for JAX's default); ``workers`` is then unused.
+
+    ``executor``: where the variants fly instead of this machine's processes
+    (any ``concurrent.futures.Executor``, a ``distributed.Client`` or a Dask
+    scheduler address; see ``executors.py``; ``workers`` is then unused),
+    ``batch_size`` variants per task (default: 1 with ``backend="process"``,
+    else ``BATCHED_BATCH``). A variant
+    that raises or kills its worker is a row with its ``error``; an interrupt
+    (Ctrl-C) returns the rows finished so far, the others ``interrupted``
+    (``df.attrs["interrupted"]``). ``progress``: a bar of drone-seconds done and
+    to go (None: when stderr is a terminal; ``progress.py``).
     """
     if not isinstance(base_mission, Mission):
         raise ConfigError(f"sweep: base_mission = {base_mission!r} is not a fa.Mission")
@@ -84,17 +105,26 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
                           f"{{kpi: '<op> <number> [unit]'}}")
     parsed = _budgets.parse_many(budgets or {})
     workers = _check_workers(workers)
+    _executors.check_executor(executor)
+    _check_batch_size(batch_size)
+    _progress.check(progress)
     wall0 = time.perf_counter()
-    if backend == "process":
-        rows, statuses = fly(base_mission, plan, workers)
+    interrupted = False
+    if backend == "process" or executor is not None:
+        outcomes, interrupted = fly(base_mission, plan, workers, executor=executor,
+                                    backend=backend, device=device, batch_size=batch_size,
+                                    progress=progress)
     else:                       # the batched path neither reads nor stores the flight cache
-        rows, statuses = _fly_batched(base_mission, plan, device), []
+        outcomes = [Outcome(r, None, None) for r in _fly_batched(base_mission, plan, device)]
     wall = time.perf_counter() - wall0
-    df = frame(rows, list(axes), parsed)
+    df = frame([o.row for o in outcomes], list(axes), parsed)
     df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
                      "wall_s": wall, "backend": backend, "device": device,
-                     "cache": dict(Counter(s for s in statuses if s is not None))})
+                     "executor": _executors.describe_executor(executor),
+                     "interrupted": interrupted,
+                     "tracebacks": {i: o.trace for i, o in enumerate(outcomes) if o.trace},
+                     "cache": dict(Counter(o.status for o in outcomes if o.status is not None))})
     return df
 
 
@@ -113,14 +143,23 @@ def _check_backend(backend, base, device) -> None:
     _batched.check(base)
 
 
-def _fly_batched(base, plan, device) -> list[dict]:
-    """The variants in one JAX batch (the backend's modules import JAX: loaded here)."""
+def _fly_batched(base, plan, device, physics="mjx") -> list[dict]:
+    """The variants in one JAX batch (the backend's modules import JAX: loaded here);
+    ``physics``: the batched backend (only "mjx" so far)."""
     try:
         from .batched import engine
     except ImportError as exc:
         raise ConfigError(f"sweep: backend='mjx' needs JAX and MJX ({exc}); install them with "
                           f"pip install 'pytest-flockai[mjx]', or use backend='process'") from None
     return engine.fly(base, plan, device)
+
+
+def _check_batch_size(batch_size) -> None:
+    if batch_size is not None and (isinstance(batch_size, bool) or not isinstance(batch_size, int)
+                                   or batch_size < 1):
+        raise ConfigError(f"sweep: batch_size = {batch_size!r} is not allowed; expected None "
+                          f"(1 variant per task, or {BATCHED_BATCH} with a batched backend) or "
+                          f"an integer >= 1")
 
 
 def _check_workers(workers) -> int:
@@ -132,27 +171,65 @@ def _check_workers(workers) -> int:
     return workers
 
 
-def fly(base, plan: list[dict], workers: int) -> tuple[list[dict], list]:
-    """One row dict per variant, in the plan's order, and each variant's cache status."""
-    cache = _cache.active()
+def fly(base, plan: list[dict], workers: int, *, executor=None, backend="process", device=None,
+        batch_size=None, progress=None) -> tuple[list[Outcome], bool]:
+    """One ``Outcome`` per variant, in the plan's order, and whether the sweep was
+    interrupted (the variants not flown then are rows ``interrupted``)."""
+    cache = _cache.active() if backend == "process" else None
     done = {i: hit for i, v in enumerate(plan) if (hit := _cached(base, v, cache)) is not None}
     todo = [i for i in range(len(plan)) if i not in done]
-    workers = min(workers, len(todo))
-    if workers <= 1:
-        with recording(_drop):
-            flown = [_fly_and_status(base, plan[i]) for i in todo]
-    else:
-        ctx = multiprocessing.get_context("spawn")
-        where = (str(cache.directory), cache.mode) if cache is not None else None
-        with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init,
-                                 initargs=(_blob(base), where)) as pool:
-            flown = list(pool.map(_fly_in_worker, [plan[i] for i in todo], chunksize=1))
-    done.update(zip(todo, flown))
-    return [done[i][0] for i in range(len(plan))], [done[i][1] for i in range(len(plan))]
+    base_until = base.until
+    bar = _progress.Progress({i: _progress.expected_s(base_until, plan[i]) for i in todo},
+                             _progress.wanted(progress), done=len(done),
+                             delay_s=0.0 if progress else _progress.DELAY_S)
+
+    def sink(i: int, outcome: Outcome) -> None:
+        done[i] = outcome
+        bar.update(i, outcome.row.get("sim_time_s"))
+
+    interrupted = False
+    try:
+        _dispatch(base, plan, todo, sink, workers, executor, backend, device, batch_size, cache)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.close()
+    rows = [done.get(i) or _worker.failed(plan[i], "interrupted", "interrupted")
+            for i in range(len(plan))]
+    if interrupted:
+        warnings.warn(f"sweep interrupted: {len(done)} of {len(plan)} variants have rows; the "
+                      f"others are rows with error 'interrupted'", SweepInterrupted, stacklevel=3)
+    return rows, interrupted
 
 
-def _cached(base, values: dict, cache) -> tuple[dict, str] | None:
-    """(row, "hit") when the cache holds this variant's flight, else None."""
+def _dispatch(base, plan, todo, sink, workers, executor, backend, device, batch_size,
+              cache) -> None:
+    if not todo:
+        return
+    if executor is None and backend == "process" and min(workers, len(todo)) <= 1:
+        _executors.fly_here(base, plan, todo, sink)
+        return
+    where = (str(cache.directory), cache.mode) if cache is not None else None
+    if where is not None and executor is None:      # this machine: the caller's own key
+        where += (cache.key,)
+    job = _worker.make_job(base, where, backend, device,
+                           _fly_batched if backend != "process" else None)
+    if executor is None:
+        _executors.fly_own(job, plan, todo, sink, min(workers, len(todo)), _spawn_pool)
+        return
+    size = batch_size or (1 if backend == "process" else BATCHED_BATCH)
+    with _executors.opened(executor) as (ex, client):
+        _executors.fly_on(ex, job, plan, todo, sink, size, client)
+
+
+def _spawn_pool(size: int, ctx, initargs: tuple) -> ProcessPoolExecutor:
+    """A pool of ``size`` spawned processes, each loading the base once."""
+    return ProcessPoolExecutor(size, mp_context=ctx, initializer=_worker.install,
+                               initargs=initargs)
+
+
+def _cached(base, values: dict, cache) -> Outcome | None:
+    """The variant's outcome ("hit") when the cache holds its flight, else None."""
     if cache is None or not cache.reads:
         return None
     try:
@@ -162,60 +239,7 @@ def _cached(base, values: dict, cache) -> tuple[dict, str] | None:
     found = cache.lookup(mission)
     if found.result is None:
         return None
-    return row_of(values, found.result, None), "hit"
-
-
-def _blob(base) -> bytes:
-    """The base mission pickled for the workers (its live subscribers stay here)."""
-    subscribers, base.subscribers = base.subscribers, []
-    try:
-        return pickle.dumps(base)
-    except (pickle.PicklingError, TypeError, AttributeError) as exc:
-        raise ConfigError(f"sweep: workers > 1 send the base mission to other processes, but "
-                          f"it cannot be pickled ({type(exc).__name__}: {exc}); define your "
-                          f"components, probes and pilots at module level, or use "
-                          f"workers=1") from None
-    finally:
-        base.subscribers = subscribers
-
-
-def _drop(result, mission) -> None:
-    """The sink of a sweep's own flights: they are summed up in the DataFrame."""
-
-
-def _init(blob: bytes, where) -> None:
-    _BASE[:] = [pickle.loads(blob)]
-    _CACHE[:] = [_cache.FlightCache(*where) if where is not None else None]
-
-
-def _fly_in_worker(values: dict) -> tuple[dict, str | None]:
-    with _cache.caching(_CACHE[0]):
-        return _fly_and_status(_BASE[0], values)
-
-
-def _fly_and_status(base, values: dict) -> tuple[dict, str | None]:
-    row, result = _fly(base, values)
-    return row, (getattr(result, "cache", None) or {}).get("status")
-
-
-def _fly(base, values: dict):
-    try:
-        result = _axes.apply(base, values).run()
-        error = None
-    except FlockAIError as exc:
-        result = getattr(exc, "result", None)
-        error = f"{type(exc).__name__}: {exc}"
-    return row_of(values, result, error), result
-
-
-def row_of(values: dict, result, error) -> dict:
-    row = dict(values)
-    row["end_reason"] = getattr(result, "end_reason", None) or ("error" if error else None)
-    row["error"] = error
-    row["sim_time_s"] = result.sim_time_s if result is not None else math.nan
-    if result is not None:
-        row.update({k: float(v) for k, v in result.kpis.items()})
-    return row
+    return Outcome(row_of(values, found.result, None), "hit", None)
 
 
 def frame(rows: list[dict], axis_names: list, parsed: list) -> pd.DataFrame:

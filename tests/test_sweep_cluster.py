@@ -1,0 +1,186 @@
+"""fa.sweep on a real Dask cluster: a scheduler and two workers started as separate
+processes (`dask scheduler`, `dask worker`) on 127.0.0.1, torn down at the end."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from sweep_faults import MarkAndWait, RaiseOn
+
+import pytest_flockai as fa
+from pytest_flockai.cache import FlightCache, caching
+
+distributed = pytest.importorskip("distributed")
+
+ROOT = Path(__file__).resolve().parent.parent
+DASK = Path(sys.executable).with_name("dask")
+START_S = 90.0        # the slowest start seen on a loaded 2-core machine was ~15 s
+STOP_S = 10.0
+
+
+def _base(**kw):
+    return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=1.0), **kw)
+
+
+AXES = dict(payload_kg=[0.0, 0.004], mission_seed=[0, 1], wind_mps=[0.0, 3.0])
+
+
+class Cluster:
+    """`dask scheduler` and `dask worker` processes of one test module."""
+
+    def __init__(self, folder: Path):
+        self.folder, self.workers, self.client, self.logs = folder, [], None, []
+        self.env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests")]),
+                        MUJOCO_GL="egl")
+        file = folder / "scheduler.json"
+        self.scheduler = self._start("scheduler", "scheduler", "--host", "127.0.0.1", "--port",
+                                     "0", "--no-dashboard", "--scheduler-file", str(file))
+        deadline = time.monotonic() + START_S
+        while not file.exists() or not file.read_text().strip():
+            assert self.scheduler.poll() is None, self._log("scheduler")
+            assert time.monotonic() < deadline, "no scheduler file after 90 s"
+            time.sleep(0.2)
+        self.address = json.loads(file.read_text())["address"]
+        self.client = distributed.Client(self.address, timeout=START_S)
+
+    def _start(self, name, *args):
+        log = open(self.folder / f"{name}.log", "w")   # noqa: SIM115 - closed in stop()
+        self.logs.append(log)
+        return subprocess.Popen([str(DASK), *args], cwd=self.folder, env=self.env, stdout=log,
+                                stderr=subprocess.STDOUT, start_new_session=True)
+
+    def _log(self, name) -> str:
+        return (self.folder / f"{name}.log").read_text()[-3000:]
+
+    def ensure_workers(self, n: int = 2) -> None:
+        """``n`` live workers (killed ones replaced), registered with the scheduler."""
+        self.workers = [w for w in self.workers if w.poll() is None]
+        while len(self.workers) < n:
+            k = len(list(self.folder.glob("worker-*.log")))
+            self.workers.append(self._start(f"worker-{k}", "worker", self.address, "--nthreads",
+                                            "1", "--no-nanny", "--no-dashboard",
+                                            "--local-directory", str(self.folder)))
+        deadline = time.monotonic() + START_S
+        while len(self.client.scheduler_info()["workers"]) != n:
+            assert time.monotonic() < deadline, f"{n} workers not up after 90 s"
+            time.sleep(0.2)
+
+    def stop(self) -> None:
+        if self.client is not None:
+            self.client.close(timeout=STOP_S)
+        for p in self.workers + [self.scheduler]:
+            if p.poll() is None:
+                p.terminate()
+        for p in self.workers + [self.scheduler]:
+            try:
+                p.wait(timeout=STOP_S)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait(timeout=STOP_S)
+        for log in self.logs:
+            log.close()
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    if not DASK.exists():
+        pytest.skip(f"no dask command beside {sys.executable}")
+    c = Cluster(tmp_path_factory.mktemp("dask"))
+    try:
+        c.ensure_workers(2)
+        yield c
+    finally:
+        procs = c.workers + [c.scheduler]
+        c.stop()
+        assert all(p.poll() is not None for p in procs), "a dask process outlived the fixture"
+
+
+def test_a_sweep_through_the_cluster_equals_one_worker_row_for_row(cluster):
+    cluster.ensure_workers(2)
+    with caching(None):                     # every variant flies (no cache hits)
+        one = fa.sweep(_base(), workers=1, **AXES)
+        by_address = fa.sweep(_base(), executor=cluster.address, **AXES)
+        by_client = fa.sweep(_base(), executor=cluster.client, batch_size=3, **AXES)
+        by_executor = fa.sweep(_base(), executor=cluster.client.get_executor(), **AXES)
+    pd.testing.assert_frame_equal(by_address, one)
+    pd.testing.assert_frame_equal(by_client, one)
+    pd.testing.assert_frame_equal(by_executor, one)
+    assert len(one) == 8 and one["error"].isna().all()
+    assert by_address.attrs["executor"] == cluster.address
+    # both workers flew: each ran tasks of this module's sweeps
+    ran = cluster.client.run(lambda: len(sys.modules["pytest_flockai.sweeps.worker"]._BASES))
+    assert len(ran) == 2 and all(n >= 1 for n in ran.values())
+
+
+def test_an_exception_in_a_variant_on_the_cluster_is_the_same_row_as_here(cluster):
+    cluster.ensure_workers(2)
+    base = _base(components=[RaiseOn(0.004)])
+    here = fa.sweep(base, payload_kg=[0.0, 0.004, 0.008], workers=1)
+    there = fa.sweep(base, payload_kg=[0.0, 0.004, 0.008], executor=cluster.address)
+    pd.testing.assert_frame_equal(there, here)
+    assert list(there["error"]) == [None, "ZeroDivisionError: division by zero", None]
+    assert "1 / 0" in there.attrs["tracebacks"][1]
+
+
+def test_the_flight_cache_in_a_shared_folder_is_written_by_the_workers(cluster, tmp_path):
+    cluster.ensure_workers(2)
+    with caching(FlightCache(tmp_path / "flights")):
+        cold = fa.sweep(_base(), executor=cluster.address, payload_kg=[0.0, 0.004])
+        warm = fa.sweep(_base(), executor=cluster.address, payload_kg=[0.0, 0.004])
+    assert cold.attrs["cache"] == {"stored": 2}             # stored by the Dask workers
+    assert warm.attrs["cache"] == {"hit": 2}                # read here: no task sent
+    pd.testing.assert_frame_equal(warm, cold)
+
+
+def test_a_worker_killed_mid_sweep_loses_no_finished_row(cluster, tmp_path):
+    cluster.ensure_workers(2)
+    axes = dict(payload_kg=[0.0, 0.001, 0.002, 0.003, 0.004, 0.005, 0.006, 0.007])
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    base = _base(components=[MarkAndWait(0.005, marks, wait_s=4.0)])
+    with ThreadPoolExecutor(1) as pool:
+        job = pool.submit(fa.sweep, base, executor=cluster.address, **axes)
+        deadline = time.monotonic() + 120
+        while not any(marks.iterdir()):
+            assert time.monotonic() < deadline and not job.done(), "variant 5 never started"
+            time.sleep(0.05)
+        victim = int(next(marks.iterdir()).name)
+        assert victim in [w.pid for w in cluster.workers]
+        os.kill(victim, signal.SIGKILL)
+        df = job.result(timeout=300)
+    assert next(w for w in cluster.workers if w.pid == victim).wait(timeout=STOP_S) == -9
+    reference = fa.sweep(_base(components=[MarkAndWait(0.005, tmp_path, wait_s=0.0)]),
+                         workers=1, **axes)
+    pd.testing.assert_frame_equal(df, reference)
+    assert df["error"].isna().all() and len(df) == 8
+
+
+def test_any_concurrent_futures_executor_gives_the_same_rows():
+    with caching(None), ThreadPoolExecutor(2) as threads:
+        one = fa.sweep(_base(), workers=1, **AXES)
+        pd.testing.assert_frame_equal(fa.sweep(_base(), executor=threads, **AXES), one)
+        pd.testing.assert_frame_equal(fa.sweep(_base(), executor=threads, batch_size=5, **AXES),
+                                      one)
+
+
+def test_the_pytest_option_points_marked_sweeps_at_the_scheduler(cluster, pytester):
+    cluster.ensure_workers(2)
+    pytester.makepyfile("""
+        import pytest
+
+        @pytest.mark.flockai_sweep(payload_kg=[0.0, 0.004], until=[1.0])
+        @pytest.mark.kpi(energy_total_j="> 0 J")
+        def test_x(flockai_sweep):
+            assert flockai_sweep.attrs["executor"] == "Client"
+            assert len(flockai_sweep) == 2 and flockai_sweep["ok"].all()
+    """)
+    result = pytester.runpytest("-p", "no:cacheprovider",
+                                f"--flockai-sweep-executor={cluster.address}")
+    result.assert_outcomes(passed=1)
