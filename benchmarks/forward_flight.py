@@ -65,8 +65,10 @@ def curve(blueprint: str, laws) -> None:
             p = [level_power(blueprint, v) for v in speeds]
         finally:
             rotors.wake_immersion = SHIPPED
+        miss = statistics.mean(abs(100 * (x / p[0] - 1 - relative(DI_FRANCO_2016, v)))
+                               for v, x in zip(speeds[1:], p[1:]))
         print(f"{blueprint + ' ' + law:22s}" + "".join(f"{100 * (x / p[0] - 1):+8.1f}" for x in p)
-              + f"  (hover {p[0]:.1f} W)", flush=True)
+              + f"  (hover {p[0]:.1f} W; Di Franco mean miss {miss:.1f} points)", flush=True)
     for name, data in (("Di Franco 2016", DI_FRANCO_2016), ("Stolaroff 2018", STOLAROFF_2018)):
         rel = [relative(data, v) for v in speeds]
         print(f"{name:22s}" + "".join("       -" if r is None else f"{100 * r:+8.1f}" for r in rel))
