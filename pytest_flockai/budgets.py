@@ -33,6 +33,7 @@ from numbers import Real
 
 from . import kpis as _kpis
 from .errors import ConfigError, close_matches
+from .recording import publish_verdicts
 from .report import table as text_table
 
 OPERATORS = ("<", "<=", ">", ">=", "==")
@@ -294,6 +295,9 @@ def evaluate(result, budgets: dict | None = None, **more) -> list[Verdict]:
             raise ConfigError(f"budget on {b.kpi!r}: the flight did not produce this KPI; it has "
                               f"{', '.join(sorted(kpis))}")
         out.append(b.verdict(kpis[b.kpi]))
+    publish_verdicts(result, out)      # the plugin keeps them with the test (the reports)
+    if not isinstance(result, Mapping):
+        result.verdicts = tuple(out)   # shown by the result's _repr_html_ in a notebook
     return out
 
 

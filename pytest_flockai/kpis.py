@@ -18,6 +18,7 @@ class KPI:
     unit: str          # "s", "J", "W", "m", "m/s", "kB", "V", "fraction" (0..1), "count", "1" (custom, unitless)
     better: str | None
     description: str
+    abs_tol: float | None = None   # a change this small is noise (SI); None: the unit's default
 
 
 _ROWS = [
@@ -74,6 +75,20 @@ _ROWS = [
     ("recall", "fraction", "higher", "objects matched by a detection at the score threshold"),
     ("objects_missed", "fraction", "lower", "objects in view never detected"),
     ("accuracy", "fraction", "higher", "frames whose predicted classes are exactly right"),
+    # closed loop (fa.policy.Follow, SearchThenOrbit, MarkerLanding): scored against the truth
+    # after the flight, never used in a decision
+    ("time_to_detect_s", "s", "lower", "start of the plan to the first confirmed target"),
+    ("track_error_p95_m", "m", "lower", "95th percentile horizontal distance drone to followed "
+     "target while following"),
+    ("track_error_mean_m", "m", "lower", "mean horizontal distance drone to followed target "
+     "while following"),
+    ("track_lost_count", "count", "lower", "times the followed target's track was lost"),
+    ("track_lost_s", "s", "lower", "time spent with the target's track lost"),
+    ("landing_error_m", "m", "lower", "horizontal distance from the touchdown point to the "
+     "landing marker's centre"),
+    ("targets_found", "count", "higher", "distinct targets a search confirmed"),
+    ("time_to_find_all_s", "s", "lower", "start of the plan until every target was found "
+     "(NaN unless all were)"),
     ("images_scored", "count", None, "frames (images) a detection or classification task scored"),
     # ML: per-task energy (ml/task_energy.py); each as '<task>.<kpi>'
     ("energy_j", "J", "lower", "energy the task cost the battery: compute_energy_j + radio_energy_j"),
@@ -92,6 +107,12 @@ _ROWS = [
     ("fleet.min_separation_m", "m", "higher", "smallest distance between two airborne drones"),
     ("fleet.crashes", "count", "lower", "drones whose flight ended in a crash"),
     ("fleet.energy_total_j", "J", "lower", "sum of the drones' energy_total_j"),
+    ("fleet.targets_found", "count", "higher", "a search together (fa.policy.SharedSearch): "
+     "distinct people confirmed"),
+    ("fleet.time_to_find_all_s", "s", "lower", "a search together: first plan start until "
+     "every person was confirmed (NaN unless all were)"),
+    ("fleet.reports", "count", None, "a search together: detections reported to the ground station"),
+    ("fleet.assignments", "count", None, "a search together: drones sent to confirm a report"),
     ("offload.latency_p95_s", "s", "lower", "fleet offload: 95th percentile capture-to-result latency"),
     ("link.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the channel"),
     ("ground.queue_delay_mean_s", "s", "lower", "fleet offload: mean wait for the ground device"),
@@ -104,6 +125,30 @@ FAMILIES = {"map50": "per class", "precision": "per class", "recall": "per class
             "band (alt_<lo>_<hi>m) or box height (size_<band>px)"}
 
 REGISTRY: dict[str, KPI] = {r[0]: KPI(*r) for r in _ROWS}
+#: the built-in names (REGISTRY also holds the KPIs registered at run time)
+BUILTIN = frozenset(REGISTRY)
+
+#: Absolute tolerance by unit: a change of a KPI smaller than this is noise, never a
+#: regression, whatever the relative threshold (a 0.002 % CPU change is not news).
+#: Chosen below what any budget in the examples resolves: 1 ms, 10 mJ, 1 mW, 1 mm,
+#: 1 mV, 1 byte, 0.01 percentage point; counts are exact.
+UNIT_ABS_TOL = {"s": 1e-3, "J": 1e-2, "W": 1e-3, "m": 1e-3, "m/s": 1e-3, "kB": 1e-3,
+                "V": 1e-3, "fraction": 1e-4, "count": 0.0, "1": 0.0}
+#: KPIs whose tolerance is not their unit's: the battery's remaining share is read to 0.1 pp
+ABS_TOL = {"battery_remaining": 1e-3}
+
+
+def abs_tolerance(name: str) -> float:
+    """The absolute tolerance of KPI ``name`` in its SI unit (0 for an unknown KPI)."""
+    info = get(name)
+    if info is None:
+        return 0.0
+    if info.abs_tol is not None:
+        return float(info.abs_tol)
+    tail = name.split(".")[-1]
+    if tail in ABS_TOL or name in ABS_TOL:
+        return ABS_TOL.get(name, ABS_TOL.get(tail, 0.0))
+    return UNIT_ABS_TOL.get(info.unit, 0.0)
 
 
 def get(name: str) -> KPI | None:
@@ -127,11 +172,16 @@ def names() -> list[str]:
     return list(REGISTRY)
 
 
-def register(name: str, unit: str = "1", better: str | None = None, description: str = "") -> KPI:
-    """Register a custom KPI (e.g. a probe metric ``probe.metric``)."""
+def register(name: str, unit: str = "1", better: str | None = None, description: str = "",
+             abs_tol: float | None = None) -> KPI:
+    """Register a custom KPI (e.g. a probe metric ``probe.metric``); ``abs_tol``: a
+    change smaller than this is noise in comparisons (default: the unit's)."""
     if better not in ("higher", "lower", None):
         raise ConfigError(f"KPI {name!r}: better = {better!r} is not allowed; allowed: 'higher', 'lower', None")
-    k = KPI(name, unit, better, description)
+    if abs_tol is not None and not (isinstance(abs_tol, (int, float)) and abs_tol >= 0):
+        raise ConfigError(f"KPI {name!r}: abs_tol = {abs_tol!r} is not allowed; expected a "
+                          f"number >= 0 (in the KPI's SI unit) or None")
+    k = KPI(name, unit, better, description, None if abs_tol is None else float(abs_tol))
     old = REGISTRY.get(name)
     if old is not None and old != k and "." not in name:
         raise ConfigError(f"KPI {name!r} is built in; choose another name")

@@ -65,7 +65,7 @@ from .harness.fixtures import drone, flight, mission, pilot, probes, tasks, worl
 from .harness.sweeps import flockai_sweep, flockai_sweep_executor  # noqa: F401
 from .harness.recorder import STATE, TestState
 from .harness.session import SESSION, FlockSession
-from .recording import recording
+from .recording import checking, recording
 
 
 def pytest_addhooks(pluginmanager):
@@ -136,7 +136,7 @@ def pytest_collection_modifyitems(session, config, items):
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     st = _state(item)
-    with recording(lambda result, m: st.record(m, result)):
+    with recording(lambda result, m: st.record(m, result)), checking(st.record_check):
         return (yield)
 
 
@@ -177,6 +177,6 @@ def pytest_runtest_makereport(item, call):
     st = item.stash.get(STATE, None)
     report = yield
     if st is not None and (st.flights or st.markers.budgets or st.markers.error
-                           or st.hypothesis or st.sweep is not None):
+                           or st.hypothesis or st.sweep is not None or st.checks):
         report.flockai = st.payload()
     return report

@@ -11,6 +11,10 @@ test, and a notebook can open one to log its flights::
 The sink lives in a ``contextvars.ContextVar``: nested recordings (a pytester
 session inside a test) stack and unwind by themselves, and threads or asyncio
 tasks each see their own.
+
+Budgets checked in a test body (``budgets.check`` / ``budgets.evaluate``) go
+the same way to a ``checking(sink)`` context: the plugin keeps them with the
+test, so the reports show the budgets of a test that flies nothing.
 """
 
 from __future__ import annotations
@@ -25,6 +29,11 @@ from .errors import ConfigError
 FlightSink = Callable[[object, object], None]
 
 _SINK: ContextVar[FlightSink | None] = ContextVar("pytest_flockai_flight_sink", default=None)
+
+#: fn(result, verdicts) -> None
+CheckSink = Callable[[object, list], None]
+
+_CHECKS: ContextVar[CheckSink | None] = ContextVar("pytest_flockai_check_sink", default=None)
 
 
 @contextmanager
@@ -45,3 +54,24 @@ def publish(result, mission) -> None:
     sink = _SINK.get()
     if sink is not None:
         sink(result, mission)
+
+
+@contextmanager
+def checking(sink: CheckSink):
+    """Send the verdicts of every ``budgets.evaluate``/``check`` call inside the
+    ``with`` block to ``sink(result, verdicts)``."""
+    if not callable(sink):
+        raise ConfigError(f"checking: sink = {sink!r} is not callable; expected "
+                          f"fn(result, verdicts)")
+    token = _CHECKS.set(sink)
+    try:
+        yield sink
+    finally:
+        _CHECKS.reset(token)
+
+
+def publish_verdicts(result, verdicts: list) -> None:
+    """Hand the verdicts of a budget check to the check sink of the current context, if any."""
+    sink = _CHECKS.get()
+    if sink is not None:
+        sink(result, verdicts)

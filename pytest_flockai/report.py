@@ -19,6 +19,7 @@ JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
          "outcome": "passed" | "failed" | "error" | "skipped" | "xfailed" | "xpassed",
          "error": null or "the flockai configuration error of this test",
          "flights": [{"name": "flight", "end_reason": "landed", "sim_time_s": 45.9,
+                      "wall_time_s": 0.21,        # host time of the flight, metadata only
                       "scenario": {...}, "kpis": {"flight_time_s": 45.96, ...},
                       "cache": {"status": "hit" | "stored" | "flown" | "replaced" | "bypass",
                                 "key": "<sha256>" or null, "reason": str or null}
@@ -26,7 +27,8 @@ JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
          "budgets": [{"flight": "flight", "kpi": "flight_time_s", "budget": ">= 24 min",
                       "op": ">=", "limit": 1440.0, "actual": 45.96, "margin": -1394.04,
                       "verdict": "pass" | "fail",
-                      "actual_text": "0.766 min", "margin_text": "-23.23 min"}],
+                      "actual_text": "0.766 min", "margin_text": "-23.23 min",
+                      "source": "check", "checked": 3}],   # only for budgets.check() calls
          "regressions": [{"flight": "flight", "kpi": "energy_total_j", "baseline": 100.0,
                           "actual": 110.0, "change_pct": 10.0, "better": "lower"}]}
       ]
@@ -37,15 +39,21 @@ Numbers are SI (see ``kpis.py``; ``limit``, ``actual`` and ``margin`` too, the
 margin is positive inside the budget. Non-finite numbers are written as
 ``null``. ``budgets`` is empty when the test body failed before the check or
 the marker was bad (then ``error`` says why).
-The file lists the tests that flew at least one mission or carry a ``kpi``
-marker. It is written atomically (a temporary file in the same directory, then
+The file lists every test pytest ran, with pytest's outcome (a test that
+flew nothing has no flights; the budgets it checked itself with
+``budgets.check`` carry ``"source": "check"``). It is written atomically (a temporary file in the same directory, then
 ``os.replace``), at the end of the session, also when tests fail or the
 session is interrupted.
 
 Baseline (``--flockai-save PATH``), schema ``"pytest-flockai-baseline/1"``::
 
     {"schema": "pytest-flockai-baseline/1",
-     "tests": {"<nodeid>": {"<flight>": {"<kpi>": value, ...}, ...}, ...}}
+     "tests": {"<nodeid>": {"<flight>": {"<kpi>": value, ...}, ...}, ...},
+     "scenarios": {"<nodeid>": {"<flight>": {"drone": ..., "computer": ..., ...}}}}
+
+``scenarios`` (``reports/scenario.summary``) lets a later comparison say what
+changed (``computer: jetson-nano-10w -> raspberry-pi-4``); older baselines
+without it still load.
 
 ``load_baseline`` also accepts a bare ``{nodeid: {flight: kpis}}`` mapping and
 a JSON report (``pytest-flockai/1``).
@@ -215,7 +223,8 @@ def build_report(tests: list[dict], *, exitstatus=0, interrupted=False, options=
 
 # -- baselines ---------------------------------------------------------------------------
 def baseline_from_tests(tests: list[dict]) -> dict:
-    """``{"schema": ..., "tests": {nodeid: {flight: kpis}}}`` for the tests that flew."""
+    """``{"schema": ..., "tests": {nodeid: {flight: kpis}}}`` for the tests that flew
+    (the plugin adds ``scenarios``, ``reports.scenario.of_report``)."""
     out = {}
     for t in tests:
         flights = {f["name"]: dict(f["kpis"]) for f in t.get("flights", ())}
@@ -275,10 +284,11 @@ def _nodeid(test) -> str:
 
 
 def regressions(flights: dict, base: dict, max_regression_pct: float, *,
-                per_kpi: dict | None = None) -> list[dict]:
+                per_kpi: dict | None = None, abs_tol: dict | None = None) -> list[dict]:
     """KPIs of ``flights`` ({flight: kpis}) worse than ``base`` ({flight: kpis}) by
-    more than ``max_regression_pct`` percent (or ``per_kpi[kpi]`` percent), in
-    each KPI's ``better`` direction.
+    more than ``max_regression_pct`` percent (or ``per_kpi[kpi]`` percent) and
+    more than the KPI's absolute tolerance (``kpis.abs_tolerance``, or
+    ``abs_tol[kpi]``), in each KPI's ``better`` direction.
 
     KPIs without a better direction, missing on either side or non-finite are
     not compared."""
@@ -297,7 +307,8 @@ def regressions(flights: dict, base: dict, max_regression_pct: float, *,
             if not (math.isfinite(a) and math.isfinite(b)):
                 continue
             frac = per_kpi.get(kpi, max_regression_pct) / 100.0
-            tol = abs(b) * frac + 1e-9 * max(1.0, abs(b))
+            atol = (abs_tol or {}).get(kpi, _kpis.abs_tolerance(kpi))
+            tol = max(abs(b) * frac, atol, 1e-6 * max(abs(a), abs(b)))
             worse = a < b - tol if info.better == "higher" else a > b + tol
             if worse:
                 change = (a - b) / abs(b) * 100.0 if b != 0 else math.inf

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from . import notebook as _notebook
 from ._io import atomic_write
 from .errors import ConfigError, WriteError
 from .phases import PHASES, STAGES
@@ -57,6 +58,7 @@ class FlightResult:
     """
 
     cache: dict | None = None
+    verdicts: tuple = ()     # the budgets last checked against it (budgets.check/evaluate)
 
     def __init__(self, kpis, telemetry: pd.DataFrame, events, scenario, energy_breakdown,
                  end_reason: str, wall_time_s: float = float("nan"), *, probe_samples=None,
@@ -70,6 +72,10 @@ class FlightResult:
         self.wall_time_s = wall_time_s   # host time, never part of the KPIs
         self.probe_samples = dict(probe_samples or {})
         self.probe_errors = list(probe_errors or [])
+
+    def _repr_html_(self) -> str:
+        """In a notebook: the headline KPIs, the budgets checked and the path (SVG)."""
+        return _notebook.flight_html(self)
 
     @property
     def sim_time_s(self) -> float:

@@ -71,8 +71,8 @@ def test_markdown_summary_and_github_step_summary(pytester, monkeypatch):
     assert "### Budgets broken (1)" in text
     assert "| test_flights.py::test_too_short | flight | flight_time_s | >= 1 h |" in text
     assert "No baseline given" in text
-    kpi_rows = [line for line in text.splitlines() if line.startswith("| test_flights.py::")]
-    assert len(kpi_rows) == 3                               # 1 broken budget + 2 KPI rows
+    rows = [line for line in text.splitlines() if line.startswith("| test_flights.py::")]
+    assert len(rows) == 5                     # 1 broken budget + 2 tests + 2 KPI rows
     assert step.read_text() == "# earlier step\n" + text      # appended, not replaced
 
 
@@ -82,7 +82,7 @@ def test_markdown_lists_regressions(run_with_baseline):
     text = paths["md"].read_text()
     assert "### Regressions against the baseline (1)" in text
     row = next(line for line in text.splitlines() if "| energy_total_j |" in line)
-    assert row.startswith("| test_flights.py::test_higher | flight | energy_total_j |")
+    assert row.startswith("| - | test_flights.py::test_higher | energy_total_j | 1 |")
     assert "+25.00%" in row and row.rstrip().endswith("| lower |")
 
 
@@ -139,18 +139,23 @@ def test_the_dashboard_is_one_self_contained_file(run_with_baseline):
     assert "http://" not in text and "https://" not in text     # nothing fetched
     page = parse(text)
     budgets = page.tables["budgets"]
-    assert budgets[0] == ["test", "flight", "KPI", "budget", "actual", "margin", "verdict"]
-    assert budgets[1][2] == "flight_time_s" and budgets[1][-1] == "fail"   # broken first
-    deltas = {(r[0].split("::")[-1], r[2]): r for r in page.tables["deltas"][1:]}
+    assert budgets[0] == ["verdict", "test", "flight", "KPI", "budget", "actual", "margin", "from"]
+    assert budgets[1][3] == "flight_time_s" and budgets[1][0] == "broken"   # broken first
+    assert page.tables["broken"][1][:4] == budgets[1][:4]                    # and at the top
+    deltas = {(r[1].split("::")[-1], r[3]): r for r in page.tables["deltas"][1:]}
     energy = deltas[("test_higher", "energy_total_j")]
-    assert energy[-1] == "regression" and energy[5] == "+25.00%"
+    assert energy[0] == "regression" and energy[6] == "+25.00%"
     assert ("test_too_short", "energy_total_j") not in deltas        # unchanged: not listed
+    (head, reg), = [page.tables["regressions"]]
+    assert reg[:2] == ["+25.00%", "energy_total_j"]
     kpis = page.tables["kpis"]
-    assert kpis[0][:5] == ["test", "flight", "outcome", "source", "flight_time_s"]
+    assert kpis[0][:5] == ["outcome", "test", "flight", "source", "flight_time_s"]
     assert len(kpis) == 3
-    titles = sorted(i["alt"] for i in page.images)
-    assert titles == ["flight: energy", "flight: energy", "flight: flight path",
-                      "flight: flight path", "robustness map"]
+    assert [r[0] for r in page.tables["tests"][1:]] == ["failed", "failed"]
+    titles = {i["alt"] for i in page.images}
+    assert titles == {"flight: energy", "flight: flight path", "robustness map"}
+    # 2 flights x (path, energy) + the map: each embedded, or linked when it looks the same
+    assert len(page.images) + text.count("same picture as test_flights.py::") == 5
     assert all(i["src"].startswith("data:image/png;base64,") for i in page.images)
 
 
@@ -184,7 +189,7 @@ def test_the_dashboard_in_a_headless_browser(run_with_baseline, tmp_path):
     dom = _browser("--dump-dom", url + "#sort=kpis:energy_total_j:desc")
     assert dom.returncode == 0, dom.stderr[-2000:]
     page = parse(dom.stdout)
-    assert {"budgets", "deltas", "kpis"} <= set(page.tables)
+    assert {"budgets", "deltas", "kpis", "tests", "regressions"} <= set(page.tables)
     assert page.attrs["kpis"].get("data-sorted") == "energy_total_j:desc"
     col = page.tables["kpis"][0].index("energy_total_j")
     values = [float(r[col].split()[0]) for r in page.tables["kpis"][1:]]
@@ -206,6 +211,7 @@ def test_dashboard_without_flights_or_baseline():
     assert page.tables == {}
     text = dash.dashboard({"summary": {"tests": 0}, "tests": []})
     assert "No test has a kpi budget." in text and "No baseline given" in text
+    assert 'id="status" class="ok"' in text            # no exit status, nothing failed
 
 
 

@@ -218,8 +218,9 @@ def test_no_flight():
     assert {"pytest-flockai", "pytest", "mujoco", "numpy"} <= set(env["packages"])
     assert env["packages"]["pytest"] == pytest.__version__
     tests = by_nodeid(report)
-    assert set(tests) == {"test_broken", "test_plain"}   # only tests that flew
-    assert report["summary"] == {"tests": 2, "passed": 1, "failed": 1, "flights": 2}
+    assert set(tests) == {"test_broken", "test_plain", "test_no_flight"}   # every test
+    assert tests["test_no_flight"]["flights"] == [] and tests["test_no_flight"]["outcome"] == "passed"
+    assert report["summary"] == {"tests": 3, "passed": 2, "failed": 1, "flights": 2}
     broken = tests["test_broken"]
     assert broken["outcome"] == "failed"
     assert broken["nodeid"] == "test_flights.py::test_broken"
@@ -419,7 +420,9 @@ class TestOverride:
     res = run(pytester, "--flockai-json", "report.json")
     res.assert_outcomes(passed=5)
     tests = by_nodeid(load(pytester.path / "report.json"))
-    assert list(tests) == ["test_override_fixture"]    # building a mission flies nothing
+    flown = [name for name, t in tests.items() if t["flights"]]
+    assert flown == ["test_override_fixture"]    # building a mission flies nothing
+    assert len(tests) == 5                       # every test is in the report
 
 
 def test_hooks_adjust_mission_and_derived_kpis(pytester):

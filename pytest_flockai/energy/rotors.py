@@ -8,10 +8,13 @@ component interface.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
+
+import numpy as np
 
 from .. import _check
 from ..errors import ConfigError
-from ..physics import G, RHO_SEA_LEVEL
+from ..physics import RHO_SEA_LEVEL, G
 from .components import Component
 
 
@@ -47,6 +50,11 @@ class HoverPower(Component):
                    if isinstance(m, Motors) else 0.4)
         area = drone.airframe.rotor_count * drone.rotor.disc_area_m2
         self._p = (drone.mass_kg * G) ** 1.5 / math.sqrt(2.0 * self._rho_air * area) / eta
+
+    @property
+    def airborne_power_w(self) -> float:
+        """The bound hover power (W), drawn while airborne."""
+        return self._p
 
     def power(self, u):
         return self._p if u.airborne else 0.0
@@ -96,6 +104,30 @@ def wake_immersion(distance_m, sink_m_s, vpar_m_s, diameter_m, maximum=max, mini
 
 #: the DC motor model's fields of ``Motors`` (and of a blueprint's ``[energy]`` table)
 MOTOR_FIELDS = ("motor_kv_rpm_v", "motor_rm_ohm", "motor_i0_a", "motor_i0_rad_s")
+
+
+class MotorParams(NamedTuple):
+    """A bound ``Motors``' coefficients as numbers (``Motors.batch_params``); ``dirs`` and
+    ``vi0`` per rotor; ``model``: the DC motor model (else ``inv_eta``, a constant)."""
+
+    inv2rhoA: float
+    c0: float
+    R: float
+    inv_kf: float
+    inv_eta: float
+    hk: float
+    kappa: float
+    wake: float
+    dirs: np.ndarray
+    vi0: np.ndarray
+    model: bool
+    esc: float
+    kv: float
+    rm: float
+    i0: float
+    inv_w0: float
+    D: float = 1.0         # rotor diameter, and an aft rotor's distance behind per unit
+    L2: float = 0.0        # weight (``wake_immersion``); the defaults: no motors
 
 
 class Motors(Component):
@@ -289,6 +321,18 @@ class Motors(Component):
 
     def power(self, u):
         return sum(self.power_parts(u))
+
+    def batch_params(self) -> MotorParams:
+        """The bound coefficients, for the batched backend (after ``bind``)."""
+        return MotorParams(
+            inv2rhoA=self._inv2rhoA, c0=self._c0, R=self._R, inv_kf=self._inv_kf,
+            inv_eta=self._inv_eta, hk=self._hk, kappa=self.induced_power_factor,
+            wake=self.wake_interference, dirs=np.asarray(self._dirs, dtype=float),
+            vi0=np.asarray(self._vi, dtype=float), model=self._kv is not None,
+            esc=self.esc_efficiency, kv=self._kv or 1.0, rm=self.motor_rm_ohm or 0.0,
+            i0=self.motor_i0_a or 0.0,
+            inv_w0=1.0 / self.motor_i0_rad_s if self.motor_i0_rad_s else 0.0,
+            D=self._D, L2=self._L2)
 
     def params(self):
         out = {k: getattr(self, k) for k in ("figure_of_merit", "induced_power_factor",

@@ -23,6 +23,7 @@ import pytest
 
 from .._io import atomic_write
 from .. import report as _report
+from ..reports import compare as _compare
 from ..reports import history as _history
 from ..reports import html as _html
 from ..reports import ml_gallery as _ml_gallery
@@ -132,8 +133,10 @@ class ReportsPlugin:
         doc = _report.build_report(entries, exitstatus=exitstatus, interrupted=interrupted,
                                    options={"baseline": str(flock.baseline_path)
                                             if flock is not None and flock.baseline_path else None})
+        base_scen = _compare.load_scenarios(flock.baseline_path) \
+            if flock is not None and flock.baseline_path else None
         if self.md is not None or self.step_summary:
-            text = _markdown.job_summary(doc)
+            text = _markdown.job_summary(doc, base_scenarios=base_scen)
             if self.md is not None:
                 self._write("Markdown summary", self.md,
                             lambda p: atomic_write(p, lambda fh: fh.write(text)))
@@ -147,7 +150,8 @@ class ReportsPlugin:
         if self.html is not None:
             self._write("HTML dashboard", self.html, lambda p: _html.write(
                 p, doc, pictures=self.pictures, baseline=flock.baseline if flock else None,
-                threshold_pct=flock.max_regression if flock else 5.0))
+                threshold_pct=flock.max_regression if flock else 5.0,
+                base_scenarios=base_scen, abs_tol=flock.abs_tol if flock else None))
         if self.history is not None:
             try:
                 p = _history.record(self.history, entries, self.config.invocation_params.dir)

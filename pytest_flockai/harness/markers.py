@@ -4,8 +4,9 @@
 checked after the test body against every flight the test flew (or only the
 flight named ``flight``); dotted KPIs go in a positional dict.
 ``@pytest.mark.flockai(drone=, pilot=, world=, tasks=, probes=, seed=, until=,
-wind=, name=, max_regression=)``: quick settings for the fixtures, and a
-per-test regression threshold (a percent, or ``{kpi: percent}``).
+wind=, name=, max_regression=, abs_tol=)``: quick settings for the fixtures, a
+per-test regression threshold (a percent, or ``{kpi: percent}``) and per-KPI
+absolute tolerances (``{kpi: value in its SI unit}``, over ``kpis.abs_tolerance``).
 
 A bad marker does not raise at collection: ``Markers.error`` holds the
 message and the test errors at setup, before anything flies.
@@ -24,7 +25,7 @@ from .. import kpis as _kpis
 from ..errors import ConfigError, close_matches
 
 FLOCKAI_KEYS = ("drone", "pilot", "world", "tasks", "probes", "seed", "until", "wind", "name",
-                "max_regression")
+                "max_regression", "abs_tol")
 
 
 @dataclass(frozen=True)
@@ -41,6 +42,7 @@ class Markers:
     budgets: tuple = ()
     max_regression: object = None
     error: str | None = None
+    abs_tol: tuple = ()         # ((kpi, SI value), ...): absolute tolerances of this test
 
     @property
     def per_kpi_regression(self) -> dict | None:
@@ -67,9 +69,10 @@ def parse(item) -> Markers:
                                                f"{', '.join(FLOCKAI_KEYS)}")
     try:
         reg = regression_setting(closest(item, "max_regression"))
+        atol = abs_tol_setting(closest(item, "abs_tol"))
     except ConfigError as exc:
         return _error(item, "flockai", str(exc))
-    return Markers(budgets=budgets, max_regression=reg)
+    return Markers(budgets=budgets, max_regression=reg, abs_tol=atol)
 
 
 def _kpi_budgets(item) -> tuple:
@@ -167,6 +170,23 @@ def regression_setting(value):
             out.append((kpi, pct(f"max_regression[{kpi!r}]", v)))
         return tuple(sorted(out))
     return pct("max_regression", value)
+
+
+def abs_tol_setting(value) -> tuple:
+    """``abs_tol``: None or ``{kpi: value >= 0 in the KPI's SI unit}`` -> sorted pairs."""
+    if value is None:
+        return ()
+    if not isinstance(value, dict):
+        raise ConfigError(f"abs_tol = {value!r} is not allowed; expected {{kpi: value >= 0 "
+                          f"in the KPI's SI unit}}, e.g. {{'energy_total_j': 5}}")
+    out = []
+    for kpi, v in value.items():
+        if _kpis.get(kpi) is None and "." not in str(kpi):
+            raise ConfigError(f"abs_tol: unknown KPI {kpi!r}{close_matches(str(kpi), _kpis.names())}")
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not v >= 0 or v == math.inf:
+            raise ConfigError(f"abs_tol[{kpi!r}] = {v!r} is not allowed; expected a number >= 0")
+        out.append((kpi, float(v)))
+    return tuple(sorted(out))
 
 
 #: marker settings read by the plugin's own fixture of that name (else by ``mission``)

@@ -18,6 +18,9 @@ OPTIONS = [
     ("max-regression", "PCT", "largest allowed regression against the baseline, in percent "
                               "of the baseline value, in each KPI's better direction "
                               "(default: 5)"),
+    ("abs-tol", "KPI=VALUE,...", "absolute tolerance per KPI in its SI unit (e.g. "
+                                 "energy_total_j=5,cpu_utilization=0.001): a change no larger "
+                                 "is never a regression; default: the KPI registry's"),
     ("artifacts", "DIR", "write each flight's telemetry (CSV) and result (JSON) under "
                          "DIR/<test nodeid>/"),
     ("sweep-executor", "ADDRESS", "fly the variants of @pytest.mark.flockai_sweep on the Dask "

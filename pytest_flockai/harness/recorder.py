@@ -58,6 +58,7 @@ class TestState:
     warnings: list = field(default_factory=list)       # e.g. artifacts that could not be written
     sweep: object = None                                # the DataFrame of @pytest.mark.flockai_sweep
     sweep_files: list = field(default_factory=list)     # its envelope CSV and picture
+    checks: dict = field(default_factory=dict)          # budgets.check() in the body, by budget
 
     __test__ = False  # not a pytest test class
 
@@ -67,11 +68,27 @@ class TestState:
         self.flights, self.verdicts, self.regressions, self.problems = [], [], [], []
         self.baseline_missing, self.baseline_unmatched, self.warnings = [], [], []
         self.finished, self.example, self.hypothesis = False, 0, None
-        self.sweep, self.sweep_files = None, []
+        self.sweep, self.sweep_files, self.checks = None, [], {}
 
     def record(self, mission, result) -> None:
         explicit = getattr(mission, "name", None) or (result.scenario or {}).get("name")
         self._add(Flight(result, explicit=explicit, example=self.example))
+
+    def record_check(self, result, verdicts) -> None:
+        """Budgets the test body checked itself (``budgets.check``/``evaluate``): per
+        (flight, KPI, budget) the worst verdict is kept (a broken one, else the
+        smallest margin), with how often it was checked (hypothesis examples)."""
+        names = {id(f.result): f.name for f in self.flights}
+        flight = names.get(id(result))
+        for v in verdicts:
+            key = (flight, v.kpi, v.budget)
+            old = self.checks.get(key)
+            n = 1 if old is None else old[1] + 1
+            if old is None or (old[0].passed and not v.passed) or (
+                    old[0].passed == v.passed and v.margin < old[0].margin):
+                self.checks[key] = (v, n)
+            else:
+                self.checks[key] = (old[0], n)
 
     def next_example(self) -> None:
         """A hypothesis example starts (the plugin wraps the test's inner function)."""
@@ -162,10 +179,13 @@ class TestState:
         """Plain JSON data for the test report (travels through pytest-xdist)."""
         flights = [{"name": f.name, "end_reason": getattr(f.result, "end_reason", None),
                     "sim_time_s": f.result.scenario.get("sim_time_s"),
+                    "wall_time_s": getattr(f.result, "wall_time_s", None),
                     "scenario": f.result.scenario, "kpis": f.result.kpis,
                     "cache": getattr(f.result, "cache", None)} for f in self.flights]
         error = self.markers.error or ("\n".join(self.problems) or None)
-        out = {"flights": flights, "budgets": [v.to_dict() for v in self.verdicts],
+        checks = [{**v.to_dict(), "flight": v.flight or k[0], "source": "check", "checked": n}
+                  for k, (v, n) in self.checks.items()]
+        out = {"flights": flights, "budgets": [v.to_dict() for v in self.verdicts] + checks,
                "regressions": self.regressions, "error": error}
         if self.baseline_missing or self.baseline_unmatched:
             out["baseline_missing"] = self.baseline_missing

@@ -18,6 +18,8 @@ from pathlib import Path
 import pytest
 
 from .. import report as _report
+from ..reports import compare as _compare
+from ..reports import scenario as _scenario
 from . import junit, signals, terminal
 from .options import DEFAULT_MAX_REGRESSION, MISSING_BASELINE, option, path_option
 
@@ -38,6 +40,7 @@ class FlockSession:
         self.max_regression = DEFAULT_MAX_REGRESSION
         self.baseline = None
         self.missing_baseline = "warn"
+        self.abs_tol: dict = {}
         self.started: dict[str, str | None] = {}   # nodeid -> None, or why it did not finish
         self.write_errors: list[str] = []
         self.held_signals: list[str] = []
@@ -51,6 +54,11 @@ class FlockSession:
             raise pytest.UsageError(f"--flockai-missing-baseline = {mb!r} is not allowed; "
                                     f"allowed: {', '.join(MISSING_BASELINE)}")
         self.missing_baseline = mb or "warn"
+        at, _ = option(config, "abs-tol")
+        try:
+            self.abs_tol = _compare.parse_abs_tol([at] if at else [])
+        except ValueError as exc:
+            raise pytest.UsageError(f"--flockai-abs-tol = {at!r}: {exc}") from None
         self._check_distinct()
         v, _ = option(config, "max-regression")
         try:
@@ -116,9 +124,7 @@ class FlockSession:
         payload = getattr(report, "flockai", None)
         crashed = report.when not in ("setup", "call", "teardown")   # xdist: "???"
         entry = self.tests.get(report.nodeid)
-        if entry is None:
-            if payload is None and not crashed:
-                return
+        if entry is None:      # every test is in the reports, also one that flew nothing
             entry = self.tests[report.nodeid] = _entry(report.nodeid)
         if payload is not None:
             entry.update(payload)
@@ -175,7 +181,9 @@ class FlockSession:
             self.config.hook.pytest_flockai_json_report(report=doc, config=self.config)
             self._write("JSON report", self.json_path, doc)
         if self.save_path is not None:
-            self._write("baseline", self.save_path, _report.baseline_from_tests(self.entries()))
+            base = _report.baseline_from_tests(self.entries())
+            base["scenarios"] = _scenario.of_report({"tests": self.entries()})   # for compare
+            self._write("baseline", self.save_path, base)
 
     def _write(self, what, path, doc) -> None:
         try:

@@ -11,6 +11,8 @@ from .. import budgets as _budgets
 from .. import kpis as _kpis
 from .. import report as _report
 from ..errors import ConfigError, close_matches
+from ..reports import compare as _compare
+from ..reports import scenario as _scenario
 from . import sweeps as _sweeps
 
 
@@ -37,17 +39,37 @@ def check(item, st, session, body_failed: bool = False) -> str | None:
         parts.append(f"pytest-flockai: {len(broken)} of {len(st.verdicts)} KPI budget(s) broken "
                      f"in {item.nodeid}:\n" + _budgets.table(st.verdicts))
     if st.regressions:
-        rows = [[r["flight"], r["kpi"], _report.format_kpi(r["kpi"], r["baseline"]),
-                 _report.format_kpi(r["kpi"], r["actual"]), f"{r['change_pct']:+.2f}%",
-                 r["better"]] for r in st.regressions]
-        parts.append(f"pytest-flockai: {len(st.regressions)} KPI regression(s) against baseline "
-                     f"{session.baseline_path} (max {limit_text(session, st)}) in "
-                     f"{item.nodeid}:\n"
-                     + _report.table(["flight", "KPI", "baseline", "actual", "change",
-                                      "better"], rows))
+        parts.append(regression_text(item, st, session))
     if st.baseline_missing and session.missing_baseline == "fail":
         parts.append(missing_text(item.nodeid, st, session))
     return "\n".join(parts) or None
+
+
+def regression_text(item, st, session) -> str:
+    """The gate's message: the scenario change against the baseline first, then one row
+    per KPI family (a task's ``det.*`` twin and the flight's KPI folded), biggest first."""
+    deltas = [_compare.Delta(item.nodeid, r["flight"], r["kpi"], r["baseline"], r["actual"],
+                             r["better"], "regression") for r in st.regressions]
+    groups = _compare.group(deltas, {})
+    rows = [[g.worst.flight if len(g.flights) == 1 else f"{len(g.flights)} flights",
+             g.family + (f" (x{g.count})" if g.count > 1 else ""),
+             _report.format_kpi(g.worst.kpi, g.worst.base),
+             _report.format_kpi(g.worst.kpi, g.worst.new), _compare.format_change(g.worst),
+             g.worst.better or ""] for g in groups]
+    changes = _scenario_changes(item, st, session)
+    cause = "".join(f"\n  scenario change: {c}" for c in changes)
+    return (f"pytest-flockai: {len(groups)} KPI regression(s) against baseline "
+            f"{session.baseline_path} (max {limit_text(session, st)}) in {item.nodeid}:{cause}\n"
+            + _report.table(["flight", "KPI family", "baseline", "actual", "change", "better"],
+                            rows))
+
+
+def _scenario_changes(item, st, session) -> list[str]:
+    if not hasattr(session, "baseline_scenarios"):
+        session.baseline_scenarios = _compare.load_scenarios(session.baseline_path)
+    base = session.baseline_scenarios.get(item.nodeid) or {}
+    new = {f.name: _scenario.summary(f.result.scenario) for f in st.flights}
+    return _scenario.changes_of({item.nodeid: base}, {item.nodeid: new}, item.nodeid)
 
 
 def warn(item, st, session) -> None:
@@ -68,8 +90,10 @@ def _baseline(item, st, session) -> None:
     reg = st.markers.max_regression
     if reg is not None and not isinstance(reg, tuple):
         limit = reg
+    abs_tol = {**getattr(session, "abs_tol", {}), **dict(st.markers.abs_tol)}
     st.regressions = _report.regressions({f.name: f.kpis for f in st.flights}, base,
-                                         limit, per_kpi=st.markers.per_kpi_regression)
+                                         limit, per_kpi=st.markers.per_kpi_regression,
+                                         abs_tol=abs_tol)
 
 
 def missing_text(nodeid, st, session) -> str:

@@ -8,6 +8,9 @@ link), and how its predictions are scored against the simulator's truth
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import os
 from numbers import Integral
 
 from .. import _check, limits
@@ -84,6 +87,10 @@ class Task:
         limits.check_at_least("period_s", self.period_s, "MIN_TASK_PERIOD_S", where=where,
                               unit=" s")
         self.execution = _check.choice("execution", execution, EXECUTIONS, where=where)
+        if self.execution == "remote" and not getattr(self.model, "needs_pixels", True):
+            raise ConfigError(f"{where}: execution = 'remote' is not allowed for model "
+                              f"{self.name!r}: it reads the truth, not pixels, so there is no "
+                              f"frame to send; model the transport as its delay_s instead")
         self.device = None if device is None else self._device("device", device, where)
         self.ground_device = self._device("ground_device", ground_device, where)
         try:
@@ -150,7 +157,8 @@ class Task:
         return {"name": self.name, "model": {"name": getattr(m, "name", None),
                                              "type": type(m).__name__,
                                              "macs": getattr(m, "macs", None),
-                                             "params": getattr(m, "params", None)},
+                                             "params": getattr(m, "params", None),
+                                             "sha256": model_sha256(m)},
                 "sensor": self.sensor, "period_s": self.period_s, "execution": self.execution,
                 "device": self.device.name if self.device is not None else None,
                 "ground_device": self.ground_device.name,
@@ -171,3 +179,25 @@ class Task:
 
 
 __all__ = ["ALERTS", "EVALUATIONS", "EXECUTIONS", "ON_BUSY", "Task"]
+
+
+def model_sha256(model) -> str | None:
+    """SHA-256 of a model's file (an ``OnnxModel``'s ``path``), memoised on the file's
+    mtime and size; None for a model without a file. The reports name a model by it."""
+    path = getattr(model, "path", None)
+    if not isinstance(path, (str, os.PathLike)):
+        return None
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return _file_sha256(os.fspath(path), st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=64)
+def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()

@@ -16,7 +16,11 @@ def add_parsers(sub) -> None:
     c.add_argument("new", type=Path, help="the new run: a --flockai-json report or baseline")
     c.add_argument("--threshold", default="5%",
                    help="largest allowed regression, percent of the base value (default 5%%)")
-    c.add_argument("--all", action="store_true", help="show every KPI, also unchanged ones")
+    c.add_argument("--abs-tol", action="append", default=[], metavar="KPI=VALUE",
+                   help="absolute tolerance of a KPI (or KPI family) in its SI unit, over the "
+                        "registry's (kpis.abs_tolerance); repeatable, e.g. energy_total_j=5")
+    c.add_argument("--all", action="store_true", help="show every regression row and every "
+                                                      "changed KPI")
     c.add_argument("--json", type=Path, default=None, help="also write the deltas as JSON")
     h = sub.add_parser("history", help="a KPI across the runs kept by --flockai-history")
     h.add_argument("directory", type=Path)
@@ -41,12 +45,18 @@ def _compare_cmd(a) -> int:
         print(f"flockai compare: --threshold = {_report.printable(repr(a.threshold))} is not "
               f"allowed; expected a percentage >= 0, e.g. 5%", file=sys.stderr)
         return 2
+    try:
+        abs_tol = _compare.parse_abs_tol(a.abs_tol)
+    except ValueError as exc:
+        print(_report.printable(f"flockai compare: --abs-tol: {exc}"), file=sys.stderr)
+        return 2
     if a.json is not None:
         _report.check_writable(a.json, "flockai compare --json")
-    cmp = _compare.compare_files(a.base, a.new, threshold)   # ReportError: exit 2 (cli.py)
+    cmp = _compare.compare_files(a.base, a.new, threshold, abs_tol=abs_tol)   # ReportError: 2
     print(_report.printable(_compare.render(cmp, show_all=a.all), newlines=True))
     if a.json is not None:
-        _report.write_json_atomic(a.json, {"threshold_pct": threshold,
+        _report.write_json_atomic(a.json, {"threshold_pct": threshold, "abs_tol": abs_tol,
+                                           "causes": cmp.causes,
                                            "deltas": [d.to_dict() for d in cmp.deltas],
                                            "only_base": cmp.only_base, "only_new": cmp.only_new})
     return 1 if cmp.regressions else 0

@@ -1,19 +1,34 @@
-"""``flockai compare BASE.json NEW.json [--threshold 5%]``: KPI deltas across commits.
+"""``flockai compare BASE.json NEW.json [--threshold 5%] [--abs-tol KPI=VALUE]``.
 
 Both files may be JSON reports (``--flockai-json``) or baselines
 (``--flockai-save``). Each KPI of each flight of each test present in both is
-compared in its better direction (the registry in ``kpis.py``); a KPI worse
-than the base by more than the threshold (percent of the base value) is a
-regression, and the command exits 1; otherwise 0 (2 for a file it cannot read).
+compared in its better direction (the registry in ``kpis.py``). A change no
+larger than the KPI's absolute tolerance (``kpis.abs_tolerance``, overridable)
+or than a millionth of the value is noise: "same". A KPI worse than the base by
+more than the threshold (percent of the base value) and its absolute tolerance
+is a regression, and the command exits 1; otherwise 0.
+
+The story comes first (``render``): one screen of summary, the scenario
+changes of the tests that changed (``scenario.py``: drone, computer, model,
+link, world, conditions, seed), then the regressions grouped by cause and
+sorted by size, one row per KPI family and test (``det.recall`` and
+``recall``, or every drone's ``flight_time_s``, folded across the flights);
+the per-KPI rows only with ``--all``.
 """
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 
 from .. import kpis as _kpis
 from .. import report as _report
+from . import scenario as _scenario
+
+#: a relative change below this is float noise, whatever the KPI
+NOISE_REL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -38,7 +53,25 @@ class Delta:
     def to_dict(self) -> dict:
         return {"test": self.test, "flight": self.flight, "kpi": self.kpi, "base": self.base,
                 "new": self.new, "change_pct": self.change_pct, "better": self.better,
-                "status": self.status}
+                "status": self.status, "family": family(self.kpi)}
+
+
+@dataclass(frozen=True)
+class Group:
+    """One row of the story: a KPI family of one test, across its flights."""
+
+    test: str
+    family: str
+    status: str                 # the worst status of its deltas
+    worst: Delta                # the delta with the largest change in the worse direction
+    count: int                  # deltas folded into this row
+    flights: tuple              # the flights they come from
+    cause: str                  # the test's scenario changes ("" when none is known)
+
+    @property
+    def size(self) -> float:
+        c = self.worst.change_pct
+        return abs(c) if c is not None else 0.0
 
 
 @dataclass
@@ -47,10 +80,15 @@ class Comparison:
     only_base: list             # tests in the base only
     only_new: list              # tests in the new file only
     threshold_pct: float
+    causes: dict = field(default_factory=dict)   # test -> [scenario change lines]
 
     @property
     def regressions(self) -> list:
         return [d for d in self.deltas if d.status == "regression"]
+
+    def groups(self, statuses=("regression",)) -> list[Group]:
+        """Rows for the deltas of ``statuses``: one per (test, KPI family), biggest first."""
+        return group(self.deltas, self.causes, statuses)
 
 
 def parse_threshold(text) -> float:
@@ -63,6 +101,36 @@ def parse_threshold(text) -> float:
     return v
 
 
+def parse_abs_tol(items) -> dict:
+    """``["energy_total_j=5", "cpu_utilization=0.01"]`` -> ``{kpi: float}`` (SI units);
+    raises ValueError naming the item for anything else."""
+    out = {}
+    for item in items or ():
+        for part in str(item).split(","):
+            kpi, sep, value = part.partition("=")
+            try:
+                v = float(value)
+            except ValueError:
+                v = math.nan
+            if not sep or not kpi.strip() or not (v >= 0 and math.isfinite(v)):
+                raise ValueError(f"abs tolerance {part!r} is not allowed; expected KPI=VALUE "
+                                 f"with VALUE >= 0 in the KPI's SI unit, e.g. energy_total_j=5")
+            out[kpi.strip()] = v
+    return out
+
+
+def family(kpi: str) -> str:
+    """The KPI with a task's or a drone's prefix taken off (``det.recall`` ->
+    ``recall``, ``drone-2.flight_time_s`` -> ``flight_time_s``); registered names
+    (``fleet.makespan_s``) and family members (``recall.person``) stay."""
+    if kpi in _kpis.BUILTIN or "." not in kpi:
+        return kpi
+    head, rest = kpi.split(".", 1)
+    if head in _kpis.FAMILIES:
+        return kpi
+    return family(rest) if _kpis.get(rest) is not None else kpi
+
+
 def _num(v):
     if v is None or isinstance(v, bool):
         return None
@@ -72,47 +140,103 @@ def _num(v):
         return None
 
 
-def classify(kpi: str, base, new, threshold_pct: float) -> tuple[str | None, str]:
+def tolerance(kpi: str, abs_tol: dict | None = None) -> float:
+    """The absolute tolerance of ``kpi``: an override (by name or family), else the registry's."""
+    over = abs_tol or {}
+    if kpi in over:
+        return float(over[kpi])
+    if family(kpi) in over:
+        return float(over[family(kpi)])
+    return _kpis.abs_tolerance(kpi)
+
+
+def classify(kpi: str, base, new, threshold_pct: float,
+             abs_tol: dict | None = None) -> tuple[str | None, str]:
     """(better direction, status) of one KPI; the tolerance matches the plugin's
     baseline gate (``report.regressions``)."""
     info = _kpis.get(kpi)
     better = info.better if info is not None else None
     if base is None or new is None or not (math.isfinite(base) and math.isfinite(new)):
         return better, "n/a"
-    if new == base:
+    noise = max(tolerance(kpi, abs_tol), NOISE_REL * max(abs(base), abs(new)))
+    if abs(new - base) <= noise:
         return better, "same"
     if better is None:
         return better, "changed"
-    tol = abs(base) * threshold_pct / 100.0 + 1e-9 * max(1.0, abs(base))
     worse = new < base if better == "higher" else new > base
     if not worse:
         return better, "better"
-    beyond = new < base - tol if better == "higher" else new > base + tol
-    return better, "regression" if beyond else "worse"
+    tol = max(abs(base) * threshold_pct / 100.0, noise)
+    return better, "regression" if abs(new - base) > tol else "worse"
 
 
-def compare(base: dict, new: dict, threshold_pct: float = 5.0) -> Comparison:
-    """Compare ``{test: {flight: {kpi: value}}}`` mappings."""
+def compare(base: dict, new: dict, threshold_pct: float = 5.0, *, abs_tol: dict | None = None,
+            base_scenarios: dict | None = None, new_scenarios: dict | None = None) -> Comparison:
+    """Compare ``{test: {flight: {kpi: value}}}`` mappings; the scenarios
+    (``scenario.of_report``) give each test's cause."""
     deltas = []
     for test in sorted(set(base) & set(new)):
         for flight in sorted(set(base[test]) & set(new[test])):
             bk, nk = base[test][flight], new[test][flight]
             for kpi in sorted(set(bk) | set(nk)):
                 b, n = _num(bk.get(kpi)), _num(nk.get(kpi))
-                better, status = classify(kpi, b, n, threshold_pct)
+                better, status = classify(kpi, b, n, threshold_pct, abs_tol)
                 deltas.append(Delta(test, flight, kpi, b, n, better, status))
+    causes = {}
+    if base_scenarios and new_scenarios:
+        for test in sorted(set(base) & set(new)):
+            lines = _scenario.changes_of(base_scenarios, new_scenarios, test)
+            if lines:
+                causes[test] = lines
     return Comparison(deltas, sorted(set(base) - set(new)), sorted(set(new) - set(base)),
-                      threshold_pct)
+                      threshold_pct, causes)
 
 
-def compare_files(base_path, new_path, threshold_pct: float = 5.0) -> Comparison:
+_RANK = {"regression": 0, "worse": 1, "better": 2, "changed": 3, "same": 4, "n/a": 5}
+
+
+def _badness(d: Delta) -> float:
+    c = d.change_pct
+    if c is None:
+        return -math.inf
+    return -c if d.better == "higher" else c
+
+
+def group(deltas, causes: dict, statuses=("regression",)) -> list[Group]:
+    """One row per (test, KPI family) among the deltas of ``statuses``: grouped by
+    cause (the tests sharing a scenario change together), biggest change first."""
+    by: dict = {}
+    for d in deltas:
+        if d.status in statuses:
+            by.setdefault((d.test, family(d.kpi)), []).append(d)
+    rows = []
+    for (test, fam), ds in by.items():
+        ds.sort(key=lambda d: (_RANK[d.status], -_badness(d)))
+        rows.append(Group(test, fam, ds[0].status, ds[0], len(ds),
+                          tuple(dict.fromkeys(d.flight for d in ds)),
+                          "; ".join(causes.get(test, ()))))
+    cause_size: dict = {}
+    for r in rows:
+        cause_size[r.cause] = max(cause_size.get(r.cause, 0.0), r.size)
+    rows.sort(key=lambda r: (r.cause == "", -cause_size[r.cause], r.cause, _RANK[r.status],
+                             -r.size, r.test, r.family))
+    return rows
+
+
+def load_scenarios(path) -> dict:
+    """The scenario summaries a report or baseline file keeps (``{}`` when none)."""
+    try:
+        return _scenario.of_report(json.loads(Path(path).read_text(encoding="utf-8")))
+    except (OSError, ValueError):
+        return {}
+
+
+def compare_files(base_path, new_path, threshold_pct: float = 5.0, *,
+                  abs_tol: dict | None = None) -> Comparison:
     """Raises ``report.ReportError`` for a file that is not a report or baseline."""
     return compare(_report.load_baseline(base_path), _report.load_baseline(new_path),
-                   threshold_pct)
-
-
-_MARK = {"regression": "REGRESSION", "worse": "worse", "better": "better", "same": "",
-         "changed": "changed", "n/a": "n/a"}
+                   threshold_pct, abs_tol=abs_tol, base_scenarios=load_scenarios(base_path),
+                   new_scenarios=load_scenarios(new_path))
 
 
 def format_change(d: Delta) -> str:
@@ -122,31 +246,75 @@ def format_change(d: Delta) -> str:
     return f"{c:+.2f}%" if math.isfinite(c) else ("+inf%" if c > 0 else "-inf%")
 
 
-def render(cmp: Comparison, *, show_all: bool = False) -> str:
-    """The comparison as a text table (KPIs with a better direction that changed,
-    or every KPI with ``show_all``), then the regressions and the summary."""
-    rows = []
+def counts(cmp: Comparison) -> dict:
+    """How many KPIs (with a better direction) are in each status."""
+    out = {s: 0 for s in _RANK}
     for d in cmp.deltas:
-        if not show_all and (d.better is None or d.status in ("same", "n/a")):
-            continue
-        rows.append([_short(d.test), d.flight, d.kpi, _report.format_kpi(d.kpi, d.base),
-                     _report.format_kpi(d.kpi, d.new), format_change(d),
-                     {"higher": "higher", "lower": "lower"}.get(d.better, ""), _MARK[d.status]])
-    out = []
-    if rows:
-        out.append(_report.table(["test", "flight", "KPI", "base", "new", "change", "better",
-                                  "status"], rows, indent=""))
-    else:
-        out.append("no KPI with a better direction changed")
+        if d.better is not None or d.status == "n/a":
+            out[d.status] += 1
+    return out
+
+
+def headline(cmp: Comparison) -> str:
+    """The one line a reader needs: regressions (rows and tests), then the rest."""
+    c = counts(cmp)
+    regs = cmp.groups()
+    tests = len({g.test for g in regs})
+    first = (f"{len(regs)} regression(s) in {tests} test(s) beyond {cmp.threshold_pct:g}%"
+             if regs else f"no regression beyond {cmp.threshold_pct:g}%")
+    return (f"{first}; {c['worse']} KPI(s) worse within the threshold, {c['better']} better, "
+            f"{c['same']} unchanged (within each KPI's absolute tolerance)")
+
+
+def _group_rows(groups) -> list[list[str]]:
+    rows = []
+    for g in groups:
+        d = g.worst
+        flights = d.flight if len(g.flights) == 1 else f"{len(g.flights)} flights"
+        rows.append([_short(g.test), g.family + (f" (x{g.count})" if g.count > 1 else ""),
+                     flights, _report.format_kpi(d.kpi, d.base), _report.format_kpi(d.kpi, d.new),
+                     format_change(d), d.better or ""])
+    return rows
+
+
+def render(cmp: Comparison, *, show_all: bool = False, limit: int = 20) -> str:
+    """The summary, the scenario changes, the regressions (one row per KPI family and
+    test, biggest first, at most ``limit`` unless ``show_all``), then with
+    ``show_all`` every changed KPI."""
+    out = [headline(cmp)]
+    causes: dict = {}
+    for test, lines in cmp.causes.items():
+        causes.setdefault("; ".join(lines), []).append(test)
+    if causes:
+        out += ["", "scenario changes:"]
+        for cause, tests in sorted(causes.items(), key=lambda kv: -len(kv[1])):
+            out.append(f"  {cause}  ({len(tests)} test(s): {', '.join(_short(t) for t in tests[:3])}"
+                       f"{', ...' if len(tests) > 3 else ''})")
+    regs = cmp.groups()
+    if regs:
+        out += ["", "regressions, biggest first (one row per KPI family and test):"]
+        shown = regs if show_all else regs[:limit]
+        last = None
+        for g in shown:
+            if g.cause != last:
+                out.append(f"  cause: {g.cause or 'no scenario change known'}")
+                last = g.cause
+                block = [x for x in shown if x.cause == g.cause]
+                out.append(_report.table(["test", "KPI family", "flights", "base", "new",
+                                          "change", "better"], _group_rows(block), indent="    "))
+        if len(shown) < len(regs):
+            out.append(f"  ... {len(regs) - len(shown)} more (--all shows every row)")
     for t in cmp.only_base:
         out.append(f"only in the base: {t}")
     for t in cmp.only_new:
         out.append(f"only in the new run: {t}")
-    n = len(cmp.regressions)
-    counted = [d for d in cmp.deltas if d.better is not None and d.status != "n/a"]
-    out.append(f"{len(counted)} KPI(s) compared, {sum(d.status == 'better' for d in counted)} "
-               f"better, {sum(d.status in ('worse', 'regression') for d in counted)} worse, "
-               f"{n} regression(s) beyond {cmp.threshold_pct:g}%")
+    if show_all:
+        rows = [[_short(d.test), d.flight, d.kpi, _report.format_kpi(d.kpi, d.base),
+                 _report.format_kpi(d.kpi, d.new), format_change(d), d.better or "", d.status]
+                for d in cmp.deltas if d.status not in ("same", "n/a")]
+        out += ["", "every changed KPI:"]
+        out.append(_report.table(["test", "flight", "KPI", "base", "new", "change", "better",
+                                  "status"], rows, indent="") if rows else "none")
     return "\n".join(out)
 
 

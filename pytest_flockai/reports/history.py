@@ -23,6 +23,7 @@ import re
 import subprocess
 from pathlib import Path
 
+from .. import kpis as _kpis
 from .. import report as _report
 from .._io import atomic_write
 
@@ -42,7 +43,13 @@ def git_info(cwd) -> dict:
             branch = _git(cwd, "rev-parse", "--abbrev-ref", "HEAD")
     except (OSError, subprocess.SubprocessError):
         pass
-    return {"commit": commit or None, "dirty": dirty, "branch": branch or None}
+    tag = None
+    if commit:
+        try:
+            tag = _git(cwd, "describe", "--tags", "--exact-match", commit) or None
+        except (OSError, subprocess.SubprocessError):
+            tag = None
+    return {"commit": commit or None, "dirty": dirty, "branch": branch or None, "tag": tag}
 
 
 def _git(cwd, *args) -> str:
@@ -146,8 +153,39 @@ def render(runs: list[dict], kpi: str, test: str | None = None) -> str:
                      + legend)
 
 
-def plot(runs: list[dict], kpi: str, path, test: str | None = None) -> Path:
-    """Draw the trend of ``kpi`` into ``path`` (PNG); needs matplotlib."""
+def run_label(run: dict) -> str:
+    """A run on the x axis: its tag, else its short commit (``+`` when dirty), else its date."""
+    if run.get("tag"):
+        return str(run["tag"])
+    if run.get("commit"):
+        return str(run["commit"])[:7] + ("+" if run.get("dirty") else "")
+    return str(run.get("created", "?"))[5:16].replace("T", " ")
+
+
+def series_label(name: str, width: int = 48) -> str:
+    """``tests/test_x.py::test_hover[a] / flight`` -> ``test_hover[a] / flight``, cut in
+    the middle (never from the left) when longer than ``width``."""
+    nodeid, _, flight = name.rpartition(" / ")
+    short = f"{nodeid.split('::', 1)[-1]} / {flight}" if nodeid else name
+    if len(short) <= width:
+        return short
+    keep = (width - 1) // 2
+    return short[:keep] + "…" + short[-(width - 1 - keep):]
+
+
+_LINESTYLES = ("-", "--", ":", "-.")
+_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "<", ">")
+
+
+def style(i: int) -> dict:
+    """The i-th series' style: 10 colours, then a new line style and marker each 10."""
+    return {"color": f"C{i % 10}", "linestyle": _LINESTYLES[(i // 10) % len(_LINESTYLES)],
+            "marker": _MARKERS[(i + i // 10) % len(_MARKERS)]}
+
+
+def trend_fig(runs: list[dict], kpi: str, test: str | None = None):
+    """The trend of ``kpi`` across ``runs`` as a matplotlib Figure (needs matplotlib):
+    one line per test and flight, the runs labelled by tag or short commit."""
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -156,20 +194,32 @@ def plot(runs: list[dict], kpi: str, path, test: str | None = None) -> Path:
         raise _report.ReportError("drawing the history needs matplotlib: pip install "
                                   "'pytest-flockai[plots]'") from None
     s = series(runs, kpi, test)
-    labels = [(r.get("commit") or "?")[:7] for r in runs]
-    fig, ax = plt.subplots(figsize=(8, 4))
-    for name, values in s.items():
-        xs = [i for i, v in enumerate(values) if v is not None]
-        ax.plot(xs, [values[i] for i in xs], marker="o", label=name[-60:])
-    ax.set_xticks(range(len(runs)), labels, rotation=45, ha="right")
-    ax.set_ylabel(kpi)
+    rows = (len(s) + 1) // 2
+    fig, ax = plt.subplots(figsize=(9, 4 + 0.22 * rows))
+    for i, (name, values) in enumerate(s.items()):
+        xs = [j for j, v in enumerate(values) if v is not None]
+        ax.plot(xs, [values[j] for j in xs], label=series_label(name), ms=5, **style(i))
+    ax.set_xticks(range(len(runs)), [run_label(r) for r in runs], rotation=45, ha="right")
+    info = _kpis.get(kpi)
+    ax.set_ylabel(f"{kpi} ({info.unit})" if info is not None and info.unit not in ("1", "count")
+                  else kpi)
     ax.set_title(f"{kpi} by commit")
+    ax.grid(alpha=0.3)
     if s:
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.22),
+                  frameon=False)
     fig.tight_layout()
+    return fig
+
+
+def plot(runs: list[dict], kpi: str, path, test: str | None = None) -> Path:
+    """Draw the trend of ``kpi`` into ``path`` (PNG, ``trend_fig``); needs matplotlib."""
+    fig = trend_fig(runs, kpi, test)
     p = Path(path)
     try:
-        atomic_write(p, lambda fh: fig.savefig(fh, dpi=100, format="png"), text=False)
+        atomic_write(p, lambda fh: fig.savefig(fh, dpi=100, format="png", bbox_inches="tight"),
+                     text=False)
     finally:
+        import matplotlib.pyplot as plt
         plt.close(fig)
     return p

@@ -11,18 +11,55 @@ import math
 
 from .. import kpis as _kpis
 from .. import report as _report
+from . import compare as _compare
+from . import scenario as _scenario
 
 HEADLINE = ("flight_time_s", "endurance_s", "energy_total_j", "mean_power_w", "battery_remaining",
             "inference_latency_p50_s", "recall", "map50", "crashed")
 
 
-def broken_budgets(doc: dict) -> list[dict]:
-    return [{"test": t["nodeid"], **b} for t in doc.get("tests", ())
-            for b in t.get("budgets", ()) if b.get("verdict") != "pass"]
+#: pytest's outcomes that make a run fail
+FAILING = ("failed", "error", "crashed", "interrupted")
+
+
+def ok(doc: dict) -> bool:
+    """The run passed, as pytest said: its exit status is 0 (a report without one:
+    no test failed). Broken budgets of an xfail test do not make it red."""
+    status = doc.get("exitstatus")
+    if status is not None:
+        return int(status) == 0
+    s = doc.get("summary", {})
+    return not any(s.get(k) for k in FAILING)
+
+
+def budget_state(outcome: str, b: dict) -> str:
+    """What a budget row means for the run: "pass", "broken" (its test failed),
+    "xfail" (broken in a test expected to fail) or "caught" (broken inside a
+    ``budgets.check`` the test expected to raise: the test passed)."""
+    if b.get("verdict") == "pass":
+        return "pass"
+    if outcome in ("xfailed", "xpassed"):
+        return "xfail"
+    if outcome in ("passed", "skipped"):
+        return "caught"
+    return "broken"
 
 
 def budgets(doc: dict) -> list[dict]:
-    return [{"test": t["nodeid"], **b} for t in doc.get("tests", ()) for b in t.get("budgets", ())]
+    """Every budget row, with its test, its test's outcome and its ``state``."""
+    return [{"test": t["nodeid"], "outcome": t.get("outcome"), **b,
+             "state": budget_state(t.get("outcome", ""), b)}
+            for t in doc.get("tests", ()) for b in t.get("budgets", ())]
+
+
+def broken_budgets(doc: dict) -> list[dict]:
+    """The budgets broken in a failed test: those that fail the run."""
+    return [b for b in budgets(doc) if b["state"] == "broken"]
+
+
+def expected_broken(doc: dict) -> list[dict]:
+    """Budgets broken where pytest expected it (xfail tests, ``pytest.raises`` around check)."""
+    return [b for b in budgets(doc) if b["state"] in ("xfail", "caught")]
 
 
 def regressions(doc: dict) -> list[dict]:
@@ -30,11 +67,28 @@ def regressions(doc: dict) -> list[dict]:
             for r in t.get("regressions", ())]
 
 
+def regression_groups(doc: dict, base_scenarios: dict | None = None) -> tuple[list, dict]:
+    """The run's regressions against the baseline as ``compare.Group`` rows (one per
+    KPI family and test, biggest first, grouped by cause), and ``{cause: [tests]}``
+    from the scenario changes against the baseline's scenarios (when it kept them)."""
+    new_scen = _scenario.of_report(doc)
+    causes: dict = {}
+    by_test: dict = {}
+    for t in doc.get("tests", ()):
+        lines = _scenario.changes_of(base_scenarios or {}, new_scen, t["nodeid"])
+        if lines:
+            by_test[t["nodeid"]] = lines
+            causes.setdefault("; ".join(lines), []).append(t["nodeid"])
+    deltas = [_compare.Delta(r["test"], r["flight"], r["kpi"], r.get("baseline"), r.get("actual"),
+                             r.get("better"), "regression") for r in regressions(doc)]
+    return _compare.group(deltas, by_test), causes
+
+
 def flights(doc: dict) -> list[dict]:
     """One row per (test, flight): test, flight, outcome, cache status, KPIs."""
     return [{"test": t["nodeid"], "flight": f["name"], "outcome": t["outcome"],
              "cache": (f.get("cache") or {}).get("status"), "kpis": f.get("kpis") or {},
-             "end_reason": f.get("end_reason")}
+             "end_reason": f.get("end_reason"), "wall_time_s": f.get("wall_time_s")}
             for t in doc.get("tests", ()) for f in t.get("flights", ())]
 
 
@@ -69,9 +123,35 @@ def fmt_pct(v) -> str:
     return f"{v:+.2f}%" if math.isfinite(v) else ("+inf%" if v > 0 else "-inf%")
 
 
+OUTCOMES = ("passed", "failed", "error", "skipped", "xfailed", "xpassed", "crashed",
+            "interrupted")
+
+
 def counts(doc: dict) -> str:
+    """pytest's counts: ``26 test(s) (24 passed, 2 xfailed), 30 flight(s)``."""
     s = doc.get("summary", {})
-    parts = [f"{s.get(k)} {k}" for k in ("passed", "failed", "error", "skipped", "xfailed",
-                                         "xpassed") if s.get(k)]
+    parts = [f"{s.get(k)} {k}" for k in OUTCOMES if s.get(k)]
     return f"{s.get('tests', 0)} test(s) ({', '.join(parts) or 'none run'}), " \
            f"{s.get('flights', 0)} flight(s)"
+
+
+def headline(doc: dict) -> str:
+    """The one line of a run: pytest's counts, then the budgets and regressions."""
+    broken, expected = broken_budgets(doc), expected_broken(doc)
+    regs, _ = regression_groups(doc)
+    cached = sum(r["cache"] == "hit" for r in flights(doc))
+    extra = [f"{len(broken)} budget(s) broken" if broken else "every budget holds"
+             if not expected else f"{len(expected)} budget(s) broken where expected (xfail)"]
+    if broken and expected:
+        extra.append(f"{len(expected)} more where expected (xfail)")
+    if regs:
+        extra.append(f"{len(regs)} regression(s) (KPI families)")
+    if cached:
+        extra.append(f"{cached} flight(s) from the cache")
+    return f"{'passed' if ok(doc) else 'FAILED'}: {counts(doc)}; {'; '.join(extra)}"
+
+
+def slowest(doc: dict, n: int = 3) -> list[dict]:
+    """The ``n`` flights that took the most wall time to fly (cache hits cost nothing)."""
+    rows = [r for r in flights(doc) if r["cache"] != "hit" and r.get("wall_time_s")]
+    return sorted(rows, key=lambda r: -r["wall_time_s"])[:n]
