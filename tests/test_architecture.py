@@ -15,7 +15,7 @@ PKG = Path(__file__).resolve().parent.parent / "pytest_flockai"
 #: bottom to top; a name is a top-level module or subpackage of pytest_flockai
 LAYERS = [
     {"errors", "physics", "phases", "clock", "_check", "_io", "kpis", "recording", "result",
-     "limits", "memo", "_mujoco", "notebook"},
+     "limits", "memo", "_mujoco", "notebook", "_xp"},
     {"compute", "world"},
     {"energy", "sensors"},
     {"comm", "airframe"},
