@@ -23,7 +23,9 @@ REL_TOL = float(os.environ.get("FLOCKAI_GOLDEN_REL_TOL", "1e-9"))
 OTHER_VERSIONS_SKIP = {
     # the JPEG size of a rendered frame: OpenCV's encoder (libjpeg-turbo) and MuJoCo's
     # renderer differ between releases (4 bytes in 241,731 on the lowest versions)
-    "remote-task": {"kpis.kbytes_out": "JPEG size", "breakdown.comm.radio.tx": "JPEG size"},
+    "remote-task": {"kpis.kbytes_out": "JPEG size", "breakdown.comm.radio.tx": "JPEG size",
+                    "kpis.cnn.energy_j": "JPEG size (the task's radio energy)",
+                    "kpis.cnn.radio_energy_j": "JPEG size"},
     # after two drones touch, their tumbling follows MuJoCo's contact solver (3.3 vs 4.0)
     "crossing": {"telemetry_sums.": "motion after the collision"},
 }

@@ -128,7 +128,10 @@ class StageMachine(Clocked):
         s = self.st
         s.stage = PILOT
         qc, vc = s.qc, s.vc
-        self.pilot.start(t, (qc[0], qc[1], qc[2]), self.accel)
+        # the pilot starts over the take-off point (the climb's setpoint), not where a wind
+        # pushed the drone during the climb: an autopilot holds the pad's position
+        sp = s.sp
+        self.pilot.start(t, (sp[0], sp[1], qc[2]), self.accel)
         self.events.add(t, "stage", stage="pilot")
         self._pupdate(t, (qc[0], qc[1], qc[2], vc[0], vc[1], vc[2]), s.sp)
 

@@ -105,8 +105,9 @@ def stages(p, s, t, q, v, contact, kind):
                                  t - s["t_stage"])
     lsp = jnp.concatenate([lpos, lvel, lacc])
     ldone = t - s["t_stage"] >= ldur
-    # take-off done: the pilot starts here and writes this tick's setpoint
-    s1 = {**s, "pilot_t0": t, "pilot_start": pilot_start(p, q, kind)}
+    # take-off done: the pilot starts over the climb's setpoint (the pad, not where a wind
+    # pushed the drone: control/stages.py) and writes this tick's setpoint
+    s1 = {**s, "pilot_t0": t, "pilot_start": pilot_start(p, jnp.stack([sp[0], sp[1], q[2]]), kind)}
     ssp, _, st0, sstart = pilot_update(p, s1, t, kind)
     # return done: land from the end of the return leg
     l_p1 = jnp.stack([lpos[0], lpos[1], s["home"][2] - LANDING_OVERSHOOT])

@@ -20,7 +20,7 @@ from ...clock import CLOCK_EPS
 from ...comm.traffic import ACK_BYTES
 from ...control.stages import LAND, PILOT, TAKEOFF
 from ...energy.battery import CUTOFF_HOLD_S, ocv_liion, ocv_lipo, resistance_shape, terminal_current
-from ...energy.rotors import VRS_K
+from ...energy.rotors import VRS_K, wake_immersion
 from ...mission.book import ACCEL_SMOOTHING_S, ACCEL_THRESHOLD, HOVER_SPEED
 from ...world.wind import gust_intensities, ou_coefficients
 from .control import rotation
@@ -114,14 +114,15 @@ def motors(mp, thrust, vrel, vi):
     n = thrust.shape[0]
     vps = jnp.where(vpar > 0.1, vpar, 1.0)
     vi_mean = wake_vi / n
-    skew = (vpar / jnp.sqrt(vpar2 + (vax + vi_mean) ** 2)) ** 2
     ws = jnp.maximum(0.0, -(mp.dirs[:, 0] * vx / vps + mp.dirs[:, 1] * vy / vps))
     tot = jnp.sum(ws)
-    scale = mp.wake * vi_mean * skew * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
+    scale = mp.wake * vi_mean * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
     use = (mp.wake > 0.0) & (vpar > 0.1) & (wake_vi > 0.0) & (tot > 0.0)
-    induced = induced + jnp.where(use, jnp.sum(ws * thrust) * scale, 0.0)
-    shaft = jnp.where(on, mp.kappa * T * v + T * vax + p0 + jnp.where(use, ws * thrust * scale,
-                                                                         0.0), 0.0)
+    # the aft rotors' immersion in the fore wake: the core's own formula, on arrays
+    extra = jnp.where(use, ws * thrust * scale * wake_immersion(
+        mp.L2 * ws, vax + vi_mean, vpar, mp.D, jnp.maximum, jnp.minimum), 0.0)
+    induced = induced + jnp.sum(extra)
+    shaft = jnp.where(on, mp.kappa * T * v + T * vax + p0 + extra, 0.0)
     total = induced + profile + axial
     inv_eta = jnp.where(mp.model & (total >= 0.0) & (total > 1e-12),
                         _electrical(mp, shaft, jnp.where(on, omega, 0.0))
