@@ -11,7 +11,7 @@ from pytest_flockai.airframe import datasheet
 from pytest_flockai.airframe.rotor_drag import BLADE_DRAG_DEFAULT, h_force
 from pytest_flockai.control.stages import PILOT
 from pytest_flockai.energy.components import Usage
-from pytest_flockai.physics import G, RHO_SEA_LEVEL
+from pytest_flockai.physics import RHO_SEA_LEVEL, G
 
 
 class Record(fa.Clocked):
@@ -62,7 +62,7 @@ def test_constant_speed_in_still_air_feels_the_h_force_of_the_formula():
     rows = _fly(d, fa.pilots.Waypoints([(400.0, 0.0, 20.0)], speed=12.0), until=45.0)
     cruise = [r for r in rows if abs(math.hypot(*r[3][:2]) - 12.0) < 0.05]
     assert len(cruise) > 200
-    for t, f, act, v, q, w, _ in cruise[::50]:
+    for t, f, act, v, q, _w, _ in cruise[::50]:
         want = _formula(d, act, v, q)
         assert np.allclose(f, want, rtol=0.02, atol=1e-3), (t, f, want)
     f = np.mean([r[1] for r in cruise], axis=0)

@@ -36,7 +36,7 @@ import math
 
 from ..energy.rotors import MOTOR_FIELDS
 from ..errors import ConfigError
-from ..physics import G, RHO_SEA_LEVEL
+from ..physics import RHO_SEA_LEVEL, G
 from . import motor_law as _law
 from . import rotor_drag as _rotor_drag
 from .params import Field, Section

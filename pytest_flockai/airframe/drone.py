@@ -19,7 +19,7 @@ from ..compute import device as _device
 from ..energy import EnergyModel
 from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
-from ..physics import G, RHO_SEA_LEVEL  # G re-exported: airframe.drone.G
+from ..physics import RHO_SEA_LEVEL, G  # G re-exported: airframe.drone.G
 from ..sensors import Sensor
 from .datasheet import Datasheet
 from .datasheet import expand as _expand_datasheet
@@ -98,7 +98,7 @@ class Drone:
                               f"read one character at a time)")
         self.sensors = list(names)
         self.payload_kg = 0.0
-        self.extra_sensors = []
+        self.extra_sensors: list = []
         energy = EnergyParams(data["energy"], where=f"{where} [energy]")
         self.energy = EnergyModel.from_params(
             energy, device=_device(self.device) if self.device != "none" else None, radio=self.radio)
@@ -125,10 +125,12 @@ class Drone:
 
     @property
     def max_thrust_n(self) -> float:
+        """Thrust of all rotors at full speed at sea level (N)."""
         return self.airframe.rotor_count * self.rotor.max_thrust_n
 
     @property
     def thrust_to_weight(self) -> float:
+        """Maximum thrust over weight at sea level, payload included."""
         return self.max_thrust_n / (self.mass_kg * G)
 
     def thrust_to_weight_at(self, rho: float) -> float:
@@ -142,6 +144,7 @@ class Drone:
 
     @property
     def hover_thrust_per_rotor_n(self) -> float:
+        """Thrust each rotor gives in a hover (N), payload included."""
         return self.mass_kg * G / self.airframe.rotor_count
 
     def rotor_layout(self) -> list[tuple[float, float, float]]:
@@ -158,7 +161,7 @@ class Drone:
             out.append((r * math.cos(a), r * math.sin(a), 1.0 if i % 2 == 0 else -1.0))
         return out
 
-    def add_sensor(self, sensor) -> "Drone":
+    def add_sensor(self, sensor) -> Drone:
         """Attach a sensor (paper Listing 2: ``mydrone.addSensor(temp)``): a
         ``fa.sensors`` object or a Sensor subclass. It is read at its rate in every
         flight and its power is added to the energy model's ``proc.sensors``."""
@@ -194,7 +197,8 @@ class Drone:
                 f"minimum {MIN_THRUST_TO_WEIGHT}; raise [rotor] max_speed_rad_s or thrust_coeff, "
                 f"or lower the mass")
 
-    def copy(self) -> "Drone":
+    def copy(self) -> Drone:
+        """An independent deep copy (change it without touching this one)."""
         return copy.deepcopy(self)
 
     def to_dict(self) -> dict:

@@ -24,11 +24,10 @@ C * area and added mass with volume, so the ellipsoid is shrunk by
 
 from __future__ import annotations
 
-from .._mujoco import mujoco
-
 import math
 
-from ..physics import G, RHO_SEA_LEVEL
+from .._mujoco import mujoco
+from ..physics import RHO_SEA_LEVEL, G
 
 
 def build_spec(drone, world=None, *, physics_dt: float, rho: float = RHO_SEA_LEVEL) -> mujoco.MjSpec:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import math
+from typing import TYPE_CHECKING, Any
 
 from .. import _check
 from ..energy import battery as _cells
@@ -112,8 +113,14 @@ class Section:
 
     FIELDS: dict[str, Field] = {}
     TABLE = ""
+    _where: str                     # "[table]" or the caller's context, for messages
 
-    def __init__(self, values: dict | None = None, *, where: str = ""):
+    if TYPE_CHECKING:
+        # The fields of FIELDS are instance attributes set (validated) in __init__ and
+        # __setattr__; their types follow each Field's kind, so the checker sees Any.
+        def __getattr__(self, name: str) -> Any: ...
+
+    def __init__(self, values: dict | None = None, *, where: str = "") -> None:
         object.__setattr__(self, "_where", where or f"[{self.TABLE}]")
         values = dict(values or {})
         unknown = sorted(set(values) - set(self.FIELDS))
@@ -184,6 +191,7 @@ class Rotor(Section):
 
     @property
     def max_thrust_n(self) -> float:
+        """Thrust of one rotor at full speed (N): kf * omega_max^2."""
         return self.thrust_coeff * self.max_speed_rad_s ** 2
 
     @property
@@ -244,7 +252,7 @@ class Battery(Section):
         return _cells.usable_energy_j(self.chemistry, self.cell_count, self.capacity_mah * 1e-3,
                                       1.0 - self.usable_fraction)
 
-    def circuit(self) -> "_cells.Circuit":
+    def circuit(self) -> _cells.Circuit:
         """A fresh, full equivalent circuit of this pack for one flight."""
         return _cells.Circuit(chemistry=self.chemistry, cells=self.cell_count,
                               capacity_ah=self.capacity_mah * 1e-3, resistance_ohm=self.resistance_ohm,

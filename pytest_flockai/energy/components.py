@@ -22,7 +22,6 @@ from .. import _check
 from ..errors import ConfigError
 
 
-
 class Usage:
     """What the drone did during one energy tick; filled by the mission loop."""
 
@@ -64,12 +63,13 @@ class Component:
     def power_parts(self, u: Usage):
         return (self.power(u),)
 
-    def set_description(self, text: str) -> "Component":
+    def set_description(self, text: str) -> Component:
         self.description = str(text)
         return self
 
     def describe(self) -> dict:
-        out = {"name": self.name, "type": type(self).__name__, "description": self.description}
+        out: dict = {"name": self.name, "type": type(self).__name__,
+                     "description": self.description}
         out.update(self.params())
         if self.parts:
             out["parts"] = list(self.parts)
@@ -98,7 +98,7 @@ class Constant(Component):
     def power_w(self, value):
         self._w = _check.non_negative("power_w", value, where=f"component {self.name!r}")
 
-    def set_power(self, watts: float) -> "Constant":
+    def set_power(self, watts: float) -> Constant:
         self.power_w = watts
         return self
 

@@ -57,7 +57,7 @@ class Group(Component):
         return name in self._children
 
     # editing -----------------------------------------------------------
-    def add(self, comp: Component) -> "Group":
+    def add(self, comp: Component) -> Group:
         if not isinstance(comp, Component):
             raise ConfigError(f"energy group {self.name!r}: add() takes a Component, got {comp!r}")
         if comp.name in self._children:
@@ -66,7 +66,7 @@ class Group(Component):
         self._children[comp.name] = comp
         return self
 
-    def remove(self, *names) -> "Group":
+    def remove(self, *names) -> Group:
         flat = []
         for n in names:
             flat.extend([n] if isinstance(n, str) else list(n))
@@ -79,7 +79,7 @@ class Group(Component):
             del self._children[n]
         return self
 
-    def replace(self, name: str, comp: Component) -> "Group":
+    def replace(self, name: str, comp: Component) -> Group:
         if name not in self._children:
             raise ConfigError(f"energy group {self.name!r} has no component {name!r} to replace"
                               f"{close_matches(name, self._children)}; it has: "
@@ -96,7 +96,7 @@ class Group(Component):
     getComponent = component
     updComponent = replace
 
-    def copy(self) -> "Group":
+    def copy(self) -> Group:
         return copy.deepcopy(self)
 
     def bind(self, drone):
@@ -135,7 +135,7 @@ class EnergyModel(Group):
         super().__init__("total", children, description)
 
     @classmethod
-    def from_params(cls, p, *, device, radio) -> "EnergyModel":
+    def from_params(cls, p, *, device, radio) -> EnergyModel:
         """The model built from a blueprint's ``[energy]`` parameters ``p``, its
         on-board computer ``device`` (a ``compute.Device`` or None) and its
         ``radio`` section."""

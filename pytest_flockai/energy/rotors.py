@@ -171,6 +171,11 @@ class Motors(Component):
     """
 
     parts = ("induced", "profile", "climb_and_drag")
+    # the DC motor model (set by _set_motor): all four given, or all None
+    motor_kv_rpm_v: float | None
+    motor_rm_ohm: float | None
+    motor_i0_a: float | None
+    motor_i0_rad_s: float | None
 
     def __init__(self, name: str = "motors", *, figure_of_merit, induced_power_factor=1.15,
                  motor_efficiency, esc_efficiency, wake_interference=0.0, rho=None,
@@ -193,7 +198,7 @@ class Motors(Component):
             raise ConfigError(f"{w}: figure_of_merit x induced_power_factor = "
                               f"{self.figure_of_merit * self.induced_power_factor:.3f} must be < 1 "
                               f"(the rest is profile power)")
-        self._vi = []
+        self._vi: list[float] = []
         self._set_motor(w, motor_kv_rpm_v=motor_kv_rpm_v, motor_rm_ohm=motor_rm_ohm,
                         motor_i0_a=motor_i0_a, motor_i0_rad_s=motor_i0_rad_s)
 
@@ -231,7 +236,10 @@ class Motors(Component):
 
     def _electrical(self) -> float:
         """Electrical power (W) of the motors, each at its operating point (motor model)."""
-        kv, rm, i0, inv_w0 = self._kv, self.motor_rm_ohm, self.motor_i0_a, 1.0 / self.motor_i0_rad_s
+        kv, rm, i0, w0 = self._kv, self.motor_rm_ohm, self.motor_i0_a, self.motor_i0_rad_s
+        assert kv is not None and rm is not None and i0 is not None and w0 is not None, \
+            "called only with the motor model (all four motor fields given)"
+        inv_w0 = 1.0 / w0
         total = 0.0
         for p, om in zip(self._shaft, self._omega):
             if om <= 0.0:
