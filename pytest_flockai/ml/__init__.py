@@ -17,19 +17,19 @@
   several models on the same frames, accuracy next to latency, energy, endurance.
 """
 
+from .analysis import analyse, write_coco_pair
+from .compare import compare_models
+from .dataset_eval import DatasetEvaluation, evaluate_dataset
+from .detections import Detections, parse_detections
+from .evaluation import FrameRecord
+from .fiducial import MarkerDetector
+from .jpeg import decode_jpeg, encode_jpeg
 from .macs import MacReport, count_macs
 from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
-from .fiducial import MarkerDetector
 from .oracle import Oracle, OracleFrame
-from .detections import Detections, parse_detections
-from .evaluation import FrameRecord
-from .analysis import analyse, write_coco_pair
-from .dataset_eval import DatasetEvaluation, evaluate_dataset
-from .shipped import SHIPPED, shipped, shipped_path
-from .compare import compare_models
-from .jpeg import decode_jpeg, encode_jpeg
 from .runner import DeviceClock, InferenceEvent, TaskRunner
+from .shipped import SHIPPED, shipped, shipped_path
 from .task import Task
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 

@@ -30,6 +30,7 @@ import contextlib
 import io
 import json
 import os
+from typing import IO
 
 import numpy as np
 
@@ -112,5 +113,8 @@ def write_coco_pair(records, classes, folder, name: str, *, min_visible: float) 
              "results": os.path.join(folder, f"{name}.results.json")}
     for key, doc in (("truth", gt), ("results", dts)):
         text = json.dumps(doc)
-        atomic_write(paths[key], lambda fh, t=text: fh.write(t))
+
+        def write(fh: IO[str], t: str = text) -> None:
+            fh.write(t)
+        atomic_write(paths[key], write)
     return paths

@@ -44,10 +44,10 @@ class Detections:
         return int(len(self.scores))
 
     @classmethod
-    def empty(cls) -> "Detections":
+    def empty(cls) -> Detections:
         return cls(np.zeros((0, 4)), np.zeros(0), np.zeros(0, dtype=int))
 
-    def above(self, threshold: float) -> "Detections":
+    def above(self, threshold: float) -> Detections:
         keep = self.scores >= threshold
         return Detections(self.boxes[keep], self.scores[keep], self.cls[keep])
 
@@ -68,7 +68,8 @@ def parse_detections(pred, frame_hw, *, n_classes: int, where: str, decode="auto
                            pred.get("classes", pred.get("labels")), frame_hw, normalized,
                            n_classes, where)
     if isinstance(pred, (tuple, list)) and len(pred) == 3 and not np.isscalar(pred[0]):
-        return _from_parts(*pred, frame_hw, normalized, n_classes, where)
+        boxes, scores, classes = pred
+        return _from_parts(boxes, scores, classes, frame_hw, normalized, n_classes, where)
     try:
         a = np.asarray(pred, dtype=float)
     except (TypeError, ValueError):
@@ -119,8 +120,8 @@ def _yolo(a, frame_hw, input_hw, nc, thr, iou, where) -> Detections:
     boxes = np.column_stack([(xywh[:, 0] - xywh[:, 2] / 2) * sx, (xywh[:, 1] - xywh[:, 3] / 2) * sy,
                              (xywh[:, 0] + xywh[:, 2] / 2) * sx, (xywh[:, 1] + xywh[:, 3] / 2) * sy])
     tl_wh = np.column_stack([boxes[:, :2], boxes[:, 2:] - boxes[:, :2]])
-    idx = cv2.dnn.NMSBoxesBatched(tl_wh.tolist(), score.tolist(), cls.tolist(), float(thr), float(iou))
-    idx = np.asarray(idx, dtype=int).reshape(-1)
+    kept = cv2.dnn.NMSBoxesBatched(tl_wh.tolist(), score.tolist(), cls.tolist(), float(thr), float(iou))
+    idx = np.asarray(kept, dtype=int).reshape(-1)
     return Detections(boxes[idx], score[idx], cls[idx].astype(int))
 
 

@@ -12,6 +12,7 @@ CSV and, with matplotlib installed, as a heat map next to it.
 from __future__ import annotations
 
 import math
+
 import numpy as np
 import pandas as pd
 

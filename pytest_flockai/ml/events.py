@@ -4,6 +4,7 @@ on-board computer."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 
 class DeviceClock:
@@ -57,8 +58,26 @@ class InferenceEvent:
     __slots__ = ("task", "frame_index", "t_capture", "t_start", "t_done", "latency_s",
                  "compute_s", "prediction", "count", "truth_count", "ok", "error",
                  "tx_bytes", "rx_bytes", "execution", "alert_sent")
+    # every slot is set by __init__, None when not given (the dataset evaluation gives
+    # no times; the flight loop gives them all)
+    task: str
+    frame_index: int
+    t_capture: float
+    t_start: float | None
+    t_done: float
+    latency_s: float
+    compute_s: float | None
+    prediction: Any
+    count: float | None
+    truth_count: float | None
+    ok: bool
+    error: str | None
+    tx_bytes: int | None
+    rx_bytes: int | None
+    execution: str | None
+    alert_sent: bool | None
 
-    def __init__(self, **kw):
+    def __init__(self, **kw: Any) -> None:
         for k in self.__slots__:
             setattr(self, k, kw.get(k))
 

@@ -30,8 +30,11 @@ def encode_jpeg(frame, quality: int) -> bytes:
 
 
 def decode_jpeg(data: bytes, grey: bool) -> np.ndarray:
+    """The image of JPEG ``data`` (RGB, or one channel when ``grey``)."""
     a = cv2.imdecode(np.frombuffer(data, np.uint8),
                      cv2.IMREAD_GRAYSCALE if grey else cv2.IMREAD_COLOR)
+    if a is None:               # not a JPEG (encode_jpeg's own output always decodes)
+        raise RuntimeError("cv2.imdecode failed")
     return a if grey else cv2.cvtColor(a, cv2.COLOR_BGR2RGB)
 
 

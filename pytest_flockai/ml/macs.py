@@ -80,7 +80,7 @@ class MacReport:
                 "uncounted": list(self.uncounted)}
 
 
-def load_onnx(path) -> "onnx.ModelProto":
+def load_onnx(path) -> onnx.ModelProto:
     """Load an ONNX file; ConfigError naming the path when missing or corrupt."""
     p = os.fspath(path)
     if not os.path.isfile(p):

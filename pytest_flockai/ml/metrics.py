@@ -81,7 +81,7 @@ def crowd_metrics(truth, pred, threshold: float) -> dict:
     truth = np.asarray(truth, dtype=np.float64)
     pred = np.asarray(pred, dtype=np.float64)
     both = ~np.isnan(truth) & ~np.isnan(pred)
-    out = {"inferred_frames": int(both.sum())}
+    out: dict[str, float] = {"inferred_frames": int(both.sum())}
     if both.any():
         t, p = truth[both], pred[both]
         out["count_mae"] = float(np.mean(np.abs(p - t)))

@@ -88,7 +88,7 @@ class PythonModel(Model):
         if not callable(fn):
             raise ConfigError(f"PythonModel: fn = {fn!r} is not callable; expected fn(frame) -> prediction")
         self.fn = fn
-        self.name = name or getattr(fn, "__name__", "python-model")
+        self.name = name or str(getattr(fn, "__name__", "python-model"))
         self.macs = _check_macs(macs, f"PythonModel {self.name!r}", allow_none=True)
         if isinstance(params, bool) or not isinstance(params, Integral) or params < 0:
             raise ConfigError(f"PythonModel {self.name!r}: params = {params!r} is not allowed; "

@@ -41,8 +41,13 @@ import numpy as np
 
 from .. import memo
 from ..comm.link import link as _link
-from ..compute.latency import (calibrate, compute_seconds, modeled_latency, resolve_device,
-                               scale_to_device)
+from ..compute.latency import (
+    calibrate,
+    compute_seconds,
+    modeled_latency,
+    resolve_device,
+    scale_to_device,
+)
 from ..errors import ConfigError
 from .events import DeviceClock, InferenceEvent
 from .jpeg import JPEG_MACS_PER_PIXEL, annotate, decode_jpeg, encode_jpeg, is_image
@@ -67,7 +72,7 @@ class TaskRunner:
 
     # -- set-up ----------------------------------------------------------------
     def bind(self, rng, *, device=None, ground_device=None, link=None, t0: float = 0.0,
-             calibration=None, device_clock: DeviceClock | None = None) -> "TaskRunner":
+             calibration=None, device_clock: DeviceClock | None = None) -> TaskRunner:
         """Reset for a flight. ``rng``: a numpy Generator (or seed) spawned from the
         mission seed, used for the link's loss and jitter. ``device`` /
         ``ground_device`` / ``link`` override the task's (e.g. the drone's own
@@ -389,7 +394,7 @@ class TaskRunner:
         m = self.scorer.crowd()
         if m is not None:
             out.update(crowd_encounters=m["crowd_encounters"], crowds_missed=m["crowds_missed"])
-        if self._wall:
+        if self._wall and self.calibration is not None:     # measured latency: calibrated
             w = np.asarray(self._wall)
             p10, p50, p90 = (float(x) for x in np.percentile(w, (10, 50, 90)))
             out["measured_wall_s"] = {"median": p50, "p10": p10, "p90": p90, "n": int(w.size)}

@@ -72,7 +72,7 @@ class TaskScheduler(Clocked):
         self.st, self.suite, self.data = state, suite, data
         onboard_clock = DeviceClock()        # one on-board computer, shared by its tasks
         self.device_clock = onboard_clock
-        self.runners = []
+        self.runners: list[TaskRunner] = []
         #: oracle models' random stream (their own, spawned beside the tasks' streams)
         self.oracle_rng = (np.random.default_rng(np.random.SeedSequence(
             seeds[0].entropy, spawn_key=tuple(seeds[0].spawn_key) + (99,))) if seeds else None)
@@ -82,7 +82,8 @@ class TaskScheduler(Clocked):
                    device=computer if tk.device is None else None)   # None: the drone's own
             self.runners.append(r)
         self.recorder = recorder
-        self.consumers = self.runners + ([recorder] if recorder is not None else [])
+        #: the task runners and the dataset recorder: each has due(t), next_frame_t, a sensor
+        self.consumers: list = self.runners + ([recorder] if recorder is not None else [])
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
         self.cpu_time_s = 0.0
         self.in_view: list = []          # (t, people in view, blur px) at every frame read
