@@ -30,8 +30,9 @@ import numpy as np
 import onnxruntime as ort
 from onnx import TensorProto, helper, numpy_helper
 
-from .devices import Device, device as _device
 from ..errors import ConfigError
+from .devices import Device
+from .devices import device as _device
 
 LATENCY_MODES = ("modeled", "measured")
 
@@ -140,7 +141,6 @@ def calibrate(*, runs: int = 15, force: bool = False) -> Calibration:
             t0 = time.perf_counter()
             sess.run(None, {"x": x})
             times.append(time.perf_counter() - t0)
-        times = np.asarray(times)
         med = float(np.median(times))
         _CAL = Calibration(host_macs_per_s=macs / med, macs=macs, runs=len(times), median_s=med,
                            p10_s=float(np.percentile(times, 10)),

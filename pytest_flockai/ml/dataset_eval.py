@@ -73,7 +73,7 @@ def evaluate_dataset(task: Task, path, *, annotations="auto", split=None, classe
                           f"against (COCO, YOLO or VisDrone-DET)")
     scorer = Scorer(task)
     failures: list = []
-    for k in range(cam.n_frames):
+    for k in range(len(cam.files)):          # n_frames of an image folder
         frame = cam.read(float(k))
         _score_one(task, scorer, k, frame, cam.last_truth, altitude_m, failures, cam.files[k])
     kpis = {"images_scored": 0.0, **scorer.evaluation()}

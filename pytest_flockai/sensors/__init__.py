@@ -7,12 +7,12 @@ OpenGL is needed only when a rendered ``Camera`` produces its first frame."""
 from ..world.truth import CameraModel, Truth, gimbal_pose, visible_people
 from .base import FunctionSensor, Sensor, SensorSuite
 from .camera import Camera
-from .views import ViewSet, render_views
 from .conditions import Conditions
 from .custom import CsvSensor, TemperatureSensor
 from .dataset import export_dataset
 from .nav import GPS, IMU, Barometer, BatterySensor, Compass, Rangefinder
 from .replay import ReplayCamera
+from .views import ViewSet, render_views
 
 __all__ = ["Conditions", "ViewSet", "GPS", "IMU", "Barometer", "BatterySensor", "Camera", "CameraModel", "Compass",
            "CsvSensor", "FunctionSensor", "Rangefinder", "ReplayCamera", "Sensor", "SensorSuite",

@@ -32,7 +32,8 @@ from .labels_txt import read_visdrone, read_yolo
 def coco_dataset(entries, classes=CLASSES, blur=None) -> dict:
     """entries: (file name, width, height, Objects) per image; ``blur``: the
     frames' blur length in pixels (None: not written)."""
-    images, anns = [], []
+    images: list[dict] = []
+    anns: list[dict] = []
     for i, (name, w, h, objs) in enumerate(entries):
         images.append({"id": i + 1, "file_name": name, "width": int(w), "height": int(h)})
         if blur is not None:

@@ -30,6 +30,7 @@ import inspect
 import math
 import zlib
 from numbers import Integral
+from typing import Any
 
 import numpy as np
 
@@ -58,7 +59,9 @@ class Sensor:
         self.name = name
         self.rate_hz = _check.positive("rate_hz", rate_hz, where=f"{where} {name!r}")
         self.power_w = _check.non_negative("power_w", power_w, where=f"{where} {name!r}")
-        self.model = self.data = self.rng = None
+        self.model: Any = None          # MuJoCo's model and data, and the noise: set by bind
+        self.data: Any = None
+        self.rng: np.random.Generator | None = None
 
     @property
     def period_s(self) -> float:
@@ -135,7 +138,7 @@ def _child_seed(seed, name: str) -> np.random.SeedSequence:
         seed = seed.bit_generator.seed_seq
     if isinstance(seed, np.random.SeedSequence):
         return np.random.SeedSequence(seed.entropy, spawn_key=tuple(seed.spawn_key) + (key,))
-    if isinstance(seed, Integral) and not isinstance(seed, bool) and seed >= 0:
+    if isinstance(seed, Integral) and not isinstance(seed, bool) and int(seed) >= 0:
         return np.random.SeedSequence(int(seed), spawn_key=(key,))
     raise ConfigError(f"SensorSuite.bind: seed = {seed!r} is not allowed; expected a "
                       f"numpy SeedSequence, Generator or an integer >= 0")

@@ -30,17 +30,19 @@ rendering (cheap: for telemetry).
 from __future__ import annotations
 
 import math
+from typing import Any
 
-from .._mujoco import mujoco
 import numpy as np
 
 from .. import _check
+from .._mujoco import mujoco
 from ..errors import ConfigError
 from ..world.actors import merge_tables
 from ..world.truth import CameraModel, Truth, gimbal_pose
 from . import _gl
-from .conditions import SKY_SHARE, Conditions, apply as apply_conditions, blur_vector, shift_boxes
 from .base import DroneBody, Sensor
+from .conditions import SKY_SHARE, Conditions, blur_vector, shift_boxes
+from .conditions import apply as apply_conditions
 
 NEAR_M = 0.05       # near clipping plane
 FAR_M = 5000.0      # far clipping plane
@@ -83,13 +85,14 @@ class FrameRenderer:
         self._buf = np.empty((height, width, 3), dtype=np.uint8)
         self._depth = np.empty((height, width), dtype=np.float32)
         yy, xx = np.mgrid[0:height, 0:width].astype(np.float32)
-        self._ray = None if width == 0 else (xx - width / 2 + 0.5, yy - height / 2 + 0.5)
+        self._ray: tuple[np.ndarray, np.ndarray] | None = None if width == 0 else (xx - width / 2 + 0.5, yy - height / 2 + 0.5)
 
     def distance(self, fov_deg: float) -> np.ndarray:
         """(H, W) metres from the camera to what each pixel of the last render shows."""
         d = self._depth[::-1]
         z = NEAR_M / (1.0 - d * (1.0 - NEAR_M / FAR_M))            # along the optical axis
         f = 0.5 * self.height / math.tan(math.radians(fov_deg) / 2.0)
+        assert self._ray is not None, "a renderer of width 0 renders nothing to measure"
         xx, yy = self._ray
         return z * np.sqrt(1.0 + (xx / f) ** 2 + (yy / f) ** 2)
 
@@ -203,19 +206,19 @@ class Camera(Sensor):
                               f"fa.Conditions(...) or None")
         self.conditions = conditions
         self.lens = CameraModel(self.width, self.height, self.fov_deg)
-        self.last_frame = None
-        self.last_truth = None
-        self.last_t = None
+        self.last_frame: np.ndarray | None = None
+        self.last_truth: Truth | None = None
+        self.last_t: float | None = None
         self.frames = 0
-        self._renderer = None
-        self.body = None
+        self._renderer: FrameRenderer | None = None
+        self.body: DroneBody | None = None
 
     @classmethod
-    def from_blueprint(cls, camera, **kw) -> "Camera":
+    def from_blueprint(cls, camera, **kw) -> Camera:
         """From a blueprint's camera section (``drone.camera``) or a Drone having one."""
         sec = getattr(camera, "camera", camera)
         try:
-            args = dict(width=int(sec.width), height=int(sec.height), fov_deg=float(sec.fov_deg),
+            args: dict[str, Any] = dict(width=int(sec.width), height=int(sec.height), fov_deg=float(sec.fov_deg),
                         pitch_deg=float(sec.pitch_deg))
         except AttributeError:
             raise ConfigError(f"Camera.from_blueprint: {camera!r} has no camera section "
@@ -281,6 +284,8 @@ class Camera(Sensor):
     # -- pose and truth (no GL) ---------------------------------------------------
     def pose(self, data) -> tuple[np.ndarray, np.ndarray]:
         """(cam_pos, cam_mat) of the gimballed camera in the current state."""
+        if self.body is None:
+            raise ConfigError(f"Camera {self.name!r}: read before bind(model, data, rng)")
         b = self.body.id
         R = data.xmat[b]
         yaw = math.atan2(R[3], R[0])
@@ -322,16 +327,18 @@ class Camera(Sensor):
 
     def _condition(self, frame, cam_pos, cam_mat, velocity, yaw_rate) -> np.ndarray:
         """Light, haze, motion blur, exposure and noise (``sensors.conditions``)."""
-        c = self.conditions
-        dist = self._renderer.distance(self.fov_deg) if c.needs_depth else None
+        c, renderer, truth = self.conditions, self._renderer, self.last_truth
+        assert c is not None and renderer is not None and truth is not None, \
+            "read() renders and takes the truth before it conditions a frame"
+        dist = renderer.distance(self.fov_deg) if c.needs_depth else None
         centre = ground_distance(cam_pos, cam_mat)    # one rule, haze or not (conditions)
         jitter = math.radians(c.gimbal_jitter_dps)
         blur = blur_vector(cam_pos, cam_mat, velocity, yaw_rate, c.exposure_s, self.lens.focal_px,
                            centre, jitter)
         skew = blur_vector(cam_pos, cam_mat, velocity, yaw_rate, c.readout_s, self.lens.focal_px,
                            centre, jitter)
-        record_skew(self.last_truth, skew, self.width, self.height)
-        self.last_truth.blur_px = blur
+        record_skew(truth, skew, self.width, self.height)
+        truth.blur_px = blur
         return apply_conditions(frame, c, self.rng, distance=dist, blur=blur, skew=skew)
 
     def close(self):

@@ -235,7 +235,7 @@ def apply(frame: np.ndarray, cond: Conditions, rng, *, distance=None, blur=(0.0,
     frame = rolling_shift(frame, skew)
     if distance is not None:
         distance = rolling_shift(distance, skew)
-    img = frame.astype(np.float32) / 255.0
+    img: np.ndarray = frame.astype(np.float32) / 255.0
     if cond.sun_azimuth_deg is None:      # rendered under the overhead sun: dim it here
         target = cond.target_level if cond.target_level is not None else float(img.mean())
         img *= cond.irradiance

@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import math
 
-from .._mujoco import mujoco
 import numpy as np
 
 from .. import _check
+from .._mujoco import mujoco
 from ..errors import ConfigError
 from .base import DroneBody, Sensor
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from typing import Any
 
 import cv2
 import numpy as np
@@ -68,7 +69,7 @@ class ReplayCamera(Sensor):
             first = cv2.imread(self.files[0], cv2.IMREAD_COLOR)
             if first is None:
                 raise ConfigError(f"{w}: image {self.files[0]!r} cannot be decoded")
-            self.n_frames = len(self.files)
+            self.n_frames: int | None = len(self.files)
             self.height, self.width = first.shape[:2]
             tj = os.path.join(p, "truth.json")
             if os.path.isfile(tj):
@@ -91,10 +92,13 @@ class ReplayCamera(Sensor):
         if self.width <= 0 or self.height <= 0:
             raise ConfigError(f"{w}: path = {p!r} has resolution {self.width}x{self.height}; "
                               f"expected width and height > 0")
-        self.last_frame = self.last_truth = self.last_t = self.last_file = None
+        self.last_frame: np.ndarray | None = None
+        self.last_truth: Any = None
+        self.last_t: float | None = None
+        self.last_file: str | None = None
         self.frames = 0
         self.ended = False
-        self.t_start = None     # the first read: the recording's frame 0
+        self.t_start: float | None = None     # the first read: the recording's frame 0
         self.last_blur_px = (0.0, 0.0)
         self._k = -1            # index of the cached frame
         self._pos = 0           # next frame the video capture will decode
@@ -156,13 +160,13 @@ class ReplayCamera(Sensor):
             self.last_frame, self.last_t, self.last_truth = None, float(t), None
             return None
         self.last_truth = None
-        if self._truth is not None and k < len(self._truth):
+        if self._truth is not None and k is not None and k < len(self._truth):
             self.last_truth = self._truth[k]
         if self.conditions is not None and self._body is not None and data is not None:
             frame, self.last_blur_px = _conditions.condition(
                 frame, self.conditions, self.rng, data, self._body, self.fov_deg, self.last_truth)
         self.last_frame, self.last_t = frame, float(t)
-        self.last_file = self.files[k] if self.files is not None else None
+        self.last_file = self.files[k] if self.files is not None and k is not None else None
         self.frames += 1
         return frame
 

@@ -16,14 +16,15 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from .._mujoco import mujoco
 import numpy as np
 
 from .. import memo
+from .._mujoco import mujoco
 from ..errors import ConfigError
 from ..world.truth import gimbal_pose
 from .camera import Camera, FrameRenderer, ground_distance, record_skew
-from .conditions import Conditions, apply as apply_conditions, blur_vector
+from .conditions import Conditions, blur_vector
+from .conditions import apply as apply_conditions
 
 
 def _camera_params(camera_params) -> Camera:

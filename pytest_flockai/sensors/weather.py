@@ -18,13 +18,15 @@ random stream, so the same seed gives the same rain.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..errors import ConfigError
 
 WEATHER = ("rain", "snow", "spatter")
 #: per weather, per severity 1..5: keyword arguments of the albumentations transform
-SEVERITY = {
+SEVERITY: dict[str, list[dict[str, Any]]] = {
     "rain": [dict(rain_type="drizzle", brightness_coefficient=0.9),
              dict(rain_type="drizzle", brightness_coefficient=0.8, drop_width=2),
              dict(rain_type="heavy", brightness_coefficient=0.75),

@@ -111,7 +111,7 @@ class Wind:
                           sigma_w20=self.sigma_w20, carry_mps=self.carry_mps)
 
     @classmethod
-    def coerce(cls, value) -> "Wind | None":
+    def coerce(cls, value) -> Wind | None:
         if value is None or isinstance(value, Wind):
             return value
         if isinstance(value, Real) and not isinstance(value, bool):
@@ -129,7 +129,7 @@ class Wind:
         g = "Dryden" if self.gust_std is None else f"{self.gust_std:g}"
         return f"Wind(mean={self.mean}, gust_std={g}, gust_tau_s={self.gust_tau_s})"
 
-    def sampler(self, rng: np.random.Generator, dt: float) -> "WindSampler":
+    def sampler(self, rng: np.random.Generator, dt: float) -> WindSampler:
         return WindSampler(self, rng, dt)
 
 
@@ -146,13 +146,13 @@ class WindSampler:
         self.mean = wind.mean
         self.rng = rng
         self.active = wind.turbulent
-        self._h = None
+        self._h: float | None = None
         self._coef = (0.0, 0.0, 0.0, 0.0)
         self.g = [0.0, 0.0, 0.0]
         if self.active:
             su, sw, _, _ = wind.intensities(0.0)
             self.g = list(rng.standard_normal(3) * np.array([su, su, sw]))
-        self._buf = []
+        self._buf: list = []
         self._k = 0
 
     def _at(self, h: float):
