@@ -21,11 +21,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
-import pytest_flockai as fa  # noqa: E402
 from labelled_sets import make_set  # noqa: E402
+from test_detection_analysis import flawed_model  # noqa: E402
+
+import pytest_flockai as fa  # noqa: E402
 from pytest_flockai.ml.jpeg import encode_jpeg  # noqa: E402
 from pytest_flockai.sensors import render_views  # noqa: E402
-from test_detection_analysis import flawed_model  # noqa: E402
 
 
 def _median(fn, n=5) -> float:

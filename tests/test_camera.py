@@ -14,7 +14,6 @@ import pytest_flockai as fa
 from pytest_flockai import ConfigError
 from pytest_flockai.airframe.model import build_spec
 from pytest_flockai.sensors import Camera, ReplayCamera, SensorSuite, export_dataset, render_views
-from pytest_flockai.world.urban import CLOTHES, SKIN
 
 CROWD = (60.0, 40.0, 50, 5.0)
 

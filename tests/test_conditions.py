@@ -11,8 +11,8 @@ import pytest
 import pytest_flockai as fa
 from pytest_flockai.ml import parse_detections
 from pytest_flockai.ml.evaluation import FrameRecord, detection_kpis
-from pytest_flockai.sensors.views import render_views
 from pytest_flockai.sensors.conditions import blur_vector, motion_kernel
+from pytest_flockai.sensors.views import render_views
 
 MODEL = Path(__file__).resolve().parent.parent / "fixtures" / "models" / "detector.onnx"
 F = 0.5 * 240 / math.tan(math.radians(51.0) / 2)          # the Mavic camera's focal length, px
@@ -171,6 +171,7 @@ def test_hypothesis_finds_and_shrinks_a_failing_condition(pytester):
 
 def test_altitude_band_and_the_envelope_files(tmp_path):
     import pandas as pd
+
     from pytest_flockai import plots
     from pytest_flockai.ml.envelope import altitude_band
     df = pd.DataFrame({"altitude_m": [15, 25, 35, 50] * 2, "speed_mps": [0] * 4 + [16] * 4,

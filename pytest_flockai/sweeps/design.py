@@ -17,6 +17,7 @@ from __future__ import annotations
 import itertools
 import math
 from numbers import Integral, Real
+from typing import Any
 
 import numpy as np
 
@@ -96,7 +97,8 @@ def _variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]
                     " x ".join(f"{len(v)} {n}" for n, v in zip(names, levels)))
         return ([dict(zip(names, combo)) for combo in itertools.product(*levels)],
                 dict(zip(names, levels)))
-    specs, to_check = [], {}
+    specs: list[tuple[str, Any]] = []
+    to_check: dict[str, Any] = {}
     for n in names:
         spec = axes[n]
         if isinstance(spec, tuple):
@@ -106,7 +108,7 @@ def _variants(axes: dict, method: str, samples, seed) -> tuple[list[dict], dict]
             specs.append(("choice", _values(n, spec, method)))
             to_check[n] = specs[-1][1]
     check_count(samples, f"samples = {samples:,}")
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(int(seed))
     if method == "random":
         u = rng.random((samples, len(names)))
     else:

@@ -245,7 +245,7 @@ def _dispatch(base, plan, todo, sink, workers, executor, backend, device, batch_
     if executor is None and backend == "process" and min(workers, len(todo)) <= 1:
         _executors.fly_here(base, plan, todo, sink)
         return
-    where = (str(cache.directory), cache.mode) if cache is not None else None
+    where: tuple | None = (str(cache.directory), cache.mode) if cache is not None else None
     if where is not None and executor is None:      # this machine: the caller's own key
         where += (cache.key,)
     job = _worker.make_job(base, where, backend, device,

@@ -31,7 +31,7 @@ def folder() -> Path | None:
 def enable() -> Path | None:
     """Point JAX's persistent compilation cache at ``folder()`` unless one is set already;
     returns the folder in use."""
-    current = jax.config.jax_compilation_cache_dir
+    current = jax.config.jax_compilation_cache_dir  # type: ignore[attr-defined]  # options are set at runtime; jax's stub omits them
     if current:
         return Path(current)
     path = folder()

@@ -20,6 +20,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+from typing import cast
 
 import jax
 import jax.numpy as jnp
@@ -74,7 +75,7 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
             LAST_TIMINGS["batch_cpu_s"] += time.process_time() - c1
             for (i, _, _, _), row in zip(members, out):
                 rows[i] = {**plan[i], **row}
-    return rows
+    return cast(list[dict], rows)       # every variant has its row (flown, or its error)
 
 
 def _stack(items):

@@ -4,7 +4,7 @@ sweep runner checks a mission before JAX is loaded)."""
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import mujoco
 import numpy as np
@@ -34,11 +34,12 @@ class RigidData(NamedTuple):
     """The state: MuJoCo's ``time``, ``qpos`` (x y z qw qx qy qz), ``qvel`` (world linear,
     body angular), ``act`` (rotor thrusts), and whether the box touched the ground."""
 
-    time: float
-    qpos: np.ndarray
-    qvel: np.ndarray
-    act: np.ndarray
-    contact: bool
+    # NumPy values when built here, JAX arrays (traced) inside the jitted step
+    time: Any
+    qpos: Any
+    qvel: Any
+    act: Any
+    contact: Any
 
 
 def unsupported(model) -> str | None:
