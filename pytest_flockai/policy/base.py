@@ -268,7 +268,8 @@ class Cockpit:
         if self._survey is not None:
             left = self._survey[2]
         if isinstance(plan, Resume):           # on the way back to a plan left earlier
-            plan, left = plan.plan, (left if getattr(plan, "_back", False) else plan.at)
+            back = plan
+            plan, left = back.plan, (left if getattr(back, "_back", False) else back.at)
         if self._st.stage != PILOT or not isinstance(plan, Waypoints):
             return []
         path = getattr(plan, "path", None)

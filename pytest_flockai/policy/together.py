@@ -279,7 +279,7 @@ class SharedSearch(_Perceiving):
         self._sent: list = []          # points this drone reported
         self._job: tuple | None = None   # (target index, (x, y), t started)
         self._todo: list = []          # assignments received, not started
-        self._keep = None              # waypoints the station left this drone after a handoff
+        self._keep: list | None = None   # waypoints the station left this drone after a handoff
         self._extra: list = []         # waypoints given to cover while on a job
 
     def decide(self, t, drone) -> None:
@@ -299,8 +299,8 @@ class SharedSearch(_Perceiving):
             drone.mode("search")
         tr = self.tracker
         if tr.confirmed:
-            *xy, vx, vy = tr.predict(t)
-            xy = tuple(xy)
+            *p, vx, vy = tr.predict(t)
+            xy = tuple(p)
             tr.reset()
             job = self._job
             if job is not None and math.dist(xy, job[1]) <= s.gate_m:
