@@ -23,6 +23,8 @@ def leg_timing(length, speed, accel, xp=MATH):
 
 
 class Leg:
+    """One straight segment p0 -> p1 flown with a trapezoidal speed profile."""
+
     __slots__ = ("p0", "p1", "u", "length", "v", "a", "t_acc", "t_cruise", "duration", "s_acc")
 
     def __init__(self, p0, p1, speed: float, accel: float):
@@ -86,6 +88,8 @@ class Path:
         return self._i
 
     def fill(self, t: float, sp) -> bool:
+        """Write the reference at time t (s since the path began) into sp[0:9];
+        True when the last leg is done."""
         legs, starts = self.legs, self.starts
         i = self._i
         n = len(legs)
@@ -97,6 +101,7 @@ class Path:
 
 
 def waypoint_path(start, points, speed, accel) -> Path:
+    """The legs from ``start`` through ``points`` at ``speed`` m/s and ``accel`` m/s^2."""
     legs = []
     prev = tuple(start)
     for p in points:

@@ -45,9 +45,11 @@ class Detections:
 
     @classmethod
     def empty(cls) -> Detections:
+        """No detections."""
         return cls(np.zeros((0, 4)), np.zeros(0), np.zeros(0, dtype=int))
 
     def above(self, threshold: float) -> Detections:
+        """The detections scoring at least ``threshold``."""
         keep = self.scores >= threshold
         return Detections(self.boxes[keep], self.scores[keep], self.cls[keep])
 

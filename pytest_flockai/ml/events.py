@@ -82,6 +82,7 @@ class InferenceEvent:
             setattr(self, k, kw.get(k))
 
     def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict."""
         d = {k: getattr(self, k) for k in self.__slots__ if k != "prediction"}
         d["kind"] = "inference"
         return d

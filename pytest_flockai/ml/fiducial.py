@@ -63,6 +63,7 @@ class MarkerDetector(Model):
         return np.asarray(rows, dtype=float).reshape(-1, 6)
 
     def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict."""
         return {"type": "MarkerDetector", "dictionary": self.dictionary,
                 "marker_id": self.marker_id, "macs": self.macs}
 

@@ -76,6 +76,7 @@ class MacReport:
     uncounted: list = field(default_factory=list)   # "op_type node_name: why"
 
     def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict."""
         return {"macs": self.macs, "params": self.params, "by_op": dict(self.by_op),
                 "uncounted": list(self.uncounted)}
 

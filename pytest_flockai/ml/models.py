@@ -68,9 +68,11 @@ class Model:
         raise NotImplementedError
 
     def macs_for(self, frame) -> int | None:
+        """Multiply-accumulates of one inference on ``frame`` (None: unknown)."""
         return self.macs
 
     def describe(self) -> dict:
+        """JSON-ready description: name, type, MACs and parameters."""
         return {"name": self.name, "type": type(self).__name__, "macs": self.macs,
                 "params": self.params}
 
@@ -332,6 +334,7 @@ class OnnxModel(Model):
         return self._count(self._target_hw(frame))
 
     def preprocess(self, frame) -> np.ndarray:
+        """The model's input tensor from a frame (RGB uint8, or what the task feeds)."""
         a = np.asarray(frame)
         if a.ndim == 3 and a.shape[2] == 4:
             a = a[:, :, :3]

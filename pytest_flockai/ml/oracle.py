@@ -96,6 +96,7 @@ class Oracle(Model):
         return out[(out[:, 2] > out[:, 0]) & (out[:, 3] > out[:, 1])]
 
     def to_dict(self) -> dict:
+        """The fields as a JSON-ready dict."""
         return {"type": "Oracle", "classes": list(self.classes), "miss_rate": self.miss_rate,
                 "box_noise_px": self.box_noise_px, "false_positives": self.false_positives,
                 "delay_s": self.delay_s, "macs": self.macs, "min_visible": self.min_visible,

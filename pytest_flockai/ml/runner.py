@@ -130,6 +130,7 @@ class TaskRunner:
         return self._next_frame_t
 
     def due(self, t: float) -> bool:
+        """Whether the task takes a frame at simulated time ``t``."""
         return t >= self._next_frame_t - 1e-9
 
     def skip(self, t: float) -> None:

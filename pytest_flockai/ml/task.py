@@ -153,6 +153,7 @@ class Task:
         return int(value)
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         m = self.model
         return {"name": self.name, "model": {"name": getattr(m, "name", None),
                                              "type": type(m).__name__,

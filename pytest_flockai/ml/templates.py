@@ -66,6 +66,7 @@ class Template(Model):
         return self
 
     def inference(self, data):
+        """The prediction for ``data`` (a frame or a sensor reading): override it."""
         raise FlockAIError(f"{type(self).__name__}.inference(data) is not implemented: override it "
                            f"in your subclass (it must return the prediction)")
 
@@ -75,12 +76,14 @@ class Template(Model):
     # -- the model interface ---------------------------------------------------
     @property
     def learns_in_flight(self) -> bool:
+        """Whether the subclass overrides ``update`` (it learns from each result)."""
         return type(self).update is not Template.update
 
     def __call__(self, frame):
         return self.inference(frame)
 
     def macs_for(self, frame):
+        """Multiply-accumulates of one inference (the wrapped model's, or as given)."""
         if self.model is not None and self._macs_from_model:
             m = self.model.macs_for(frame)
             self.macs = self.model.macs if self.model.macs is not None else m

@@ -65,21 +65,25 @@ class Sensor:
 
     @property
     def period_s(self) -> float:
+        """Seconds between readings (1 / rate_hz)."""
         return 1.0 / self.rate_hz
 
     def add_to_spec(self, spec, body_name: str = "drone") -> None:
         """Add what the sensor needs to the mission's MjSpec (default: nothing)."""
 
     def bind(self, model, data, rng: np.random.Generator) -> None:
+        """Per flight: MuJoCo's model and data, and this sensor's own noise stream."""
         if not isinstance(rng, np.random.Generator):
             raise ConfigError(f"{type(self).__name__} {self.name!r}: bind(rng = {rng!r}) is not "
                               f"allowed; expected a numpy.random.Generator")
         self.model, self.data, self.rng = model, data, rng
 
     def read(self, t: float, data):
+        """One reading at simulated time ``t`` from MuJoCo's ``data`` (override)."""
         raise NotImplementedError(f"{type(self).__name__} must implement read(t, data)")
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"name": self.name, "type": type(self).__name__, "rate_hz": self.rate_hz,
                 "power_w": self.power_w}
 
@@ -175,6 +179,7 @@ class SensorSuite:
 
     # -- composition --------------------------------------------------------
     def add_to_spec(self, spec, body_name: str = "drone") -> None:
+        """Let every sensor add what it needs to the mission's MjSpec."""
         for s in self.sensors:
             add = getattr(s, "add_to_spec", None)
             if add is not None:
@@ -241,10 +246,12 @@ class SensorSuite:
     # -- access ---------------------------------------------------------------
     @property
     def power_w(self) -> float:
+        """The sensors' power draw together (W)."""
         return float(sum(s.power_w for s in self.sensors))
 
     @property
     def names(self) -> list[str]:
+        """The sensors' names, in order."""
         return [s.name for s in self.sensors]
 
     def __getitem__(self, name: str):
@@ -265,6 +272,7 @@ class SensorSuite:
         return len(self.sensors)
 
     def to_dict(self) -> list:
+        """Each sensor's description."""
         return [s.to_dict() for s in self.sensors]
 
     def __repr__(self):

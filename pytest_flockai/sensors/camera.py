@@ -317,6 +317,7 @@ class Camera(Sensor):
         return frame
 
     def render_pose(self, data, cam_pos, cam_mat) -> np.ndarray:
+        """Render the scene from ``cam_pos`` looking along ``cam_mat`` (RGB uint8)."""
         if self._renderer is None:
             self._renderer = FrameRenderer(self.model, self.width, self.height)
         c = self.conditions
@@ -341,7 +342,8 @@ class Camera(Sensor):
         truth.blur_px = blur
         return apply_conditions(frame, c, self.rng, distance=dist, blur=blur, skew=skew)
 
-    def close(self):
+    def close(self) -> None:
+        """Free the renderer's GL context (it is rebuilt on the next read)."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

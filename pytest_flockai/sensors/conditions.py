@@ -141,13 +141,16 @@ class Conditions:
 
     @property
     def extinction_per_m(self) -> float:
+        """Haze extinction coefficient (1/m) from the visibility (Koschmieder); 0 in clear air."""
         return KOSCHMIEDER / self.visibility_m if math.isfinite(self.visibility_m) else 0.0
 
     @property
     def needs_depth(self) -> bool:
+        """Whether the frames need per-pixel depth (haze)."""
         return self.extinction_per_m > 0.0
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {k: (None if isinstance(v, float) and math.isinf(v) else v)
                 for k, v in asdict(self).items()}
 

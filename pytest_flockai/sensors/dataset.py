@@ -36,7 +36,9 @@ from .annotations import coco_dataset
 FORMATS = ("png", "jpg")
 
 
-def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame"):
+def export_dataset(records, folder, *, fmt: str = "png", prefix: str = "frame") -> None:
+    """Write ``(t, frame, truth)`` records to ``folder`` as numbered images with
+    truth.csv and truth.json (see the module docstring)."""
     if fmt not in FORMATS:
         raise ConfigError(f"export_dataset: fmt = {fmt!r} is not allowed; allowed: "
                           f"{', '.join(map(repr, FORMATS))}")

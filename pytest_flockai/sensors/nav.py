@@ -225,6 +225,8 @@ class BatterySensor(Sensor):
 
     @property
     def source(self):
+        """What the sensor reads: a callable with no arguments, a number, or None (the
+        flight's own battery state)."""
         return self._source
 
     @source.setter

@@ -45,6 +45,9 @@ FRAME_TOL = 1e-6
 
 
 class ReplayCamera(Sensor):
+    """A camera that shows recorded frames (a folder of images or a video) at
+    ``rate_hz``, with their labels as the truth (see the module docstring)."""
+
     on_demand = True
 
     def __init__(self, path, rate_hz: float = 1.0, loop: bool = True, *, name: str = "camera",
@@ -207,7 +210,8 @@ class ReplayCamera(Sensor):
         self._k = k
         return self._frame
 
-    def close(self):
+    def close(self) -> None:
+        """Release the video file (a folder holds nothing open)."""
         if self._cap is not None:
             self._cap.release()
             self._cap = None

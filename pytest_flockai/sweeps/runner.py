@@ -72,6 +72,7 @@ class SweepInterrupted(UserWarning):
 
 
 def default_workers() -> int:
+    """Worker processes of a sweep by default: the CPUs this process may use."""
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:       # macOS, Windows

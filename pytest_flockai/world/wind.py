@@ -78,8 +78,12 @@ class WindParams(NamedTuple):
 
 
 class Wind:
+    """A mean wind ``mean`` = (x, y, z) m/s (towards), with Dryden turbulence
+    (MIL-F-8785C light; see the module docstring): ``gust_std`` sets the horizontal
+    intensity (m/s), ``gust_tau_s`` one correlation time (s) for all axes."""
+
     def __init__(self, mean=(0.0, 0.0, 0.0), *, gust_std: float | None = None,
-                 gust_tau_s: float | None = None):
+                 gust_tau_s: float | None = None) -> None:
         self.mean = _check.vector("mean", mean, 3, where="Wind")
         speed = math.sqrt(sum(c * c for c in self.mean))
         self.sigma_w20 = 0.1 * speed            # MIL-F-8785C light: sigma_w = 0.1 W20
@@ -96,6 +100,7 @@ class Wind:
 
     @property
     def turbulent(self) -> bool:
+        """Whether it has gusts (a horizontal intensity above 0)."""
         return (self.gust_std if self.gust_std is not None else self.sigma_w20) > 0.0
 
     def intensities(self, h_m: float):
@@ -111,7 +116,9 @@ class Wind:
                           sigma_w20=self.sigma_w20, carry_mps=self.carry_mps)
 
     @classmethod
-    def coerce(cls, value) -> Wind | None:
+    def coerce(cls, value: object) -> Wind | None:
+        """None, a Wind, a speed along x (m/s) or (x, y, z) m/s as a Wind;
+        ConfigError for anything else."""
         if value is None or isinstance(value, Wind):
             return value
         if isinstance(value, Real) and not isinstance(value, bool):
@@ -122,6 +129,7 @@ class Wind:
         return cls(value)
 
     def to_dict(self) -> dict:
+        """JSON-ready description for the flight's scenario."""
         return {"mean": list(self.mean), "gust_std": self.gust_std, "gust_tau_s": self.gust_tau_s,
                 "turbulence": "MIL-F-8785C Dryden, low altitude"}
 
@@ -130,6 +138,7 @@ class Wind:
         return f"Wind(mean={self.mean}, gust_std={g}, gust_tau_s={self.gust_tau_s})"
 
     def sampler(self, rng: np.random.Generator, dt: float) -> WindSampler:
+        """The gust generator of one flight, stepped every ``dt`` s from ``rng``."""
         return WindSampler(self, rng, dt)
 
 
