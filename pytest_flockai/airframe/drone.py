@@ -61,7 +61,7 @@ class Drone:
     ``payload_kg`` and ``energy`` (the composable energy model).
     """
 
-    def __init__(self, data: dict, *, source: str = "<dict>"):
+    def __init__(self, data: dict, *, source: str = "<dict>") -> None:
         where = source
         unknown = sorted(set(data) - _TOP_KEYS)
         if unknown:
@@ -161,7 +161,7 @@ class Drone:
             out.append((r * math.cos(a), r * math.sin(a), 1.0 if i % 2 == 0 else -1.0))
         return out
 
-    def add_sensor(self, sensor) -> Drone:
+    def add_sensor(self, sensor: Sensor) -> Drone:
         """Attach a sensor (paper Listing 2: ``mydrone.addSensor(temp)``): a
         ``fa.sensors`` object or a Sensor subclass. It is read at its rate in every
         flight and its power is added to the energy model's ``proc.sensors``."""

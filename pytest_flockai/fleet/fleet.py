@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import math
 import time as _time
-from typing import cast
+from collections.abc import Iterable, Sequence
+from typing import Any, cast
 
 from .. import _check
 from .. import cache as _cache
@@ -41,8 +42,9 @@ class FleetDrone:
     and names its rows in the telemetry's ``drone`` column; ``pad`` = (x, y) is
     where it stands on the ground, takes off and lands."""
 
-    def __init__(self, name: str, drone: Drone, pilot: Pilot, pad=(0.0, 0.0), *, tasks=(),
-                 seed: int = 0, probes=None, policies=()):
+    def __init__(self, name: str, drone: Drone, pilot: Pilot,
+                 pad: Sequence[float] = (0.0, 0.0), *, tasks: Iterable = (), seed: int = 0,
+                 probes: Iterable | None = None, policies: Iterable = ()) -> None:
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "./ "):
             raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; expected a non-empty "
                               f"str without '.', '/' or spaces (it prefixes the drone's KPIs)")
@@ -98,10 +100,11 @@ class Fleet:
     world, seen by every drone; each drone's ``policies`` are its own (a
     ``fa.policy.SharedSearch`` per drone with one ``GroundStation``: a search together)."""
 
-    def __init__(self, drones, world=None, *, until="landed", max_time_s: float = 4 * 3600.0,
-                 telemetry_hz: float = 10.0, area=None, swath_m: float | None = None,
+    def __init__(self, drones: Iterable[FleetDrone], world: World | None = None, *,
+                 until: str | float = "landed", max_time_s: float = 4 * 3600.0,
+                 telemetry_hz: float = 10.0, area: Any = None, swath_m: float | None = None,
                  name: str | None = None, offload: Offload | None = None,
-                 shared_link: bool = True, actors=()):
+                 shared_link: bool = True, actors: Iterable = ()) -> None:
         try:
             drones = list(drones)
         except TypeError:

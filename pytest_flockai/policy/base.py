@@ -330,7 +330,7 @@ class Policy(Clocked):
     #: mode names whose time is always reported (0 when never entered)
     modes: tuple = ()
 
-    def __init__(self, name: str | None = None, period_s: float = 0.1):
+    def __init__(self, name: str | None = None, period_s: float = 0.1) -> None:
         nm = name if name is not None else type(self).__name__.lower()
         if not isinstance(nm, str) or not nm or "." in nm:
             raise ConfigError(f"{type(self).__name__}: name = {nm!r} is not allowed; expected a "

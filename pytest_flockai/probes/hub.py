@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import queue as _queue
+from collections.abc import Iterable
 from numbers import Real
 
 import pandas as pd
@@ -72,7 +73,7 @@ class RunView:
         return self._meter.breakdown()
 
 
-def resolve_probes(user) -> list[Probe]:
+def resolve_probes(user: Probe | Iterable[Probe] | None) -> list[Probe]:
     """The built-in probes, with the user's probes added; a user probe named like
     a built-in one (of the same class) replaces it, e.g. to change its period
     or disable it."""

@@ -41,6 +41,7 @@ import time
 import warnings
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
+from typing import Any
 
 import pandas as pd
 
@@ -79,9 +80,11 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, workers=None,
-          backend="process", device=None, executor=None, batch_size=None, progress=None,
-          **axes) -> pd.DataFrame:
+def sweep(base_mission: Mission, *, samples: int | None = None, method: str = "grid",
+          seed: int = 0, budgets: dict | None = None, workers: int | None = None,
+          backend: str = "process", device: str | None = None, executor: Any = None,
+          batch_size: int | None = None, progress: bool | None = None,
+          **axes: Any) -> pd.DataFrame:
     """Fly ``base_mission`` once per variant of ``axes``; one DataFrame row per variant.
 
     Columns: the axes, ``end_reason``, ``error`` (None, or the failure of that

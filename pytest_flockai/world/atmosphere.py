@@ -33,7 +33,7 @@ class Atmosphere:
     """Air at a field elevation (m above mean sea level) and, optionally, a
     temperature (degC) other than the standard one there."""
 
-    def __init__(self, altitude_m: float = 0.0, temperature_c: float | None = None):
+    def __init__(self, altitude_m: float = 0.0, temperature_c: float | None = None) -> None:
         where = "Atmosphere"
         self.altitude_m = _check.number("altitude_m", altitude_m, where=where, minimum=-500.0,
                                         maximum=MAX_ALTITUDE_M)

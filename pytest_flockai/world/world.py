@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from collections.abc import Iterable, Sequence
 from numbers import Integral, Real
 from typing import SupportsInt, cast
 
@@ -53,7 +54,7 @@ FIGURES = ("articulated", "simple")
 class World:
     """A scene: ground, obstacles and people. Build with ``empty``, ``urban`` or ``from_mjcf``."""
 
-    def __init__(self, name: str = "empty"):
+    def __init__(self, name: str = "empty") -> None:
         self.name = name
         self.people = np.zeros((0, 3))
         self.truth_height = 0.5 * PERSON_HEIGHT
@@ -81,7 +82,8 @@ class World:
         return cls("empty")
 
     @classmethod
-    def urban(cls, seed: int = 0, size=(200.0, 200.0), people: int = 100, crowds=(), *,
+    def urban(cls, seed: int = 0, size: Sequence[float] = (200.0, 200.0), people: int = 100,
+              crowds: Iterable = (), *,
               building_density: float = 0.7, clear_radius: float = 15.0,
               max_building_height: float | None = None, vehicles: int = 0,
               figures: str = "articulated") -> World:
@@ -142,8 +144,9 @@ class World:
         return w
 
     @classmethod
-    def scene(cls, people=(), vehicles=(), buildings=(), *, size=(100.0, 100.0),
-              figures: str = "articulated", poses=None) -> World:
+    def scene(cls, people: Iterable = (), vehicles: Iterable = (), buildings: Iterable = (), *,
+              size: Sequence[float] = (100.0, 100.0), figures: str = "articulated",
+              poses: Iterable | None = None) -> World:
         """A test range: figures, cars and buildings exactly where you put them, on
         the urban world's ground and streets. people: (x, y) feet positions;
         vehicles: (x, y, yaw) rows; buildings: (cx, cy, half_x, half_y, height);
@@ -179,7 +182,7 @@ class World:
         return w
 
     @classmethod
-    def from_mjcf(cls, path, people=None) -> World:
+    def from_mjcf(cls, path: str | os.PathLike, people: Iterable | None = None) -> World:
         """A user's static MJCF scene (no joints; textures resolve relative to the file).
 
         people: None to find them in the scene (bodies, else geoms, whose name
