@@ -27,14 +27,18 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from numbers import Real
+from typing import TYPE_CHECKING
 
 from . import kpis as _kpis
 from .errors import ConfigError, close_matches
 from .recording import publish_verdicts
 from .report import table as text_table
+
+if TYPE_CHECKING:
+    from .result import FlightResult
 
 OPERATORS = ("<", "<=", ">", ">=", "==")
 
@@ -93,7 +97,7 @@ class Budget:
     factor: float = 1.0   # SI value = written value * factor
     dimension: str = "1"  # SI unit of the limit: "s", "J", "W", "m", "m/s", "kB" or "1"
 
-    def evaluate(self, actual) -> tuple[bool, float]:
+    def evaluate(self, actual: float | None) -> tuple[bool, float]:
         """(passed, margin): margin > 0 inside the budget, in SI units.
 
         A missing (None) or NaN value never passes (margin NaN).
@@ -120,7 +124,7 @@ class Budget:
             margin = math.nan
         return bool(passed), float(margin)
 
-    def verdict(self, actual, flight: str | None = None) -> Verdict:
+    def verdict(self, actual: float | None, flight: str | None = None) -> Verdict:
         """The one verdict type: this budget against ``actual`` (SI)."""
         passed, margin = self.evaluate(actual)
         a = math.nan if actual is None else float(actual)
@@ -128,7 +132,7 @@ class Budget:
                        actual=a, margin=margin, passed=passed, actual_text=self.format(actual),
                        margin_text=self.format(margin) if margin == margin else "n/a")
 
-    def format(self, value) -> str:
+    def format(self, value: float | None) -> str:
         """``value`` (SI) in the unit the budget was written in."""
         if value is None or (isinstance(value, float) and math.isnan(value)):
             return "n/a"
@@ -158,7 +162,7 @@ def kpi_unit(kpi: str) -> str | None:
                       f"from pytest_flockai.kpis.names() or a custom '<probe>.<metric>'")
 
 
-def parse(kpi: str, text) -> Budget:
+def parse(kpi: str, text: str | Budget) -> Budget:
     """Parse one budget for one KPI; raises ConfigError naming KPI, text and what is allowed."""
     if isinstance(text, Budget):
         if text.kpi != kpi:
@@ -245,7 +249,7 @@ class Verdict:
         return getattr(self, key)
 
 
-def table(verdicts, indent: str = "  ") -> str:
+def table(verdicts: Iterable[Verdict], indent: str = "  ") -> str:
     """The budget table of a failure message: flight, KPI, budget, actual, margin, verdict."""
     rows = [[v.flight or "", v.kpi, v.budget, v.actual_text, v.margin_text,
              "ok" if v.passed else "BROKEN"] for v in verdicts]
@@ -269,12 +273,13 @@ def _dim_name(dim) -> str:
 class BudgetError(AssertionError):
     """Raised by ``check`` when a budget is broken; the message is the budget table."""
 
-    def __init__(self, message, verdicts):
+    def __init__(self, message: str, verdicts: list[Verdict]) -> None:
         super().__init__(message)
         self.verdicts = verdicts
 
 
-def evaluate(result, budgets: dict | None = None, **more) -> list[Verdict]:
+def evaluate(result: FlightResult | Mapping[str, float], budgets: dict | None = None,
+             **more: str | Budget) -> list[Verdict]:
     """Evaluate budgets against a FlightResult (or a KPI dict) without pytest.
 
     Returns one ``Verdict`` per budget (kpi, budget, limit, actual, passed,
@@ -302,7 +307,8 @@ def evaluate(result, budgets: dict | None = None, **more) -> list[Verdict]:
     return out
 
 
-def check(result, budgets: dict | None = None, **more) -> list[Verdict]:
+def check(result: FlightResult | Mapping[str, float], budgets: dict | None = None,
+          **more: str | Budget) -> list[Verdict]:
     """Like ``evaluate`` but raises BudgetError (an AssertionError) with a table
     when a budget is broken: use it inside hypothesis ``@given`` tests, where
     the failing example is then shrunk and shown."""

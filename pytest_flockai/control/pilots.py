@@ -17,6 +17,8 @@ from __future__ import annotations
 import functools
 import inspect
 import math
+from collections.abc import Iterable, Sequence
+from typing import Any
 
 from .. import _check, limits
 from ..errors import ConfigError, close_matches
@@ -90,7 +92,8 @@ class Hover(Pilot):
     """Hold position over the take-off point at ``altitude`` for ``duration``
     seconds (None: until the mission ends)."""
 
-    def __init__(self, altitude: float = 10.0, duration: float | None = None, *, yaw: float = 0.0):
+    def __init__(self, altitude: float = 10.0, duration: float | None = None, *,
+                 yaw: float = 0.0) -> None:
         self.altitude = _alt(altitude, "Hover")
         self.duration = None if duration is None else _check.non_negative("duration", duration, where="Hover")
         self.yaw = _check.number("yaw", yaw, where="Hover")
@@ -114,7 +117,8 @@ class Waypoints(Pilot):
     """Fly through ``points`` [(x, y, z), ...] at ``speed`` m/s, stopping at each
     (trapezoidal speed profile). ``loop``: start over at the first point forever."""
 
-    def __init__(self, points, speed: float = 6.94, loop: bool = False, *, yaw: float = 0.0):
+    def __init__(self, points: Iterable[Sequence[float]], speed: float = 6.94, loop: bool = False,
+                 *, yaw: float = 0.0) -> None:
         try:
             pts = [tuple(p) for p in points]
         except TypeError:
@@ -162,8 +166,8 @@ class ZigZag(Waypoints):
     ``altitude``: legs along x, ``spacing`` metres apart (the paper's Bounding
     Box ZigZag Pilot)."""
 
-    def __init__(self, area, altitude: float = 30.0, spacing: float = 15.0, speed: float = 8.0,
-                 *, yaw: float = 0.0):
+    def __init__(self, area: Any, altitude: float = 30.0, spacing: float = 15.0,
+                 speed: float = 8.0, *, yaw: float = 0.0) -> None:
         x0, y0, x1, y1 = _check.area(area, where="ZigZag")
         for n, v in (("area x0", x0), ("area y0", y0), ("area x1", x1), ("area y1", y1)):
             _extent(n, v, "ZigZag")
@@ -197,8 +201,9 @@ class Orbit(Pilot):
     """Circle ``center`` = (x, y) at ``radius`` and ``altitude``, counter-clockwise at
     ``speed`` m/s; ``laps`` turns (None: until the mission ends)."""
 
-    def __init__(self, center=(0.0, 0.0), radius: float = 20.0, altitude: float = 30.0,
-                 speed: float = 5.0, *, laps: float | None = None):
+    def __init__(self, center: Sequence[float] = (0.0, 0.0), radius: float = 20.0,
+                 altitude: float = 30.0, speed: float = 5.0, *,
+                 laps: float | None = None) -> None:
         self.center = _check.vector("center", center, 2, where="Orbit")
         for axis, c in zip("xy", self.center):
             _extent(f"center {axis}", c, "Orbit")
