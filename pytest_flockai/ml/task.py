@@ -11,9 +11,12 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+from collections.abc import Callable, Sequence
 from numbers import Integral
+from typing import Any
 
 from .. import _check, limits
+from ..comm.link import Link
 from ..comm.link import link as _link
 from ..compute.devices import Device
 from ..compute.latency import LATENCY_MODES, resolve_device
@@ -65,14 +68,16 @@ class Task:
     ignore regions.
     """
 
-    def __init__(self, model, sensor: str = "camera", period_s: float = 5.0,
-                 execution: str = "onboard", device=None, *, name: str | None = None,
-                 ground_device="ground-gpu", link="wifi-80211n", on_busy: str = "drop",
+    def __init__(self, model: Any, sensor: str = "camera", period_s: float = 5.0,
+                 execution: str = "onboard", device: str | Device | None = None, *,
+                 name: str | None = None, ground_device: str | Device = "ground-gpu",
+                 link: str | Link = "wifi-80211n", on_busy: str = "drop",
                  latency: str = "modeled", result_bytes: int = 256, jpeg_quality: int = 90,
-                 crowd_threshold: float = 10.0, count=None, alert: str = "frame",
-                 ground_station=(0.0, 0.0, 0.0), max_queue: int = 16, evaluate="count",
-                 classes=CLASSES, score_threshold: float = 0.25, iou_threshold: float = 0.5,
-                 decode="auto", min_visible: float = 0.25):
+                 crowd_threshold: float = 10.0, count: Callable | None = None,
+                 alert: str = "frame", ground_station: Sequence[float] = (0.0, 0.0, 0.0),
+                 max_queue: int = 16, evaluate: str = "count", classes: Sequence[str] = CLASSES,
+                 score_threshold: float = 0.25, iou_threshold: float = 0.5,
+                 decode: str | Callable = "auto", min_visible: float = 0.25) -> None:
         self.model = as_model(model)
         self.name = name if name is not None else str(getattr(self.model, "name", "task"))
         if not isinstance(self.name, str) or not self.name or "." in self.name:

@@ -23,7 +23,9 @@ Its values land in the telemetry as ``app.detections_per_min`` and as the KPI
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Any
 
 from .. import _check
 from ..errors import ConfigError
@@ -60,7 +62,8 @@ class Probe:
     period_s: float = 1.0
     builtin: bool = False          # built-in probes publish un-prefixed KPI names
 
-    def __init__(self, *, period_s: float | None = None, enabled: bool = True, name: str | None = None):
+    def __init__(self, *, period_s: float | None = None, enabled: bool = True,
+                 name: str | None = None) -> None:
         if name is not None:
             self.name = name
         if not isinstance(self.name, str) or not self.name or "." in self.name:
@@ -104,7 +107,8 @@ class Probe:
 class FunctionProbe(Probe):
     """A probe from a function: ``FunctionProbe("app", fn, metrics=[Metric(...)])``."""
 
-    def __init__(self, name: str, fn, metrics, *, period_s: float = 1.0, enabled: bool = True):
+    def __init__(self, name: str, fn: Callable[[Any], dict], metrics: Iterable[Metric], *,
+                 period_s: float = 1.0, enabled: bool = True) -> None:
         if not callable(fn):
             raise ConfigError(f"probe {name!r}: fn = {fn!r} is not callable")
         self.metrics = tuple(metrics)
