@@ -54,7 +54,7 @@ def test_a_green_run_with_xfail_budget_failures_is_green(pytester, monkeypatch):
     test is in the JSON, Markdown and HTML reports, with the budgets it checked itself."""
     step = pytester.path / "step.md"
     monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(step))
-    pytester.makepyfile(test_ml=ML_SUITE)
+    pytester.makepyfile(test_team_suite=ML_SUITE)   # not test_ml: tests/test_ml.py may be imported
     res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--flockai-json", "r.json",
                                        "--flockai-md", "s.md", "--flockai-html", "d.html")
     res.assert_outcomes(passed=3, xfailed=1, skipped=1)
