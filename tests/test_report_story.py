@@ -225,6 +225,10 @@ def test_absolute_tolerance_from_the_registry_and_overrides():
                                                                    "recall": 0.01}
     with pytest.raises(ValueError, match="KPI=VALUE"):
         cmp.parse_abs_tol(["energy_total_j"])
+    # a misspelled KPI is an error (it would silently tolerate nothing), a custom one is not
+    with pytest.raises(ValueError, match=r"unknown KPI 'energy_totl_j' \(did you mean: energy_total_j"):
+        cmp.parse_abs_tol(["energy_totl_j=5"])
+    assert cmp.parse_abs_tol(["app.detections_per_min=1"]) == {"app.detections_per_min": 1.0}
 
 
 def test_abs_tol_on_the_command_line_of_compare(tmp_path, capsys):
@@ -235,6 +239,8 @@ def test_abs_tol_on_the_command_line_of_compare(tmp_path, capsys):
     assert cli.main(args + ["--abs-tol", "energy_total_j=5"]) == 0
     assert cli.main(args + ["--abs-tol", "energy_total_j=lots"]) == 2
     assert "KPI=VALUE" in capsys.readouterr().err
+    assert cli.main(args + ["--abs-tol", "energy_totl_j=5"]) == 2
+    assert "unknown KPI 'energy_totl_j'" in capsys.readouterr().err
 
 
 def test_the_dashboard_has_a_place_for_more_sections():
