@@ -85,3 +85,12 @@ def test_classes_for_labels_that_name_their_own_categories_are_refused(tmp_path)
     make_set(tmp_path, "coco", n=2)
     with pytest.raises(fa.ConfigError, match=r"classes = \['person', 'vehicle'\] names YOLO class"):
         fa.sensors.ReplayCamera(tmp_path, classes=["person", "vehicle"])
+
+
+def test_a_missing_or_empty_folder_names_evaluate_dataset_and_the_path(tmp_path):
+    task = fa.Task(lambda f: f, evaluate="detection", latency="measured", name="det")
+    with pytest.raises(fa.ConfigError, match=r"^evaluate_dataset\(task 'det'\): .*path = '.*nowhere'"
+                                             r": no such folder"):
+        fa.ml.evaluate_dataset(task, tmp_path / "nowhere")
+    with pytest.raises(fa.ConfigError, match=r"^evaluate_dataset\(task 'det'\): .*holds no images"):
+        fa.ml.evaluate_dataset(task, tmp_path)

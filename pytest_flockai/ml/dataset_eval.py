@@ -66,8 +66,11 @@ def evaluate_dataset(task: Task, path, *, annotations="auto", split=None, classe
     if task.evaluate == "count":
         raise ConfigError(f"evaluate_dataset: task {task.name!r} has evaluate='count'; dataset "
                           f"scoring needs evaluate='detection', 'classification' or a callable")
-    cam = ReplayCamera(path, rate_hz=1.0, loop=False, annotations=annotations, split=split,
-                       classes=classes, name=task.sensor)
+    try:
+        cam = ReplayCamera(path, rate_hz=1.0, loop=False, annotations=annotations, split=split,
+                           classes=classes, name=task.sensor)
+    except ConfigError as exc:    # say which call read the folder, not only the camera
+        raise ConfigError(f"evaluate_dataset(task {task.name!r}): {exc}") from None
     if cam.files is None or cam._truth is None:
         raise ConfigError(f"evaluate_dataset: {os.fspath(path)!r} has no labels to score "
                           f"against (COCO, YOLO or VisDrone-DET)")
