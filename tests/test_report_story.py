@@ -76,6 +76,7 @@ def test_a_green_run_with_xfail_budget_failures_is_green(pytester, monkeypatch):
     assert step.read_text() == md
     page = (pytester.path / "d.html").read_text()
     assert 'id="status" class="ok"' in page and "passed: 5 test(s)" in page
+    assert "3 budget(s) broken where expected (2 xfail, 1 caught by pytest.raises)" in page
     tests = [r for r in _rows(page, "tests")]
     assert sorted(r[1].split("::")[-1] for r in tests) == sorted(outcomes)
     assert {r[1].split("::")[-1]: r[0] for r in tests} == outcomes      # verdict first
