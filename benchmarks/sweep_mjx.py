@@ -9,18 +9,26 @@ payload axis. Three ways:
   ``--seconds`` (default 1800 s, 30 minutes) one after another;
 - ``fa.sweep(workers=2)``: the same flights across 2 processes (spawn start-up
   included);
-- ``fa.sweep(backend="mjx")`` at each ``--batch`` size: one warm-up sweep
-  (JIT compile, printed), then a timed sweep of ``--mjx-seconds`` per variant
+- ``fa.sweep(backend=--backend)`` (``jax``: the free-flight body, the default; ``mjx``:
+  MJX's full physics) at each ``--batch`` size: one warm-up sweep (JIT compile or a
+  load from JAX's persistent cache, printed), then a timed sweep of ``--mjx-seconds``
+  per variant (``--mjx-seconds 1800``: the full thirty minutes, for a GPU)
   (default 20 s: at 30 minutes, 256 variants on 2 CPU cores would take hours);
   its rate is per drone-second, and variants per minute are for 30-minute
   missions at that rate (the batched step costs the same at every simulated
   second: a fixed-length scan, chunk after chunk).
 
 ``--device gpu`` runs the batched backend on JAX's GPU (needs jax[cuda]). The
-load average is printed with every line: these machines are shared.
+load average is printed with every line: these machines are shared. The timed line
+also splits the sweep into building the variants (numbers and MuJoCo models, on the
+host) and the batch itself. On a GPU, for 10^3 to 10^5 thirty-minute variants:
 
-    python benchmarks/sweep_mjx.py [--device cpu|gpu] [--batch 8 64 256]
-        [--seconds 1800] [--mjx-seconds 20] [--core-variants 2] [--skip-core]
+    python benchmarks/sweep_mjx.py --device gpu --skip-core --mjx-seconds 1800 \
+        --batch 1000 10000 100000
+
+    python benchmarks/sweep_mjx.py [--device cpu|gpu] [--backend jax|mjx]
+        [--batch 8 64 256] [--seconds 1800] [--mjx-seconds 20] [--core-variants 2]
+        [--skip-core]
 """
 
 from __future__ import annotations
@@ -32,6 +40,7 @@ import time
 import numpy as np
 
 import pytest_flockai as fa
+from pytest_flockai.sweeps.batched import engine
 
 MISSION_S = 1800.0       # the figures' mission: 30 minutes
 
@@ -65,16 +74,18 @@ def pool(seconds, n):
     _line("fa.sweep workers=2", n, time.perf_counter() - t0, float(df["sim_time_s"].sum()))
 
 
-def batched(seconds, n, device):
+def batched(seconds, n, device, backend):
     payloads = list(np.linspace(0.0, 0.3, n))
     t0 = time.perf_counter()
-    fa.sweep(base(seconds), payload_kg=payloads, backend="mjx", device=device)
+    fa.sweep(base(min(seconds, 4.0)), payload_kg=payloads, backend=backend, device=device)
     warm = time.perf_counter() - t0
     t0 = time.perf_counter()
-    df = fa.sweep(base(seconds), payload_kg=payloads, backend="mjx", device=device)
+    df = fa.sweep(base(seconds), payload_kg=payloads, backend=backend, device=device)
     assert df["error"].isna().all(), df["error"]
-    _line(f"fa.sweep backend=mjx ({device})", n, time.perf_counter() - t0,
-          float(df["sim_time_s"].sum()), f"   (warm-up with JIT compile {warm:.1f} s)")
+    t = engine.LAST_TIMINGS
+    _line(f"fa.sweep backend={backend} ({device})", n, time.perf_counter() - t0,
+          float(df["sim_time_s"].sum()), f"   (variants {t['variants_s']:.1f} s, batch "
+          f"{t['batch_s']:.1f} s; warm-up with JIT compile {warm:.1f} s)")
 
 
 def main() -> None:
@@ -85,6 +96,7 @@ def main() -> None:
     ap.add_argument("--mjx-seconds", type=float, default=20.0)
     ap.add_argument("--core-variants", type=int, default=2)
     ap.add_argument("--skip-core", action="store_true", help="only the batched backend")
+    ap.add_argument("--backend", default="jax", choices=("jax", "mjx"))
     a = ap.parse_args()
     print(f"Mavic 2 Pro ZigZag missions (payload 0 to 0.3 kg), {os.cpu_count()} CPU core(s); "
           f"variants/min are of {MISSION_S:g} s missions at the measured drone-s/s")
@@ -93,7 +105,7 @@ def main() -> None:
         core(a.seconds, a.core_variants)
         pool(a.seconds, 2 * a.core_variants)
     for n in a.batch:
-        batched(a.mjx_seconds, n, a.device)
+        batched(a.mjx_seconds, n, a.device, a.backend)
 
 
 if __name__ == "__main__":

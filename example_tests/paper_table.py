@@ -26,7 +26,7 @@ Why the figures differ:
 - Cost of on-board ML: ours is the Raspberry Pi 4's measured power (2.7 W
   idle, 6 W busy) times the CNN's modeled busy time (526 M MACs at
   1.5 GMAC/s: 0.36 s every 5 s). That is well under 1 W on a drone that
-  draws ~117 W, so on-board ML costs seconds, not minutes. The paper reports
+  draws ~109 W, so on-board ML costs seconds, not minutes. The paper reports
   that processing took 21 % of the energy and 5 min 18 s of flight. Its
   Webots run slowed from 6.5-8x to 1.7x real time with the CNN, and its
   energy followed host time, which would explain most of that loss.

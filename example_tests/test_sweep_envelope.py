@@ -19,7 +19,9 @@ pytestmark = pytest.mark.flockai(drone="dji-mavic-2-pro",
 
 
 @pytest.mark.flockai_sweep(payload_kg=[0.0, 0.25, 0.5], wind_mps=[0.0, 5.0, 10.0], workers=2)
-@pytest.mark.kpi(endurance_s=">= 15 min")      # 0.5 kg: 15.3 to 16.2 min; ">= 20 min" fails there
+# 0.5 kg: 15.3 min in still air to 17.3 min at 5 m/s (15.3 to 16.2 before issue 30's wake
+# geometry: the aft rotors ingest less of the fore wake in a light wind); ">= 20 min" fails there
+@pytest.mark.kpi(endurance_s=">= 15 min")
 def test_mavic_endurance_envelope(flockai_sweep):
     df = flockai_sweep
     assert len(df) == 9 and df["error"].isna().all()

@@ -23,7 +23,7 @@ from .recording import recording
 __version__ = "0.1.0"
 
 if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type checkers and docs
-    from . import comm, fleet, ml, probes, sensors
+    from . import comm, fleet, ml, policy, probes, sensors
     from .airframe import Drone, blueprints, drone
     from .compute import devices
     from .control import pilots
@@ -31,10 +31,11 @@ if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type c
     from .fleet import Fleet, FleetDrone, FleetResult
     from .mission import Mission
     from .ml import Task
+    from .policy import Policy
     from .result import FlightResult
     from .sensors import Conditions
     from .sweeps import sweep
-    from .world import Atmosphere, Wind, World
+    from .world import Atmosphere, Wind, World, actors
 
 #: public name -> (module, attribute in it; None: the module itself), imported on first use
 _LAZY = {
@@ -47,10 +48,12 @@ _LAZY = {
     "FleetDrone": (".fleet", "FleetDrone"), "FleetResult": (".fleet", "FleetResult"),
     "FlightResult": (".result", "FlightResult"), "Task": (".ml", "Task"),
     "sweep": (".sweeps", "sweep"), "GL_IMPORT_ERROR": ("._mujoco", "GL_IMPORT_ERROR"),
+    "Policy": (".policy", "Policy"), "actors": (".world.actors", None),
 }
 
 __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet",
-           "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission",
+           "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission", "Policy",
+           "actors", "policy",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
            "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "sweep",
            "__version__"]

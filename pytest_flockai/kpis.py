@@ -75,6 +75,20 @@ _ROWS = [
     ("recall", "fraction", "higher", "objects matched by a detection at the score threshold"),
     ("objects_missed", "fraction", "lower", "objects in view never detected"),
     ("accuracy", "fraction", "higher", "frames whose predicted classes are exactly right"),
+    # closed loop (fa.policy.Follow, SearchThenOrbit, MarkerLanding): scored against the truth
+    # after the flight, never used in a decision
+    ("time_to_detect_s", "s", "lower", "start of the plan to the first confirmed target"),
+    ("track_error_p95_m", "m", "lower", "95th percentile horizontal distance drone to followed "
+     "target while following"),
+    ("track_error_mean_m", "m", "lower", "mean horizontal distance drone to followed target "
+     "while following"),
+    ("track_lost_count", "count", "lower", "times the followed target's track was lost"),
+    ("track_lost_s", "s", "lower", "time spent with the target's track lost"),
+    ("landing_error_m", "m", "lower", "horizontal distance from the touchdown point to the "
+     "landing marker's centre"),
+    ("targets_found", "count", "higher", "distinct targets a search confirmed"),
+    ("time_to_find_all_s", "s", "lower", "start of the plan until every target was found "
+     "(NaN unless all were)"),
     ("images_scored", "count", None, "frames (images) a detection or classification task scored"),
     # ML: per-task energy (ml/task_energy.py); each as '<task>.<kpi>'
     ("energy_j", "J", "lower", "energy the task cost the battery: compute_energy_j + radio_energy_j"),
@@ -93,6 +107,12 @@ _ROWS = [
     ("fleet.min_separation_m", "m", "higher", "smallest distance between two airborne drones"),
     ("fleet.crashes", "count", "lower", "drones whose flight ended in a crash"),
     ("fleet.energy_total_j", "J", "lower", "sum of the drones' energy_total_j"),
+    ("fleet.targets_found", "count", "higher", "a search together (fa.policy.SharedSearch): "
+     "distinct people confirmed"),
+    ("fleet.time_to_find_all_s", "s", "lower", "a search together: first plan start until "
+     "every person was confirmed (NaN unless all were)"),
+    ("fleet.reports", "count", None, "a search together: detections reported to the ground station"),
+    ("fleet.assignments", "count", None, "a search together: drones sent to confirm a report"),
     ("offload.latency_p95_s", "s", "lower", "fleet offload: 95th percentile capture-to-result latency"),
     ("link.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the channel"),
     ("ground.queue_delay_mean_s", "s", "lower", "fleet offload: mean wait for the ground device"),

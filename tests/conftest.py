@@ -6,15 +6,21 @@ so the test files stay about what they check:
 - ``slow``: more than a few seconds on an idle 2-core machine (hypothesis searches,
   pytester runs under xdist, flights to battery depletion, JIT compiles, packaging);
   ``pytest tests -m "not slow" -n 2`` is the inner loop.
-- ``jax``: needs the ``[mjx]`` extra; CI's newest-versions stage must not skip them.
+- ``jax``: needs the ``[mjx]`` extra; CI's newest-versions stage must not skip them:
+  with ``FLOCKAI_REQUIRE_JAX=1`` (.ci/run) a skipped ``jax`` test fails, and JAX
+  missing is a usage error.
 - ``browser``: drives headless Chromium.
 """
 
 import importlib
+import os
 
 import pytest
 
 pytest_plugins = ["pytester"]
+
+#: CI's newest-versions stage sets this: a jax test that skips is then a failure
+REQUIRE_JAX = os.environ.get("FLOCKAI_REQUIRE_JAX") == "1"
 
 # ``import pytest_flockai`` is lazy (PEP 562), so the first flight of a session may happen
 # inside a pytester in-process run; pytester then drops the modules that run imported, and the
@@ -31,8 +37,8 @@ for _name in ("numpy", "pandas", "mujoco", "cv2", "onnxruntime", "matplotlib.pyp
         pass
 
 #: whole files whose every test is slow
-SLOW_FILES = {"test_sweep_mjx.py", "test_interrupted_runs.py", "test_packaging.py",
-              "test_baseline_gate.py", "test_fuzz.py"}
+SLOW_FILES = {"test_sweep_mjx.py", "test_sweep_batched.py", "test_interrupted_runs.py",
+              "test_packaging.py", "test_baseline_gate.py", "test_fuzz.py"}
 #: single slow tests, by function name (all their parametrizations)
 SLOW_TESTS = {
     "test_hypothesis_finds_wind_breaking_a_flight_time_budget",
@@ -75,3 +81,22 @@ def pytest_collection_modifyitems(items):
             item.add_marker(pytest.mark.browser)
         if func.startswith("test_every_docs_example_runs") and "imaging-conditions" in item.name:
             item.add_marker(pytest.mark.slow)
+
+
+def pytest_sessionstart(session):
+    if REQUIRE_JAX:
+        try:
+            import jax  # noqa: F401
+            import mujoco.mjx  # noqa: F401
+        except ImportError as exc:
+            raise pytest.UsageError(f"FLOCKAI_REQUIRE_JAX=1 but JAX/MJX do not import ({exc}): "
+                                    f"the jax-marked tests would skip") from None
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    outcome = yield
+    rep = outcome.get_result()
+    if REQUIRE_JAX and rep.skipped and item.get_closest_marker("jax") is not None:
+        rep.outcome = "failed"
+        rep.longrepr = f"FLOCKAI_REQUIRE_JAX=1: a jax-marked test skipped: {rep.longrepr}"

@@ -15,12 +15,12 @@ PKG = Path(__file__).resolve().parent.parent / "pytest_flockai"
 #: bottom to top; a name is a top-level module or subpackage of pytest_flockai
 LAYERS = [
     {"errors", "physics", "phases", "clock", "_check", "_io", "kpis", "recording", "result",
-     "limits", "memo", "_mujoco", "notebook"},
+     "limits", "memo", "_mujoco", "notebook", "_xp"},
     {"compute", "world"},
     {"energy", "sensors"},
     {"comm", "airframe"},
     {"control", "ml", "probes"},
-    {"mission", "cache", "fleet"},
+    {"mission", "cache", "fleet", "policy"},
     {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
      "plugin", "__init__", "sweeps"},
 ]
@@ -56,7 +56,8 @@ SAME_LAYER = {
     ("result", "_io"), ("result", "errors"), ("result", "phases"), ("result", "notebook"),
     ("notebook", "kpis"),
     ("ml", "control"),
-    ("fleet", "cache"), ("fleet", "mission"), ("mission", "cache"),
+    ("fleet", "cache"), ("fleet", "mission"), ("fleet", "policy"), ("mission", "cache"),
+    ("mission", "policy"),
     ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
     ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
     ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),

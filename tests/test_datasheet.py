@@ -76,7 +76,7 @@ def test_datasheet_motor_values_and_user_fields_override_the_defaults(tmp_path):
     assert worse.datasheet["motor_rm_ohm"] == 4.0
     assert worse.energy.component("motors").motor_efficiency < default.energy.component("motors").motor_efficiency
     # a field the user knows better wins over the derived one
-    own = fa.drone(str(_mini(tmp_path, **{"\n[energy]\n": "\n[energy]\nmotor_efficiency = 0.9\n",
+    own = fa.drone(str(_mini(tmp_path, **{"\n[radio]\n": "\n[energy]\nmotor_efficiency = 0.9\n\n[radio]\n",
                                           "\n[battery]\n": "\n[rotor]\nthrust_coeff = 2.0e-6\n\n[battery]\n"})))
     assert own.energy.component("motors").motor_efficiency == 0.9
     assert own.rotor.thrust_coeff == 2.0e-6
@@ -207,3 +207,55 @@ def test_a_datasheet_no_load_current_is_taken_at_its_test_voltage(tmp_path):
     assert (m.motor_i0_a, m.motor_i0_rad_s) == (pytest.approx(at_hover), d.datasheet["hover_rad_s"])
     d7 = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": "motor_i0_v = 7.4\n" + extra})))
     assert d7.datasheet["motor_i0_a"] == pytest.approx(at_hover * math.sqrt(10.0 / 7.4))
+
+
+def test_section_drag_is_laminar_below_transition_and_turbulent_above():
+    """Blasius (C_d ~ Re^-1/2) up to Re 1e5, turbulent skin friction (Re^-1/5) above: the
+    two laws meet at the transition, and the drag keeps falling, more slowly, past it."""
+    assert dsm.section_drag(dsm.RE_REF) == pytest.approx(dsm.CD_REF)
+    assert dsm.section_drag(1.5e4) == pytest.approx(dsm.CD_REF * 2.0)      # (6e4 / 1.5e4)^0.5
+    t = dsm.RE_TURBULENT
+    assert dsm.section_drag(t * 0.999) == pytest.approx(dsm.section_drag(t * 1.001), rel=1e-3)
+    assert dsm.section_drag(4 * t) == pytest.approx(dsm.section_drag(t) * 4 ** -0.2)
+    # above the transition the laminar law would have given a lower drag
+    assert dsm.section_drag(4 * t) > dsm.CD_REF * (4 * t / dsm.RE_REF) ** -0.5
+
+
+def test_section_drag_takes_arrays():
+    np = pytest.importorskip("numpy")
+    re = np.array([1.5e4, 6e4, 4e5])
+    out = dsm.section_drag(re, maximum=np.maximum)
+    assert out.shape == (3,)
+    assert list(out) == pytest.approx([dsm.section_drag(float(r)) for r in re])
+
+
+def test_large_rotors_are_less_efficient_than_the_laminar_law_alone_says():
+    # the 21 in rotor of a 15 kg hexacopter hovers at Re ~ 1.6e5, in the turbulent range
+    ct, cp, fm, omega = dsm.hover_propeller(21 * IN, 7 * IN, 2, 15.5 * 9.81 / 6)
+    re = 0.75 * omega * 0.5 * 21 * IN * dsm.CHORD_RATIO * 0.5 * 21 * IN / dsm.NU_SEA_LEVEL
+    assert re > dsm.RE_TURBULENT
+    laminar_cd = dsm.CD_REF * (re / dsm.RE_REF) ** dsm.CD_RE_EXP
+    assert dsm.section_drag(re) > 1.1 * laminar_cd
+
+
+@pytest.mark.parametrize("mass, fc, camera", [(0.080, 0.3, 1.5), (0.249, 1.0, 1.5), (0.907, 2.5, 2.0),
+                                               (9.5, 2.5, 2.0)])
+def test_avionics_by_class(mass, fc, camera):
+    a = dsm.avionics(mass)
+    assert a["flight_controller_w"] == fc
+    assert a["sensors"]["camera"] == camera and a["sensors"]["video_link"] == 0.8
+    total = a["flight_controller_w"] + a["io_w"] + sum(a["sensors"].values())
+    assert 2.0 < total < 6.0
+
+
+def test_a_datasheet_blueprint_gets_its_class_avionics_unless_it_gives_its_own(tmp_path):
+    d = fa.drone("dji-mini-3-pro")
+    proc = d.energy.component("proc")
+    assert proc.component("fc").power_w == 1.0                         # sub-250 g class
+    assert proc.component("sensors.video_link").power_w == 0.8
+    text = (BLUEPRINTS / "dji-mini-3-pro.toml").read_text()
+    own = tmp_path / "mini.toml"
+    own.write_text(text.replace("[radio]", "[energy]\nflight_controller_w = 4.0\n\n[radio]"))
+    d2 = fa.drone(str(own))
+    assert d2.energy.component("proc.fc").power_w == 4.0
+    assert "video_link" not in d2.energy.component("proc.sensors")

@@ -183,3 +183,28 @@ def test_paper_wifi_power_states_give_the_papers_comm_share():
     # one 256 B heartbeat up and a 64 B ack down per second at 6 Mbit/s
     t_tx = 256 * 8 / 6e6 * r.kpis["packets_out"]
     assert b["comm.radio.tx"] == pytest.approx(8.4 * t_tx, rel=1e-6)
+
+
+def test_wake_immersion_is_geometry():
+    """Issue 30: the aft rotor sits in the fore rotor's wake by how far that wake has sunk
+    when it reaches it: h = L (V_ax + v_i) / V_par below the aft disc, immersion 1 - h / D."""
+    from pytest_flockai.energy.rotors import wake_immersion
+    L, D = 0.25, 0.221                          # Mavic 2 rotor spacing and propeller
+    assert wake_immersion(L, 3.0, 0.5, D) == 0.0                # slow: the wake falls clear
+    assert wake_immersion(L, 0.0, 10.0, D) == 1.0               # flat wake
+    assert wake_immersion(L, 3.3, 6.94, D) == pytest.approx(1 - L * 3.3 / 6.94 / D)
+    speeds = [2.0, 5.0, 8.0, 12.0, 20.0]
+    values = [wake_immersion(L, 3.0, v, D) for v in speeds]
+    assert values == sorted(values) and values[0] == 0.0 and values[-1] < 1.0
+    np = pytest.importorskip("numpy")
+    arr = wake_immersion(L, 3.0, np.array(speeds), D, maximum=np.maximum, minimum=np.minimum)
+    assert list(arr) == pytest.approx(values)
+
+
+def test_cruise_beats_hover_on_a_small_folding_drone():
+    """Issue 30: the Mini 3 Pro lasts longer at 21.6 km/h than in hover, as its maker says
+    (34 against 30 min): translational lift outweighs the profile and parasite power and the
+    aft rotors' wake ingestion at that speed."""
+    hover = _hover_until_empty("dji-mini-3-pro").kpis["flight_time_s"]
+    cruise = _cruise_until_empty("dji-mini-3-pro", speed=6.0).kpis["flight_time_s"]
+    assert cruise / hover == pytest.approx(34 / 30, abs=0.05)

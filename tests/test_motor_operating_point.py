@@ -113,7 +113,7 @@ def test_a_user_motor_efficiency_on_a_datasheet_blueprint_wins(tmp_path):
     from pathlib import Path
     text = (Path(fa.__file__).parent / "airframe" / "blueprints" / "dji-mini-3-pro.toml").read_text()
     p = tmp_path / "mini.toml"
-    p.write_text(text.replace("\n[energy]\n", "\n[energy]\nmotor_efficiency = 0.9\n"))
+    p.write_text(text.replace("\n[radio]\n", "\n[energy]\nmotor_efficiency = 0.9\n\n[radio]\n"))
     m = fa.drone(str(p)).energy.component("motors")
     assert m.motor_efficiency == 0.9 and m.motor_kv_rpm_v is None
 
@@ -133,7 +133,7 @@ def _mini_constant(tmp_path):
     eta = fa.drone("dji-mini-3-pro").datasheet["motor_efficiency"]
     text = (Path(fa.__file__).parent / "airframe" / "blueprints" / "dji-mini-3-pro.toml").read_text()
     p = tmp_path / "mini-constant.toml"
-    p.write_text(text.replace("\n[energy]\n", f"\n[energy]\nmotor_efficiency = {eta!r}\n"))
+    p.write_text(text.replace("\n[radio]\n", f"\n[energy]\nmotor_efficiency = {eta!r}\n\n[radio]\n"))
     return str(p)
 
 
@@ -150,3 +150,33 @@ def test_a_datasheet_drone_flies_on_the_motor_model(tmp_path):
     c_light, c_heavy = motors_j(const, 0.0), motors_j(const, 0.05)
     assert light == pytest.approx(c_light, rel=0.02)        # same hover efficiency
     assert heavy / light > c_heavy / c_light + 0.02
+
+
+def test_a_payload_moves_the_motor_operating_point():
+    """Issue 30: a payload raises each motor's thrust, speed and torque; on the Matrice 600
+    Pro (motors sized for 15.5 kg) 6 kg more brings the motors nearer the load they are
+    sized for: the electrical power rises less than the (m g)^1.5 of momentum theory over
+    a constant efficiency would say, and more than the shaft power alone."""
+    d = fa.drone("dji-matrice-600-pro")
+    comp = _bound(d)
+    m0, m1 = d.mass_kg, d.mass_kg + 6.0
+    t0, t1 = (m * 9.81 / d.airframe.rotor_count for m in (m0, m1))
+    p0, p1 = _steady(comp, _usage(d, t0)), _steady(comp, _usage(d, t1))
+    s0, s1 = _shaft(comp, d, _usage(d, t0)), _shaft(comp, d, _usage(d, t1))
+    assert s1 / s0 == pytest.approx((m1 / m0) ** 1.5, rel=0.01)         # momentum theory
+    eta0, eta1 = s0 / p0, s1 / p1
+    assert eta1 != pytest.approx(eta0, rel=1e-3)                           # a new operating point
+    assert p1 / p0 == pytest.approx((s1 / s0) * (eta0 / eta1), rel=1e-9)
+    # the rotor turns faster: omega ~ sqrt(T)
+    assert math.sqrt(t1 / d.rotor.thrust_coeff) / math.sqrt(t0 / d.rotor.thrust_coeff) == pytest.approx(
+        math.sqrt(m1 / m0))
+
+
+def test_a_payload_shortens_the_flight_more_than_in_proportion_to_the_mass():
+    d0 = fa.drone("dji-matrice-100")
+    d1 = fa.drone("dji-matrice-100", payload_kg=1.0)
+    p = []
+    for d in (d0, d1):
+        comp = _bound(d)
+        p.append(_steady(comp, _usage(d, d.mass_kg * 9.81 / 4)))
+    assert p[1] / p[0] > d1.mass_kg / d0.mass_kg

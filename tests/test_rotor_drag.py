@@ -139,3 +139,19 @@ def test_the_energy_model_does_not_count_the_h_force_work_twice():
 def test_blade_drag_out_of_range_names_the_field():
     with pytest.raises(fa.ConfigError, match="blade_drag"):
         fa.drone("dji-mavic-2-pro", blade_drag=-0.01)
+
+
+@pytest.mark.parametrize("name", ["dji-mini-3-pro", "dji-mavic-2-pro-datasheet", "dji-matrice-600-pro"])
+def test_blade_drag_follows_the_section_drag_at_the_hover_reynolds_number(name):
+    """Issue 30: sigma C_d0 of a datasheet rotor is its solidity times the section drag at
+    its hover Reynolds number, laminar on a Mini (Re ~ 2.6e4), turbulent on the Matrice 600
+    Pro's 21 in rotor (Re ~ 1.6e5), where the H-force is larger than the laminar law gives."""
+    d = fa.drone(name)
+    ds = d.datasheet
+    sigma = 2 * datasheet.CHORD_RATIO / math.pi
+    assert d.rotor.blade_drag == pytest.approx(sigma * datasheet.section_drag(ds["reynolds_075"]))
+    laminar = sigma * datasheet.CD_REF * (ds["reynolds_075"] / datasheet.RE_REF) ** -0.5
+    if ds["reynolds_075"] > datasheet.RE_TURBULENT:
+        assert d.rotor.blade_drag > 1.05 * laminar
+    else:
+        assert d.rotor.blade_drag == pytest.approx(laminar)

@@ -1,7 +1,9 @@
-"""The datasheet-level blueprints of the issue-15 validation table (benchmarks/validation.py):
-each loads and validates, keeps to the global rules its header states, refuses a bad value
-with the field, and hovers stably for 10 s. The flights to depletion are in the benchmark."""
+"""The datasheet-level blueprints of the validation table (benchmarks/validation.py, issues 15
+and 30): each loads and validates, keeps to the global rules its header states, refuses a bad
+value with the field, and hovers stably for 10 s. The flights to depletion are in the
+benchmark."""
 
+import importlib.util
 import math
 from pathlib import Path
 
@@ -14,6 +16,18 @@ from pytest_flockai import ConfigError
 NEW = ["dji-mini-3-pro", "dji-air-2s", "dji-phantom-4-pro-v2", "dji-inspire-2", "dji-matrice-300-rtk"]
 RHO = 1.225
 BLUEPRINTS = Path(fa.__file__).parent / "airframe" / "blueprints"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _validation():
+    spec = importlib.util.spec_from_file_location("validation", ROOT / "benchmarks" / "validation.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+VALIDATION = _validation()
+DATASHEET = sorted({c[0] for c in VALIDATION.CASES if c[6] != VALIDATION.OUTSIDE})
 
 
 def test_new_blueprints_are_listed_and_span_sub_250_g_to_over_3_kg():
@@ -22,7 +36,27 @@ def test_new_blueprints_are_listed_and_span_sub_250_g_to_over_3_kg():
     assert min(masses) < 0.250 and max(masses) > 3.0
 
 
-@pytest.mark.parametrize("name", NEW + ["dji-mavic-2-pro-datasheet"])
+def test_the_validation_set_spans_80_g_to_15_kg_with_payload_tables_and_a_split():
+    """Issue 30: at least 25 drones and 50 rows, 80 g to 15 kg, six drones with payload rows,
+    every speed row a maker gives; at most half of the drones in the tuning half."""
+    cases = [c for c in VALIDATION.CASES if c[6] != VALIDATION.OUTSIDE]
+    assert len(cases) >= 50
+    airframe = {bp: bp.split("-tb")[0] for bp in DATASHEET}          # battery variants: one drone
+    drones = set(airframe.values())
+    assert len(drones) >= 25
+    masses = [fa.drone(bp).airframe.mass_kg + c[2] for c in cases for bp in [c[0]]]
+    assert min(masses) <= 0.080 and max(masses) >= 15.0
+    payload = {airframe[c[0]] for c in cases if c[2] > 0.0}
+    assert len(payload) >= 4 and len({airframe[c[0]] for c in cases if c[2] > 0.0 or "take-off" in c[4]}) >= 6
+    assert sum(c[1] is not None for c in cases) >= 10
+    tuning = {airframe[c[0]] for c in cases if c[6] == VALIDATION.TUNING}
+    held = {airframe[c[0]] for c in cases if c[6] == VALIDATION.HELD_OUT}
+    assert not tuning & held and len(tuning) <= len(drones) / 2
+    for c in cases:
+        assert c[5].startswith("http") or "manual" in c[5], c
+
+
+@pytest.mark.parametrize("name", DATASHEET)
 def test_blueprint_is_datasheet_level(name):
     """Issue 15, session 4: the validation blueprints give datasheet values only; the rotor
     coefficients and efficiencies come from airframe/datasheet.py, the same for every drone."""
@@ -38,10 +72,16 @@ def test_blueprint_is_datasheet_level(name):
     assert d.energy.component("motors").figure_of_merit == pytest.approx(ds["figure_of_merit"])
     assert d.energy.component("motors").motor_efficiency == pytest.approx(ds["motor_efficiency"])
     # no Kv on the datasheet: the design thrust-to-weight 2.5 sets the top rotor speed
-    assert d.thrust_to_weight_at(RHO) == pytest.approx(2.5, rel=0.01)
+    if "motor_kv =" not in text:
+        assert d.thrust_to_weight_at(RHO) == pytest.approx(2.5, rel=0.01)
+    # every datasheet figure carries its source on its line
+    body = text.split("\n[datasheet]\n")[1].split("\n[radio]\n")[0]
+    for line in body.splitlines():
+        if "=" in line and not line.startswith("#"):
+            assert "# spec" in line or "# props" in line or "# estimate" in line, (name, line)
 
 
-@pytest.mark.parametrize("name", NEW)
+@pytest.mark.parametrize("name", NEW + ["ryze-tello", "dji-spark", "dji-fpv", "dji-matrice-600-pro", "dji-s1000"])
 def test_blueprint_hovers_stably_for_10_s(name):
     r = fa.Mission(fa.drone(name), fa.pilots.Hover(altitude=5.0, duration=10.0), until=25.0,
                    return_home=False).run()

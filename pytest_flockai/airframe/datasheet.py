@@ -16,7 +16,9 @@ derived one ("fields a user knows better").
   Profile power sigma C_d / 8 with a section drag that falls with the blade's
   Reynolds number at 0.75 R in hover, C_d ~ Re^-1/2 (laminar skin friction,
   Blasius; the regime of small propellers, Lissaman, Annu. Rev. Fluid Mech. 15,
-  1983). The figure of merit follows: FM = C_T^1.5 / sqrt(2) / C_P.
+  1983) up to Re 1e5, C_d ~ Re^-1/5 above (turbulent skin friction: the rotors of
+  large drones; ``section_drag``). The figure of merit follows: FM = C_T^1.5 /
+  sqrt(2) / C_P.
 - Motor: the DC motor model (Kv, winding resistance Rm, no-load current I0),
   eta = Q omega / (V I) with I = Kt Q + I0, V = omega / Kv + I Rm, at hover (the energy
   model recomputes it at every operating point, energy/rotors.py Motors). Without Rm or
@@ -24,6 +26,8 @@ derived one ("fields a user knows better").
   motors of 18-360 g (Km = Kt / sqrt(Rm) ~ m^0.92, no-load loss ~ m^1.25 omega^1.5), for
   motors weighing MOTOR_MASS_SHARE of the take-off mass they are sized for.
 - Body: drag areas from the top speed, inertia from a box and rotor masses.
+- Avionics (flight controller, video link, camera, small sensors) by drone class
+  (``avionics``), unless the blueprint's ``[energy]`` gives a flight controller power.
 """
 
 from __future__ import annotations
@@ -59,6 +63,12 @@ KAPPA = 1.15
 CD_REF, RE_REF = 0.040, 6.0e4
 #: C_d ~ Re^CD_RE_EXP, laminar skin friction (Blasius: C_f = 1.328 Re^-1/2)
 CD_RE_EXP = -0.5
+#: above this blade Reynolds number the boundary layer is turbulent before it can separate
+#: laminar: the critical Reynolds number of thin cambered sections, 7e4-1e5 (McMasters and
+#: Henderson, "Low-speed single-element airfoil synthesis", Tech. Soaring 6, 1980; Lissaman
+#: 1983, fig. 1), and the drag follows turbulent skin friction, C_f = 0.074 Re^-1/5
+#: (Schlichting, Boundary-Layer Theory, ch. 21): 1e5 and -0.2 taken
+RE_TURBULENT, CD_RE_EXP_TURBULENT = 1.0e5, -0.2
 #: estimate: the motors of a multirotor weigh about 10 % of the take-off mass they are sized
 #: for (all motors; the maximum take-off mass where the maker publishes one)
 MOTOR_MASS_SHARE = 0.10
@@ -116,6 +126,16 @@ class Datasheet(Section):
     }
 
 
+def section_drag(reynolds, maximum=max):
+    """Profile drag coefficient of the blade section at ``reynolds`` (at 0.75 R): laminar
+    skin friction below RE_TURBULENT, turbulent above (the larger of the two laws, which
+    meet there). Pure arithmetic: ``maximum=numpy.maximum`` (or jax's) takes arrays."""
+    laminar = CD_REF * (reynolds / RE_REF) ** CD_RE_EXP
+    at_transition = CD_REF * (RE_TURBULENT / RE_REF) ** CD_RE_EXP
+    turbulent = at_transition * (reynolds / RE_TURBULENT) ** CD_RE_EXP_TURBULENT
+    return maximum(laminar, turbulent)
+
+
 def propeller(diameter_m: float, pitch_m: float, blades: int, reynolds: float | None = None):
     """Static (C_T, C_P, FM) in propeller form (T = C_T rho n^2 D^4, P = C_P rho n^3 D^5) of
     a propeller at blade Reynolds number ``reynolds`` (at 0.75 R; None: the anchor's)."""
@@ -124,7 +144,7 @@ def propeller(diameter_m: float, pitch_m: float, blades: int, reynolds: float | 
     ct = 0.01
     for _ in range(60):            # fixed point of C_T = (sigma a / 2)(theta/3 - sqrt(C_T/2)/2)
         ct = max(1e-6, 0.5 * sigma * LIFT_SLOPE * (theta / 3.0 - 0.5 * math.sqrt(0.5 * ct)))
-    cd = CD_REF * ((reynolds or RE_REF) / RE_REF) ** CD_RE_EXP
+    cd = section_drag(reynolds or RE_REF)
     ideal = ct ** 1.5 / math.sqrt(2.0)
     cp = KAPPA * ideal + sigma * cd / 8.0
     # helicopter (rho A (Omega R)^k) to propeller (rho n^k D^(k+2)) normalisation
@@ -219,7 +239,7 @@ def derive(ds: Section, pack_v: float) -> dict:
     eta, kv, rm, i0 = _motor(ds, mass, n, q_h, om_h, om_design, pack_v)
     om_max = _max_speed(ds, kq, kv, rm, i0, pack_v, om_h)
     re_h = 0.75 * om_h * 0.5 * D * CHORD_RATIO * 0.5 * D / NU_SEA_LEVEL
-    blade_drag = ds.prop_blades * CHORD_RATIO / math.pi * CD_REF * (re_h / RE_REF) ** CD_RE_EXP
+    blade_drag = ds.prop_blades * CHORD_RATIO / math.pi * section_drag(re_h)
     rotor = {"diameter_m": D, "thrust_coeff": kf, "torque_coeff": kq, "max_speed_rad_s": om_max,
              "time_constant_s": TAU_REF_S * D / TAU_REF_D, "blade_drag": blade_drag}
     energy = {"figure_of_merit": fm, "induced_power_factor": KAPPA, "motor_efficiency": eta,
@@ -235,6 +255,37 @@ def derive(ds: Section, pack_v: float) -> dict:
     return {"airframe": _body(ds, mass, n, h_top), "rotor": rotor, "energy": energy, "derived": derived}
 
 
+#: avionics by drone class, W: (largest take-off mass of the class in kg, flight controller
+#: with its IMU, barometer, compass and GNSS receiver, video downlink, camera and gimbal)
+#: - toy (Ryze Tello class, up to 100 g): flight controller MCU 0.3 W (STM32F4 class: under
+#:   100 mA at 3.3 V, ST STM32F405 datasheet); 2.4 GHz 802.11n video link 0.8 W (the idle
+#:   802.11 power of Feeney and Nilsson, IEEE INFOCOM 2001, as the radio model); a vision
+#:   processor 1 W (Intel Movidius Myriad 2 product brief: 1 W) and a 720p camera 0.5 W
+#:   (estimate) counted as the camera;
+#: - sub-250 g (DJI Mini class): flight controller 1.0 W (estimate: an STM32-class MCU,
+#:   IMU, barometer and GNSS receiver, 0.3 + 0.15 + 0.5 W), video link 0.8 W (as above),
+#:   a 1/2.3-1/1.3 in camera with a 3-axis gimbal 1.5 W (estimate);
+#: - larger drones: the figures the issue-15 blueprints used (flight controller 2.5 W, the
+#:   generic autopilot of generic-hexa-680.toml; camera and gimbal at idle video 2.0 W;
+#:   video link 0.8 W).
+#: Estimates where not cited; they are 2-10 % of a small drone's power and under 2 % of a
+#: drone over 1 kg.
+AVIONICS_CLASSES = ((0.100, 0.3, 0.8, 1.5), (0.250, 1.0, 0.8, 1.5), (math.inf, 2.5, 0.8, 2.0))
+#: W: storage and buses, and the four small sensors of every blueprint (u-blox M8 GNSS 0.15 W,
+#: Bosch BMI088 IMU 0.02 W, magnetometer 0.01 W, BMP388 barometer 0.005 W: their datasheets)
+IO_W = 0.3
+SMALL_SENSORS_W = {"gps": 0.15, "imu": 0.02, "compass": 0.01, "barometer": 0.005}
+
+
+def avionics(mass_kg: float) -> dict:
+    """The ``[energy]`` avionics (flight controller, I/O, sensors, camera, video link) of a
+    drone of ``mass_kg`` take-off mass, by class (AVIONICS_CLASSES)."""
+    _, fc, link, camera = next(c for c in AVIONICS_CLASSES if mass_kg <= c[0])
+    io = IO_W if mass_kg > AVIONICS_CLASSES[0][0] else 0.0
+    return {"flight_controller_w": fc, "io_w": io,
+            "sensors": {"camera": camera, "video_link": link, **SMALL_SENSORS_W}}
+
+
 def expand(data: dict, where: str) -> tuple[dict, dict | None]:
     """A blueprint dict with its ``[datasheet]`` expanded into the simulator's tables (the
     blueprint's own values win); returns (blueprint dict, derived figures or None)."""
@@ -247,6 +298,8 @@ def expand(data: dict, where: str) -> tuple[dict, dict | None]:
     pack_v = _pack_voltage(data.get("battery"), where)
     out = derive(ds, pack_v)
     merged = {k: v for k, v in data.items() if k != "datasheet"}
+    if "flight_controller_w" not in data.get("energy", {}):
+        out["energy"].update(avionics(ds.mass_kg))
     for sec in ("airframe", "rotor", "energy"):
         own = data.get(sec, {})
         if not isinstance(own, dict):

@@ -23,13 +23,48 @@ costs more than the arithmetic (see benchmarks/flight_core.py).
 
 from __future__ import annotations
 
+import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-from ..physics import G, RHO_SEA_LEVEL
+from ..physics import RHO_SEA_LEVEL, G
 
 CASCADE_RATIO = 3.0
+
+
+class ControllerParams(NamedTuple):
+    """A controller's gains and limits as numbers (``CascadedController.batch_params``)."""
+
+    mass: float
+    J: np.ndarray
+    fmax: float
+    k_rate: float
+    k_att: float
+    k_yaw_rate: float
+    k_yaw: float
+    k_vel: float
+    k_vel_i: float
+    k_pos: float
+    tan_tilt: float
+    a_up: float
+    a_down: float
+    i_lim_h: float
+    i_lim_z: float
+    kd_h: float
+    kd_v: float
+    B: np.ndarray
+
+
+@functools.lru_cache(maxsize=256)
+def allocation(layout: tuple, k: float) -> list:
+    """The mixer: the pseudo-inverse of [T, tau_x, tau_y, tau_z] = A f for rotors at
+    ``layout`` ((x, y, spin) each) with torque/thrust ratio ``k``, as rows of floats
+    (cached: a sweep builds a controller per variant on the same layout)."""
+    A = np.array([[1.0] * len(layout), [y for _, y, _ in layout], [-x for x, _, _ in layout],
+                  [-s * k for _, _, s in layout]])
+    return [tuple(float(v) for v in row) for row in np.linalg.pinv(A)]
 
 
 class CascadedController:
@@ -67,15 +102,21 @@ class CascadedController:
         # allocation: [T, tau_x, tau_y, tau_z] = A f
         k = rot.torque_coeff / rot.thrust_coeff
         lay = drone.rotor_layout()
-        A = np.array([[1.0] * n, [y for _, y, _ in lay], [-x for x, _, _ in lay],
-                      [-s * k for _, _, s in lay]])
-        B = np.linalg.pinv(A)
-        self.B = [tuple(float(v) for v in row) for row in B]
+        self.B = list(allocation(tuple(tuple(r) for r in lay), k))
         self.gains = {"k_rate": self.k_rate, "k_att": self.k_att, "k_yaw_rate": self.k_yaw_rate,
                       "k_yaw": self.k_yaw, "k_vel": self.k_vel, "k_vel_i": self.k_vel_i,
                       "k_pos": self.k_pos, "max_tilt_rad": self.max_tilt}
         self.f = [0.0] * n
         self.reset()
+
+    def batch_params(self) -> ControllerParams:
+        """The gains, limits and allocation, for the batched backend's controller."""
+        return ControllerParams(
+            mass=self.mass, J=np.asarray(self.J, dtype=float), fmax=self.fmax, k_rate=self.k_rate,
+            k_att=self.k_att, k_yaw_rate=self.k_yaw_rate, k_yaw=self.k_yaw, k_vel=self.k_vel,
+            k_vel_i=self.k_vel_i, k_pos=self.k_pos, tan_tilt=self.tan_tilt, a_up=self.a_up,
+            a_down=self.a_down, i_lim_h=self.i_lim_h, i_lim_z=self.i_lim_z, kd_h=self.kd_h,
+            kd_v=self.kd_v, B=np.asarray(self.B, dtype=float))
 
     def reset(self):
         self.ix = self.iy = self.iz = 0.0

@@ -89,6 +89,20 @@ class StageMachine(Clocked):
         """Leave the pilot's plan now: return home (if away) and land."""
         self._after_pilot(t, force_home=True)
 
+    def replace_pilot(self, t: float, pilot) -> None:
+        """Fly ``pilot`` from now on, from where the drone is (a policy's new plan; during
+        the pilot stage, or on the way home: then the pilot stage starts again)."""
+        qc = self.st.qc
+        if self.st.stage == RETURN:
+            self.st.stage = PILOT
+            self.events.add(t, "stage", stage="pilot")
+        self.pilot, self._pupdate = pilot, pilot.update
+        pilot.start(t, (qc[0], qc[1], qc[2]), self.accel)
+
+    def land_here(self, t: float) -> None:
+        """Leave the plan now and land straight down."""
+        self._land(t)
+
     def _climbed(self, t) -> bool:
         """Whether the drone rose enough to start the pilot's plan; ends the flight
         "takeoff_failed" once it lagged ``CLIMB_GRACE_S`` past its climb leg."""
@@ -114,7 +128,10 @@ class StageMachine(Clocked):
         s = self.st
         s.stage = PILOT
         qc, vc = s.qc, s.vc
-        self.pilot.start(t, (qc[0], qc[1], qc[2]), self.accel)
+        # the pilot starts over the take-off point (the climb's setpoint), not where a wind
+        # pushed the drone during the climb: an autopilot holds the pad's position
+        sp = s.sp
+        self.pilot.start(t, (sp[0], sp[1], qc[2]), self.accel)
         self.events.add(t, "stage", stage="pilot")
         self._pupdate(t, (qc[0], qc[1], qc[2], vc[0], vc[1], vc[2]), s.sp)
 

@@ -9,6 +9,18 @@ from __future__ import annotations
 
 import math
 
+from .._xp import MATH
+
+
+def leg_timing(length, speed, accel, xp=MATH):
+    """(cruise speed, t_acc, s_acc, t_cruise, duration) of a trapezoidal leg of ``length``
+    > 0 (triangular when too short to reach ``speed``)."""
+    v = xp.minimum(speed, xp.sqrt(length * accel))
+    t_acc = v / accel
+    s_acc = 0.5 * accel * t_acc ** 2
+    t_cruise = (length - 2.0 * s_acc) / v
+    return v, t_acc, s_acc, t_cruise, 2.0 * t_acc + t_cruise
+
 
 class Leg:
     __slots__ = ("p0", "p1", "u", "length", "v", "a", "t_acc", "t_cruise", "duration", "s_acc")
@@ -25,12 +37,7 @@ class Leg:
             self.v = 0.0
             self.t_acc = self.t_cruise = self.duration = self.s_acc = 0.0
             return
-        v = min(speed, math.sqrt(L * accel))       # triangular when too short to cruise
-        self.v = v
-        self.t_acc = v / accel
-        self.s_acc = 0.5 * accel * self.t_acc ** 2
-        self.t_cruise = (L - 2.0 * self.s_acc) / v
-        self.duration = 2.0 * self.t_acc + self.t_cruise
+        self.v, self.t_acc, self.s_acc, self.t_cruise, self.duration = leg_timing(L, speed, accel)
 
     def fill(self, t: float, sp) -> None:
         """Write the reference at time t (s since the leg began) into sp[0:9]."""

@@ -37,7 +37,11 @@ or at once when the load asks for more power than the pack can give.
 
 from __future__ import annotations
 
+import functools
 import math
+from typing import NamedTuple
+
+from .._xp import MATH
 
 CHEMISTRIES = ("lipo", "li-ion")
 
@@ -57,19 +61,50 @@ SPECIFIC_RESISTANCE_OHM_AH = 0.03
 CUTOFF_HOLD_S = 1.0
 
 
+def ocv_lipo(s, xp=MATH):
+    """Open-circuit voltage of one LiPo cell (V) at state of charge ``s`` (Chen and Rincon-Mora)."""
+    return -1.031 * xp.exp(-35.0 * s) + 3.685 + s * (0.2156 + s * (-0.1178 + s * 0.3201))
+
+
+def ocv_liion(s, xp=MATH):
+    """Open-circuit voltage of one Li-ion cell (V) at state of charge ``s`` (Tremblay et al.)."""
+    s = xp.maximum(s, 1e-3)
+    return 3.7348 - 0.00876 / s + 0.468 * xp.exp(-3.5294 * (1.0 - s))
+
+
 def ocv(chemistry: str, s: float) -> float:
     """Open-circuit voltage of one cell (V) at state of charge ``s``."""
-    if chemistry == "lipo":
-        return -1.031 * math.exp(-35.0 * s) + 3.685 + s * (0.2156 + s * (-0.1178 + s * 0.3201))
-    s = max(s, 1e-3)
-    return 3.7348 - 0.00876 / s + 0.468 * math.exp(-3.5294 * (1.0 - s))
+    return ocv_lipo(s) if chemistry == "lipo" else ocv_liion(s)
 
 
-def resistance_shape(s: float) -> float:
+def resistance_shape(s, xp=MATH):
     """R(s) / R(0.5): Chen and Rincon-Mora's series resistance, normalised at half charge."""
-    return (0.07446 + 0.1562 * math.exp(-24.37 * s)) / (0.07446 + 0.1562 * math.exp(-12.185))
+    return (0.07446 + 0.1562 * xp.exp(-24.37 * s)) / (0.07446 + 0.1562 * math.exp(-12.185))
 
 
+def terminal_current(e, r, power_w, xp=MATH):
+    """(current I, over) drawn from a source ``e`` behind ``r`` by a load of ``power_w``:
+    I = (e - sqrt(e^2 - 4 r P)) / 2r; ``over`` where P is beyond the pack's maximum
+    power (then I = e / 2r, the current of that maximum)."""
+    disc = e * e - 4.0 * r * power_w
+    over = disc < 0.0
+    i = xp.where(over, e / (2.0 * r), xp.where(
+        power_w > 0.0, (e - xp.sqrt(xp.maximum(disc, 0.0))) / (2.0 * r), 0.0))
+    return i, over
+
+
+class BatteryParams(NamedTuple):
+    """A pack's circuit as numbers (``Circuit.batch_params``): what the batched backend flies."""
+
+    lipo: bool
+    cells: float
+    q_c: float
+    r_mid: float
+    v_cut: float
+    v0: float
+
+
+@functools.lru_cache(maxsize=512)
 def usable_energy_j(chemistry: str, cells: int, capacity_ah: float, floor: float, n: int = 400) -> float:
     """Chemical energy (J) between full charge and the floor: cells x Q x integral of OCV ds."""
     h = (1.0 - floor) / n
@@ -99,18 +134,20 @@ class Circuit:
         self.v_min = self.voltage_v
         self._below_s = 0.0
 
+    def batch_params(self) -> BatteryParams:
+        """The circuit's constants, for the batched backend (the state starts full)."""
+        return BatteryParams(lipo=self.chemistry == "lipo", cells=float(self.cells), q_c=self.q_c,
+                             r_mid=self.r_mid, v_cut=self.v_cut, v0=self.cells * ocv(self.chemistry, 1.0))
+
     def open_circuit_v(self) -> float:
         return self.cells * ocv(self.chemistry, self.soc)
 
     def draw(self, power_w: float, dt: float) -> float:
         e = self.open_circuit_v()
         r = self.r_mid * resistance_shape(self.soc)
-        disc = e * e - 4.0 * r * power_w
-        if disc < 0.0:                 # beyond the pack's maximum power (at I = E / 2R)
+        i, over = terminal_current(e, r, power_w)
+        if over:                       # beyond the pack's maximum power (at I = E / 2R)
             self.cutoff = True
-            i = e / (2.0 * r)
-        else:
-            i = (e - math.sqrt(disc)) / (2.0 * r) if power_w > 0.0 else 0.0
         v = e - i * r
         self.current_a, self.voltage_v = i, v
         if v < self.v_min:

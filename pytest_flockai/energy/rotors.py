@@ -8,10 +8,13 @@ component interface.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
+
+import numpy as np
 
 from .. import _check
 from ..errors import ConfigError
-from ..physics import G, RHO_SEA_LEVEL
+from ..physics import RHO_SEA_LEVEL, G
 from .components import Component
 
 
@@ -48,6 +51,11 @@ class HoverPower(Component):
         area = drone.airframe.rotor_count * drone.rotor.disc_area_m2
         self._p = (drone.mass_kg * G) ** 1.5 / math.sqrt(2.0 * self._rho_air * area) / eta
 
+    @property
+    def airborne_power_w(self) -> float:
+        """The bound hover power (W), drawn while airborne."""
+        return self._p
+
     def power(self, u):
         return self._p if u.airborne else 0.0
 
@@ -80,8 +88,46 @@ def _descent_inflow(v_glauert: float, vax: float, vpar2: float, vh: float) -> fl
     return v if v > v_glauert else v_glauert
 
 
+def wake_immersion(distance_m, sink_m_s, vpar_m_s, diameter_m, maximum=max, minimum=min):
+    """Share of the fore rotor's wake an aft rotor ``distance_m`` behind it ingests.
+
+    The wake leaves the fore disc skewed back by the in-plane airspeed V_par and sinks at
+    V_ax + v_i (``sink_m_s``) relative to the rotor plane: by the aft rotor its centre lies
+    h = L (V_ax + v_i) / V_par below the aft disc (the wake skew angle chi, tan chi =
+    V_par / (V_ax + v_i), Leishman 2006 sec. 5.4), and the aft disc sits in it in proportion
+    to 1 - h / D: fully when the wake is flat (fast flight), not at all once it passes a
+    diameter below (slow flight, where the wake falls clear). Geometry, no fitted constant.
+    Pure arithmetic: ``maximum``/``minimum`` = numpy's (or jax's) take arrays."""
+    depth = distance_m * maximum(sink_m_s, 0.0) / maximum(vpar_m_s, 1e-9)
+    return maximum(0.0, minimum(1.0, 1.0 - depth / diameter_m))
+
+
 #: the DC motor model's fields of ``Motors`` (and of a blueprint's ``[energy]`` table)
 MOTOR_FIELDS = ("motor_kv_rpm_v", "motor_rm_ohm", "motor_i0_a", "motor_i0_rad_s")
+
+
+class MotorParams(NamedTuple):
+    """A bound ``Motors``' coefficients as numbers (``Motors.batch_params``); ``dirs`` and
+    ``vi0`` per rotor; ``model``: the DC motor model (else ``inv_eta``, a constant)."""
+
+    inv2rhoA: float
+    c0: float
+    R: float
+    inv_kf: float
+    inv_eta: float
+    hk: float
+    kappa: float
+    wake: float
+    dirs: np.ndarray
+    vi0: np.ndarray
+    model: bool
+    esc: float
+    kv: float
+    rm: float
+    i0: float
+    inv_w0: float
+    D: float = 1.0         # rotor diameter, and an aft rotor's distance behind per unit
+    L2: float = 0.0        # weight (``wake_immersion``); the defaults: no motors
 
 
 class Motors(Component):
@@ -98,8 +144,10 @@ class Motors(Component):
       vortex-ring state, where momentum theory does not hold, the empirical
       curve of ``_descent_inflow``;
     - induced power kappa T v_i, plus, for aft rotors, the share
-      ``wake_interference`` of the fore rotors' wake they ingest, growing with
-      the square of the wake skew sin(chi) = V_par / sqrt(V_par^2 + (V_ax + v_i)^2);
+      ``wake_interference`` of the fore rotors' wake they ingest, in proportion to how
+      deep the aft disc sits in that wake (``wake_immersion``: the wake sinks at
+      V_ax + v_i while it travels the rotor spacing at V_par; none at low speed, where
+      it falls clear below the aft rotors, all of it once the wake is flat);
     - climb and drag power T V_ax (the tilted disc's propulsive power equals body
       drag times airspeed, so parasitic power comes out of the simulated tilt);
     - profile power c0 T^1.5 (1 + 4.65 mu^2), mu = V_par / (Omega R) (Leishman
@@ -168,6 +216,8 @@ class Motors(Component):
         self._inv2rhoA = 1.0 / (2.0 * rho * A)
         self._c0 = (1.0 / self.figure_of_merit - self.induced_power_factor) / math.sqrt(2.0 * rho * A)
         self._R = 0.5 * drone.rotor.diameter_m
+        self._D = drone.rotor.diameter_m
+        self._L2 = 2.0 * drone.airframe.arm_length_m   # an aft rotor's distance behind: L2 x weight
         self._hk = 0.25 * drone.rotor.blade_drag * rho * A      # H V_par / ((Omega R)^3 mu^2)
         self._inv_kf = RHO_SEA_LEVEL / (drone.rotor.thrust_coeff * rho)   # kf is given at sea level
         self._inv_eta = 1.0 / (self.motor_efficiency * self.esc_efficiency)
@@ -243,20 +293,23 @@ class Motors(Component):
                 shaft[i] = kappa * T * v + T * vax + p0
                 omega[i] = omega_r / R
         if self.wake_interference > 0.0 and vpar > 0.1 and wake_vi > 0.0:
-            # aft rotors ingest the fore rotors' wake, skewed back by V_par
+            # aft rotors ingest the fore rotors' wake, skewed back by V_par and sinking below
+            # them as it goes: immersed by wake_immersion() of their distance behind
             n = self._n
             hx, hy = vx / vpar, vy / vpar
             vi_mean = wake_vi / n
-            skew = vpar / math.sqrt(vpar2 + (vax + vi_mean) ** 2)
-            skew *= skew    # the skewed wake reaches the aft rotors only as it flattens
             ws = [max(0.0, -(dx * hx + dy * hy)) for dx, dy in self._dirs]
             tot = sum(ws)
             if tot > 0.0:
-                scale = self.wake_interference * vi_mean * skew * (0.5 * n) / tot
-                induced += sum([w * thrust[i] for i, w in enumerate(ws)]) * scale
-                if motor:
-                    for i, w in enumerate(ws):
-                        shaft[i] += w * thrust[i] * scale
+                scale = self.wake_interference * vi_mean * (0.5 * n) / tot
+                sink, span = vax + vi_mean, self._D
+                for i, w in enumerate(ws):
+                    if w > 0.0:
+                        extra = w * thrust[i] * scale * wake_immersion(
+                            self._L2 * w, sink, vpar, span)
+                        induced += extra
+                        if motor:
+                            shaft[i] += extra
         inv_eta = self._inv_eta
         mech_axial = axial
         total = induced + profile + mech_axial
@@ -268,6 +321,18 @@ class Motors(Component):
 
     def power(self, u):
         return sum(self.power_parts(u))
+
+    def batch_params(self) -> MotorParams:
+        """The bound coefficients, for the batched backend (after ``bind``)."""
+        return MotorParams(
+            inv2rhoA=self._inv2rhoA, c0=self._c0, R=self._R, inv_kf=self._inv_kf,
+            inv_eta=self._inv_eta, hk=self._hk, kappa=self.induced_power_factor,
+            wake=self.wake_interference, dirs=np.asarray(self._dirs, dtype=float),
+            vi0=np.asarray(self._vi, dtype=float), model=self._kv is not None,
+            esc=self.esc_efficiency, kv=self._kv or 1.0, rm=self.motor_rm_ohm or 0.0,
+            i0=self.motor_i0_a or 0.0,
+            inv_w0=1.0 / self.motor_i0_rad_s if self.motor_i0_rad_s else 0.0,
+            D=self._D, L2=self._L2)
 
     def params(self):
         out = {k: getattr(self, k) for k in ("figure_of_merit", "induced_power_factor",

@@ -41,7 +41,7 @@ class FleetDrone:
     where it stands on the ground, takes off and lands."""
 
     def __init__(self, name: str, drone: Drone, pilot: Pilot, pad=(0.0, 0.0), *, tasks=(),
-                 seed: int = 0, probes=None):
+                 seed: int = 0, probes=None, policies=()):
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "./ "):
             raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; expected a non-empty "
                               f"str without '.', '/' or spaces (it prefixes the drone's KPIs)")
@@ -70,11 +70,13 @@ class FleetDrone:
         self.name, self.drone, self.pilot = name, drone, pilot
         self.pad = _check.vector("pad", pad, 2, where=f"FleetDrone {name!r}")
         self.tasks, self.seed, self.probes = tuple(tasks or ()), seed, probes
+        self.policies = tuple(policies or ())       # checked by the drone's Mission
 
     def to_dict(self) -> dict:
         return {"name": self.name, "drone": self.drone.name, "pilot": self.pilot.to_dict(),
                 "pad": list(self.pad), "seed": self.seed,
-                "tasks": [tk.to_dict() for tk in self.tasks]}
+                "tasks": [tk.to_dict() for tk in self.tasks],
+                **({"policies": [p.to_dict() for p in self.policies]} if self.policies else {})}
 
     def __repr__(self):
         return f"FleetDrone({self.name!r}, {self.drone.name!r}, pad={self.pad})"
@@ -90,12 +92,14 @@ class Fleet:
     else one per drone) and one ground device, each a FIFO queue.
     ``area`` = ((x0, y0), (x1, y1)) and ``swath_m`` (the ground width one pass
     covers) give ``fleet.coverage_fraction``; ``until`` and ``max_time_s`` are
-    the Mission's, for every drone."""
+    the Mission's, for every drone. ``actors``: people and cars moving through the
+    world, seen by every drone; each drone's ``policies`` are its own (a
+    ``fa.policy.SharedSearch`` per drone with one ``GroundStation``: a search together)."""
 
     def __init__(self, drones, world=None, *, until="landed", max_time_s: float = 4 * 3600.0,
                  telemetry_hz: float = 10.0, area=None, swath_m: float | None = None,
                  name: str | None = None, offload: Offload | None = None,
-                 shared_link: bool = True):
+                 shared_link: bool = True, actors=()):
         try:
             drones = list(drones)
         except TypeError:
@@ -130,7 +134,8 @@ class Fleet:
                               f"fleet.coverage_fraction) or neither")
         self.missions = [Mission(fd.drone, fd.pilot, world, tasks=fd.tasks, probes=fd.probes,
                                  seed=fd.seed, until=until, max_time_s=max_time_s,
-                                 telemetry_hz=telemetry_hz, name=fd.name) for fd in drones]
+                                 telemetry_hz=telemetry_hz, name=fd.name, policies=fd.policies,
+                                 actors=actors) for fd in drones]
         self.seed = tuple(fd.seed for fd in drones)
         self._plans()
 

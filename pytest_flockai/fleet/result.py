@@ -27,6 +27,7 @@ import pandas as pd
 from .. import notebook as _notebook
 from ..control.stages import TAKEOFF
 from ..mission import collect
+from ..policy.together import stations
 from ..result import FlightResult
 from .offload import ground_kpis
 
@@ -62,6 +63,8 @@ def build(fleet, runs, stats: dict, wall_s: float) -> FleetResult:
     tel = pd.concat([res.telemetry.assign(drone=name) for name, res in drones.items()])
     tel = tel.sort_index(kind="stable")
     kpis.update(fleet_kpis(fleet, drones, stats, ends, tel))
+    for station in stations(runs):              # a search together (fa.policy.SharedSearch)
+        kpis.update(station.kpis())
     events = sorted(({**e, "drone": name} for name, res in drones.items() for e in res.events),
                     key=lambda e: e["t"])
     energy = {f"{name}.{k}": v for name, res in drones.items()

@@ -32,6 +32,7 @@ from ..probes.hub import ProbeHub, RunView
 from ..probes.telemetry import TelemetryRecorder, TelemetryStep
 from ..sensors import GPS, IMU, Barometer, BatterySensor, Camera, Compass, Rangefinder, SensorSuite
 from ..sensors.base import Sensing
+from ..world.actors import ActorSet
 from ..world.wind import WindStep
 from . import parts
 from .book import FlightBook
@@ -158,6 +159,8 @@ def flight_model(plans, prefixes, pads, suites, name=None) -> mujoco.MjModel:
             add_drone(spec, plan.drone, rho=plan.atmosphere.density, prefix=prefix, pos=pad,
                       visual=visual)
             suite.add_to_spec(spec, f"{prefix}drone")
+        if p0.actors:                  # people and cars walking, markers (a single flight's)
+            ActorSet(p0.actors).add_to_spec(spec)
 
     return model_cache.compiled(name or p0.drone.name, p0.world, add_drones,
                                 physics_dt=p0.physics_dt, rho=p0.atmosphere.density)
@@ -189,6 +192,12 @@ class Run:
                         world=plan.world, battery=lambda: st.battery_remaining)
         self.controller = parts.controller(plan)
         self.meter = parts.meter(plan)
+        self.actors = ActorSet(plan.actors) if plan.actors else None
+        if self.actors is not None:
+            self.actors.bind(self.model)       # their geoms: added by flight_model
+        for sensor in self.suite:
+            if hasattr(sensor, "bind_actors"):
+                sensor.bind_actors(self.actors)        # None: no actors in this flight
         self.components = self._components(plan, subscribers, probes)
         # the task scheduler reads the camera, which renders the whole MjData
         self.scheduler.data = slot.data
@@ -237,6 +246,10 @@ class Run:
         for c in plan.components:
             c.bind(self)
             comps.append(c)
+        self.policies = [copy.copy(p) for p in plan.policies]   # per-flight state on the copy
+        for p in self.policies:
+            p.bind(self)
+            comps.append(p)
         if plan.max_wall_s is not None:
             guard = WallClockGuard(plan.max_wall_s)
             guard.bind(self)

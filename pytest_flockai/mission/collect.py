@@ -20,6 +20,8 @@ def flight_result(run, mission, wall_s: float, t_final: float, end_reason: str) 
     stage = DONE if st.t_land else PILOT
     kpis = run.probing.final(t_final, d.qpos.tolist(), d.qvel.tolist(), stage)
     kpis.update(run.scheduler.evaluation_kpis())
+    for p in getattr(run, "policies", ()):
+        kpis.update(p.kpis(run))
     kpis.update(run.scheduler.energy_kpis(run.meter))
     frames = run.hub.frames()
     _merge_probe_columns(tel, frames)

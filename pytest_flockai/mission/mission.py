@@ -28,10 +28,12 @@ from ..recording import publish
 from ..result import FlightResult
 from ..sensors import Conditions
 from ..world import World
+from ..world.actors import check_actors
 from ..world.wind import Wind
 from . import collect, loop
 from .assemble import Flight
-from .plan import check_components, check_sensors, check_tasks, check_until, resolve
+from .plan import (check_components, check_policies, check_sensors, check_tasks, check_until,
+                   resolve)
 from .plan import computers as _computers
 
 
@@ -48,6 +50,9 @@ class Mission:
     max_wall_s: seconds of host time after which the flight is stopped with a
     ``SimulationError`` (``end_reason`` ``"wall_time"``) carrying the partial
     result in ``.result`` (None: no limit).
+    policies: ``fa.Policy`` objects that decide during the flight from what the
+    drone knows (``fa.policy``: Rule, Follow, SearchThenOrbit, your own).
+    actors: people and cars moving through the world (``fa.actors.Person``, ``Car``).
     """
 
     def __init__(self, drone: Drone, pilot: Pilot, world=None, tasks=(), probes=None, wind=None,
@@ -57,7 +62,7 @@ class Mission:
                  dataset_dir=None, dataset_period_s: float = 1.0,
                  climb_speed: float = 2.0, descent_speed: float = 1.0, name: str | None = None,
                  components=(), conditions: Conditions | None = None, atmosphere=None,
-                 max_wall_s: float | None = None):
+                 max_wall_s: float | None = None, policies=(), actors=()):
         if not isinstance(drone, Drone):
             raise ConfigError(f"Mission: drone = {drone!r} is not a Drone; use fa.drone(name)")
         if not isinstance(pilot, Pilot):
@@ -107,6 +112,8 @@ class Mission:
         self.atmosphere = atmosphere
         self.max_wall_s = (None if max_wall_s is None
                            else _check.positive("max_wall_s", max_wall_s, where="Mission"))
+        self.actors = check_actors(actors, world)
+        self.policies = check_policies(policies, self)
         resolve(self)
 
     def subscribe(self, target) -> "Mission":
@@ -131,6 +138,8 @@ class Mission:
             **({"components": [c.to_dict() for c in self.components]} if self.components else {}),
             **({"conditions": self.conditions.to_dict()} if self.conditions is not None else {}),
             **({"atmosphere": self.atmosphere.to_dict()} if self.atmosphere is not None else {}),
+            **({"policies": [p.to_dict() for p in self.policies]} if self.policies else {}),
+            **({"actors": [a.to_dict() for a in self.actors]} if self.actors else {}),
         }
 
     def __repr__(self):

@@ -23,6 +23,7 @@ from ..compute import device as _device
 from ..control.pilots import Pilot
 from ..errors import ConfigError
 from ..ml import Task
+from ..policy import Policy, register_kpis
 from ..probes.builtin import BUILTIN
 from ..sensors import Sensor
 from ..world.atmosphere import Atmosphere
@@ -66,6 +67,8 @@ class FlightPlan:
     conditions: object = None  # sensors.Conditions for the blueprint's camera
     atmosphere: Atmosphere = Atmosphere()   # the air: density for thrust, drag and power
     max_wall_s: float | None = None  # s of host time before the flight is stopped
+    policies: tuple = ()      # fa.Policy objects (copied per flight)
+    actors: tuple = ()        # fa.actors.Person / Car moving through the world
 
     @property
     def use_reserve(self) -> bool:
@@ -172,6 +175,27 @@ def check_components(components) -> tuple:
     return components
 
 
+def check_policies(policies, mission) -> tuple:
+    """The policies as a tuple: each a ``Policy`` with its own name, checked against
+    the mission (the tasks, signals and actors it names); their KPIs registered."""
+    try:
+        policies = tuple(policies or ())
+    except TypeError:
+        raise ConfigError(f"Mission: policies = {policies!r} is not a list of fa.Policy") from None
+    names: set = set()
+    for i, p in enumerate(policies):
+        if not isinstance(p, Policy):
+            raise ConfigError(f"Mission: policies[{i}] = {p!r} is not a Policy; use fa.policy.Rule, "
+                              f"Follow, SearchThenOrbit or subclass fa.Policy")
+        if p.name in names:
+            raise ConfigError(f"Mission: two policies are named {p.name!r}; give them name=... "
+                              f"(policy names prefix their KPIs)")
+        names.add(p.name)
+        p.check(mission)
+        register_kpis(p.name, p.modes)
+    return policies
+
+
 def onboard_device(tasks, drone):
     """The computer the on-board tasks run on: the one they name, else the drone's own."""
     for tk in tasks:
@@ -217,4 +241,5 @@ def resolve(m) -> FlightPlan:
         climb_speed=m.climb_speed, descent_speed=m.descent_speed, return_home=m.return_home,
         fly_on=m.fly_on, dataset_dir=m.dataset_dir, dataset_period_s=m.dataset_period_s,
         onboard_device=onboard_device(tasks, drone), conditions=m.conditions, atmosphere=atmosphere,
-        max_wall_s=getattr(m, "max_wall_s", None))
+        max_wall_s=getattr(m, "max_wall_s", None), policies=tuple(getattr(m, "policies", ())),
+        actors=tuple(getattr(m, "actors", ())))

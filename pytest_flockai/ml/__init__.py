@@ -8,6 +8,8 @@
 - ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
   into one shape; ``evaluation``: COCO detection metrics and classification;
 - ``count_macs``: MACs and parameters of an ONNX graph;
+- ``Oracle``: the frame's truth boxes as detections (optionally degraded), no pixels;
+  ``MarkerDetector``: ArUco markers through OpenCV;
 - ``evaluate_dataset``: a task's model over a labelled folder, each image once,
   offline; ``analyse``: PR curves, per-class AP, confusion matrix, F1-best
   threshold from COCOeval's arrays;
@@ -18,6 +20,8 @@
 from .macs import MacReport, count_macs
 from .metrics import count_of, crowd_metrics
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
+from .fiducial import MarkerDetector
+from .oracle import Oracle, OracleFrame
 from .detections import Detections, parse_detections
 from .evaluation import FrameRecord
 from .analysis import analyse, write_coco_pair
@@ -32,6 +36,7 @@ from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Temp
 __all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detections", "Detector",
            "DeviceClock", "SHIPPED", "analyse", "compare_models", "evaluate_dataset", "shipped", "shipped_path",
            "write_coco_pair",
-           "FrameRecord", "InferenceEvent", "MacReport", "Model", "OnnxModel", "OpenCVModel",
+           "FrameRecord", "InferenceEvent", "MacReport", "MarkerDetector", "Model", "OnnxModel",
+           "OpenCVModel", "Oracle", "OracleFrame",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
            "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]

@@ -295,8 +295,7 @@ class TaskRunner:
         free = done + self._update(task.model, frame, done)
         count = self.scorer.count(pred, idx, frame) if err is None else None
         err = err or invalid_prediction(pred, count, task, self.scorer.parse_error)
-        tx = 0
-        alert = False
+        tx, alert = 0, False
         if err is None:
             d = float(np.linalg.norm(pos - np.asarray(task.ground_station)))
             if (task.alert == "frame" and count is not None and count >= task.crowd_threshold
@@ -310,6 +309,7 @@ class TaskRunner:
             tr = self.link.transfer(n, d, self.rng, direction="up")
             self._radio_rec(free, tr, "up")
             tx = tr.payload_bytes
+        done += float(getattr(task.model, "delay_s", 0.0) or 0.0)   # an oracle's delay
         ev = InferenceEvent(task=task.name, frame_index=idx, t_capture=t, t_start=start, t_done=done,
                             latency_s=done - t, compute_s=compute, prediction=pred, count=count,
                             truth_count=tc, ok=err is None, error=err, tx_bytes=tx, rx_bytes=0,

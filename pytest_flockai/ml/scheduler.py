@@ -11,6 +11,7 @@ KPIs, events and truth records.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -20,6 +21,7 @@ from ..control.stages import PILOT, RETURN
 from .analysis import coco_pair
 from .gallery import worst_frames
 from .metrics import percentile
+from .oracle import OracleFrame, needs_pixels
 from .runner import DeviceClock, TaskRunner
 from .task_energy import task_energy_kpis
 
@@ -69,7 +71,11 @@ class TaskScheduler(Clocked):
                  computer=None):
         self.st, self.suite, self.data = state, suite, data
         onboard_clock = DeviceClock()        # one on-board computer, shared by its tasks
+        self.device_clock = onboard_clock
         self.runners = []
+        #: oracle models' random stream (their own, spawned beside the tasks' streams)
+        self.oracle_rng = (np.random.default_rng(np.random.SeedSequence(
+            seeds[0].entropy, spawn_key=tuple(seeds[0].spawn_key) + (99,))) if seeds else None)
         for tk, seed in zip(tasks, seeds):
             r = TaskRunner(tk)
             r.bind(np.random.default_rng(seed), t0=0.0, device_clock=onboard_clock,
@@ -81,6 +87,9 @@ class TaskScheduler(Clocked):
         self.cpu_time_s = 0.0
         self.in_view: list = []          # (t, people in view, blur px) at every frame read
         self.capture_pos: dict = {}      # t -> drone (x, y, z) at captures
+        #: t -> what the drone knew of its pose at captures: (x, y, z, qw, qx, qy, qz), the
+        #: navigation estimate when flying on estimates (policies project boxes with it)
+        self.capture_nav: dict = {}
         #: per task: [busy s, tx bytes, tx packets, rx bytes, rx packets] charged to the energy
         self.charged = [[0.0, 0, 0, 0, 0] for _ in self.runners]
 
@@ -90,30 +99,68 @@ class TaskScheduler(Clocked):
             return
         q = self.st.q
         pos = (q[0], q[1], q[2])
+        due = [c for c in self.consumers if c.due(t)]
         cache = {}
-        for c in self.consumers:
-            if not c.due(t):
-                continue
+        for c in due:
             name = getattr(c, "sensor", None) or c.task.sensor
             if name not in cache:
-                cache[name] = self._read(name, t)
+                pixels = any(needs_pixels(getattr(getattr(o, "task", None), "model", None))
+                             for o in due if (getattr(o, "sensor", None) or o.task.sensor) == name)
+                cache[name] = self._read(name, t, pixels)
                 self.capture_pos[round(t, 6)] = pos
+                self.capture_nav[round(t, 6)] = tuple(self.st.qc[:7])
             value, truth = cache[name]
+            if not needs_pixels(getattr(getattr(c, "task", None), "model", None)):
+                value = self._oracle_frame(name, truth)
             if value is None and getattr(self.suite[name], "ended", False):
                 c.skip(t)           # a replay without loop is over: no frame, no inference
                 continue
             c.on_frame(t, value, truth, pos)
         self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
 
-    def _read(self, name, t):
+    def refresh(self) -> None:
+        """Recompute when the next frame is due (after a task's period changed)."""
+        self.next_due = min((c.next_frame_t for c in self.consumers), default=math.inf) - CLOCK_EPS
+
+    def retask(self, runner: TaskRunner, t: float, **changes) -> None:
+        """Change a running task from time t on (a policy's action): ``period_s``,
+        ``model``, ``execution`` (a copy of its Task, the mission's is untouched), or
+        ``enabled`` (False: no frame until enabled again; True: a frame now)."""
+        enabled = changes.pop("enabled", None)
+        if changes:
+            last = runner.next_frame_t - runner.task.period_s
+            runner.task = copy.copy(runner.task)
+            for k, v in changes.items():
+                setattr(runner.task, k, v)
+            if "period_s" in changes and runner.next_frame_t != math.inf:
+                runner._t0 = last
+                runner._next_frame_t = max(t, last + runner.task.period_s)
+            if "execution" in changes:
+                runner._shared = self.device_clock if runner.task.execution == "onboard" else None
+        if enabled is False:
+            runner._next_frame_t = math.inf
+        elif enabled is True and runner.next_frame_t == math.inf:
+            runner._t0 = runner._next_frame_t = t
+        self.refresh()
+
+    def _read(self, name, t, pixels=True):
         if name not in self.suite:
             return None, None
-        value = self.suite.read(name, t, self.data)
-        truth = getattr(self.suite[name], "last_truth", None)
+        sensor = self.suite[name]
+        if not pixels and hasattr(sensor, "truth"):      # oracles only: no render
+            value, truth = None, sensor.truth(t, self.data)
+        else:
+            value = self.suite.read(name, t, self.data)
+            truth = getattr(sensor, "last_truth", None)
         if truth is not None:
             du, dv = getattr(truth, "blur_px", (0.0, 0.0))
             self.in_view.append((t, truth.count, math.hypot(du, dv)))
         return value, truth
+
+    def _oracle_frame(self, name, truth) -> OracleFrame:
+        cam = self.suite[name] if name in self.suite else None
+        shape = (getattr(cam, "height", 0), getattr(cam, "width", 0), 3)
+        return OracleFrame(truth, shape, self.oracle_rng)
 
     def take_usage(self, t: float):
         """(SoC busy s, tx bytes, tx packets, rx bytes, rx packets) of all tasks

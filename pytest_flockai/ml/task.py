@@ -87,6 +87,10 @@ class Task:
         limits.check_at_least("period_s", self.period_s, "MIN_TASK_PERIOD_S", where=where,
                               unit=" s")
         self.execution = _check.choice("execution", execution, EXECUTIONS, where=where)
+        if self.execution == "remote" and not getattr(self.model, "needs_pixels", True):
+            raise ConfigError(f"{where}: execution = 'remote' is not allowed for model "
+                              f"{self.name!r}: it reads the truth, not pixels, so there is no "
+                              f"frame to send; model the transport as its delay_s instead")
         self.device = None if device is None else self._device("device", device, where)
         self.ground_device = self._device("ground_device", ground_device, where)
         try:

@@ -36,6 +36,7 @@ import numpy as np
 
 from .. import _check
 from ..errors import ConfigError
+from ..world.actors import merge_tables
 from ..world.truth import CameraModel, Truth, gimbal_pose
 from . import _gl
 from .conditions import SKY_SHARE, Conditions, apply as apply_conditions, blur_vector, shift_boxes
@@ -194,6 +195,7 @@ class Camera(Sensor):
         self.body_name = body_name
         self.world = world                     # yours; else each flight's (bind_world)
         self._flight_world = None
+        self._actors = None                    # this flight's moving actors (world.actors)
         self.occlusion = bool(occlusion)
         self.objects = bool(objects)          # per-object truth (boxes, visibility) per frame
         if conditions is not None and not isinstance(conditions, Conditions):
@@ -263,6 +265,19 @@ class Camera(Sensor):
         """Per flight: the world flown in, used when the camera has no world of its own."""
         self._flight_world = world
 
+    def bind_actors(self, actors) -> None:
+        """Per flight: the moving actors (``world.actors.ActorSet``) or None; they join
+        the truth of every frame where they are at that time, and the render."""
+        self._actors = actors if actors is not None and len(actors) else None
+
+    def _scene(self, t: float):
+        """(people points, object table) of the truth at t: the world's, plus the actors."""
+        if self._actors is None:
+            return self._points, self._objects
+        pts, tab = self._actors.table(t)
+        objs = merge_tables(self._objects, tab) if self.objects else None
+        return np.vstack([self._points, pts]), objs
+
     # -- pose and truth (no GL) ---------------------------------------------------
     def pose(self, data) -> tuple[np.ndarray, np.ndarray]:
         """(cam_pos, cam_mat) of the gimballed camera in the current state."""
@@ -275,15 +290,19 @@ class Camera(Sensor):
     def truth(self, t: float, data) -> Truth:
         """The ground truth of a frame taken now, without rendering it."""
         cam_pos, cam_mat = self.pose(data)
-        return self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ, self._objects)
+        points, objects = self._scene(t)
+        return self.lens.truth(t, points, cam_pos, cam_mat, self._occ, objects)
 
     # -- frames ---------------------------------------------------------------
     def read(self, t: float, data) -> np.ndarray:
         if self.body is None:
             raise ConfigError(f"Camera {self.name!r}: read before bind(model, data, rng)")
         cam_pos, cam_mat = self.pose(data)
+        if self._actors is not None:
+            self._actors.place(data, t)
         frame = self.render_pose(data, cam_pos, cam_mat)
-        self.last_truth = self.lens.truth(t, self._points, cam_pos, cam_mat, self._occ, self._objects)
+        points, objects = self._scene(t)
+        self.last_truth = self.lens.truth(t, points, cam_pos, cam_mat, self._occ, objects)
         if self.conditions is not None:
             b = self.body.id
             w_world = data.xmat[b].reshape(3, 3) @ data.qvel[3:6]     # free joint: body rates

@@ -13,10 +13,15 @@ mission rejects, a bug in a probe) or kills its worker is a row with its
 a Dask cluster): ``executors.py``. A progress bar (``progress.py``) counts the
 drone-seconds done and to go.
 
-``backend="mjx"`` flies every variant in one batch instead (MJX physics and
-the core's components in JAX, ``batched/``; ``pip install
-'pytest-flockai[mjx]'``): same columns, for Hover, Waypoints and ZigZag
+``backend="jax"`` flies every variant in one batch instead (the core's
+components in JAX and a free-flying rigid body with the ground handled apart,
+``batched/``; ``pip install 'pytest-flockai[mjx]'``), ``backend="mjx"`` the same
+batch on MJX's full physics: same columns, for Hover, Waypoints and ZigZag
 missions without tasks (``batched.params.check`` names anything else).
+``backend="auto"`` picks the batch ("jax", or "mjx" where the free-flight body
+cannot fly the drone) for a batchable mission of at least ``AUTO_MIN_VARIANTS``
+variants or with a ``device``, else the process pool; ``df.attrs["backend"]``
+says which ran (``"backend_asked"``: what was asked).
 
 Flights of a sweep are not handed to the recording sink of the caller (the
 pytest plugin records the sweep as a whole). Each variant is a flight of the
@@ -29,6 +34,7 @@ counts the variants per cache status ("hit", "stored", ...).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import os
 import time
@@ -51,7 +57,10 @@ from .batched import params as _batched
 from .result import SweepResult
 from .worker import Outcome, row_of
 
-BACKENDS = ("process", "mjx")
+BACKENDS = ("process", "mjx", "jax", "auto")
+#: backend="auto" batches from this many variants: below it, compiling the batch (tens of
+#: seconds on a CPU, once per machine with the compile cache) costs more than it saves
+AUTO_MIN_VARIANTS = 16
 #: JAX platforms the mjx backend runs on (None: JAX's default device)
 DEVICES = (None, "cpu", "gpu", "cuda", "tpu")
 #: variants per task on an executor with a batched backend (one compiled batch each)
@@ -79,8 +88,10 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
     (``{kpi: "<op> <number> [unit]"}``, as ``@pytest.mark.kpi``) one boolean
     column ``ok_<kpi>`` per budget and ``ok`` (every budget holds and the
     variant flew without error). ``df.attrs`` holds the sweep's settings and its
-    wall time. ``backend="mjx"`` flies the variants in one JAX batch (``device``:
-    "cpu", "gpu", or None for JAX's default); ``workers`` is then unused.
+    wall time. ``backend="jax"`` / ``"mjx"`` fly the variants in one JAX batch
+    (``device``: "cpu", "gpu", or None for JAX's default); ``workers`` is then unused.
+    ``backend="auto"`` chooses (``choose_backend``); ``df.attrs["backend"]`` is the one
+    that ran.
 
     ``executor``: where the variants fly instead of this machine's processes
     (any ``concurrent.futures.Executor``, a ``distributed.Client`` or a Dask
@@ -109,19 +120,21 @@ def sweep(base_mission, *, samples=None, method="grid", seed=0, budgets=None, wo
     _executors.check_executor(executor)
     _check_batch_size(batch_size)
     _progress.check(progress)
+    ran = choose_backend(base_mission, len(plan), device) if backend == "auto" else backend
     wall0 = time.perf_counter()
     interrupted = False
-    if backend == "process" or executor is not None:
+    if ran == "process" or executor is not None:
         outcomes, interrupted = fly(base_mission, plan, workers, executor=executor,
-                                    backend=backend, device=device, batch_size=batch_size,
+                                    backend=ran, device=device, batch_size=batch_size,
                                     progress=progress)
     else:                       # the batched path neither reads nor stores the flight cache
-        outcomes = [Outcome(r, None, None) for r in _fly_batched(base_mission, plan, device)]
+        outcomes = [Outcome(r, None, None)
+                    for r in _fly_batched(base_mission, plan, device, ran)]
     wall = time.perf_counter() - wall0
     df = frame([o.row for o in outcomes], list(axes), parsed)
     df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
-                     "wall_s": wall, "backend": backend, "device": device,
+                     "wall_s": wall, "backend": ran, "backend_asked": backend, "device": device,
                      "executor": _executors.describe_executor(executor),
                      "interrupted": interrupted,
                      "tracebacks": {i: o.trace for i, o in enumerate(outcomes) if o.trace},
@@ -135,24 +148,46 @@ def _check_backend(backend, base, device) -> None:
                           f"{', '.join(map(repr, BACKENDS))}")
     if device not in DEVICES:
         raise ConfigError(f"sweep: device = {device!r} is not allowed; allowed: "
-                          f"{', '.join(map(repr, DEVICES))} (backend='mjx' only)")
+                          f"{', '.join(map(repr, DEVICES))} (batched backends only)")
+    if backend == "auto":
+        return
     if backend == "process":
         if device is not None:
-            raise ConfigError(f"sweep: device = {device!r} needs backend='mjx'; "
+            raise ConfigError(f"sweep: device = {device!r} needs a batched backend, backend='jax' "
+                              f"or backend='mjx'; "
                               f"backend='process' flies on this machine's CPU cores")
         return
     _batched.check(base)
+    why = _batched.free_flight_unsupported(base) if backend == "jax" else None
+    if why is not None:
+        raise ConfigError(f"sweep: backend='jax' cannot fly this drone ({why}); allowed: "
+                          f"backend='mjx' (MJX's full physics) or 'process'")
+
+
+def choose_backend(base, n_variants: int, device=None) -> str:
+    """``backend="auto"``: "jax" (the free-flight batch) for a mission the batched path
+    flies, with JAX installed, of at least ``AUTO_MIN_VARIANTS`` variants or with a
+    ``device``; "mjx" there if the free-flight body cannot fly the drone; else "process"."""
+    if device is None and n_variants < AUTO_MIN_VARIANTS:
+        return "process"
+    if importlib.util.find_spec("jax") is None or importlib.util.find_spec("mujoco.mjx") is None:
+        return "process"
+    try:
+        _batched.check(base)
+    except ConfigError:
+        return "process"
+    return "jax" if _batched.free_flight_unsupported(base) is None else "mjx"
 
 
 def _fly_batched(base, plan, device, physics="mjx") -> list[dict]:
     """The variants in one JAX batch (the backend's modules import JAX: loaded here);
-    ``physics``: the batched backend (only "mjx" so far)."""
+    ``physics``: the batched backend ("jax": the free-flight body, "mjx")."""
     try:
         from .batched import engine
     except ImportError as exc:
-        raise ConfigError(f"sweep: backend='mjx' needs JAX and MJX ({exc}); install them with "
-                          f"pip install 'pytest-flockai[mjx]', or use backend='process'") from None
-    return engine.fly(base, plan, device)
+        raise ConfigError(f"sweep: backend={physics!r} needs JAX and MJX ({exc}); install them "
+                          f"with pip install 'pytest-flockai[mjx]', or use backend='process'") from None
+    return engine.fly(base, plan, device, physics)
 
 
 def _check_batch_size(batch_size) -> None:

@@ -1,8 +1,9 @@
-"""The world: ground, scenery, people, wind and the atmosphere."""
+"""The world: ground, scenery, people (standing or walking: ``actors``), wind and the atmosphere."""
 
+from . import actors
 from .atmosphere import Atmosphere
 from .truth import CameraModel, Truth, gimbal_pose, visible_people
 from .wind import Wind
 from .world import World
 
-__all__ = ["Atmosphere", "CameraModel", "Truth", "Wind", "World", "gimbal_pose", "visible_people"]
+__all__ = ["actors", "Atmosphere", "CameraModel", "Truth", "Wind", "World", "gimbal_pose", "visible_people"]

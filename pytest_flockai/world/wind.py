@@ -27,22 +27,54 @@ from __future__ import annotations
 
 import math
 from numbers import Real
+from typing import NamedTuple
 
 import numpy as np
 
 from .. import _check, limits
+from .._xp import MATH
 from ..clock import Clocked
 from ..errors import ConfigError
 
 FT = 0.3048
 
 
-def dryden_low_altitude(h_m: float):
+def dryden_low_altitude(h_m, xp=MATH):
     """(sigma_u / sigma_w, L_u (m), L_w (m)) of MIL-F-8785C at height h_m above ground."""
-    h = max(h_m / FT, 10.0)
-    h = min(h, 1000.0)
+    h = xp.maximum(h_m / FT, 10.0)
+    h = xp.minimum(h, 1000.0)
     k = 0.177 + 0.000823 * h
     return k ** -0.4, h / k ** 1.2 * FT, h * FT
+
+
+def gust_intensities(h_m, sigma_w20, gust_std, gust_tau_s, carry_mps, xp=MATH):
+    """(sigma_horizontal, sigma_vertical, tau_horizontal, tau_vertical) at height h_m;
+    ``gust_std < 0``: the specification's intensities, ``gust_tau_s <= 0``: its length
+    scales carried at ``carry_mps`` (``Wind.intensities`` with None as -1)."""
+    ratio, lu, lw = dryden_low_altitude(h_m, xp)
+    given = gust_std >= 0.0
+    su = xp.where(given, gust_std, sigma_w20 * ratio)
+    sw = xp.where(given, gust_std / ratio, sigma_w20)
+    fixed = gust_tau_s > 0.0
+    return su, sw, xp.where(fixed, gust_tau_s, lu / carry_mps), xp.where(fixed, gust_tau_s,
+                                                                          lw / carry_mps)
+
+
+def ou_coefficients(dt, su, sw, tu, tw, xp=MATH):
+    """(a_h, b_h, a_v, b_v): one step g' = a g + b n of the exact OU discretisation."""
+    ah, aw = xp.exp(-dt / tu), xp.exp(-dt / tw)
+    return ah, su * xp.sqrt(1.0 - ah * ah), aw, sw * xp.sqrt(1.0 - aw * aw)
+
+
+class WindParams(NamedTuple):
+    """A wind as numbers (``Wind.batch_params``; -1 stands for None)."""
+
+    mean: np.ndarray
+    active: bool
+    gust_std: float
+    gust_tau_s: float
+    sigma_w20: float
+    carry_mps: float
 
 
 class Wind:
@@ -68,16 +100,15 @@ class Wind:
 
     def intensities(self, h_m: float):
         """(sigma_horizontal, sigma_vertical, tau_horizontal, tau_vertical) at height h_m."""
-        ratio, lu, lw = dryden_low_altitude(h_m)
-        if self.gust_std is None:
-            sw = self.sigma_w20
-            su = sw * ratio
-        else:
-            su = self.gust_std
-            sw = su / ratio
-        if self.gust_tau_s is not None:
-            return su, sw, self.gust_tau_s, self.gust_tau_s
-        return su, sw, lu / self.carry_mps, lw / self.carry_mps
+        p = self.batch_params()
+        return gust_intensities(h_m, p.sigma_w20, p.gust_std, p.gust_tau_s, p.carry_mps)
+
+    def batch_params(self) -> WindParams:
+        """This wind's numbers, for the shared formulas and the batched backend."""
+        return WindParams(mean=np.asarray(self.mean, dtype=float), active=self.turbulent,
+                          gust_std=-1.0 if self.gust_std is None else float(self.gust_std),
+                          gust_tau_s=-1.0 if self.gust_tau_s is None else float(self.gust_tau_s),
+                          sigma_w20=self.sigma_w20, carry_mps=self.carry_mps)
 
     @classmethod
     def coerce(cls, value) -> "Wind | None":
@@ -125,9 +156,7 @@ class WindSampler:
         self._k = 0
 
     def _at(self, h: float):
-        su, sw, tu, tw = self.wind.intensities(h)
-        ah, aw = math.exp(-self.dt / tu), math.exp(-self.dt / tw)
-        self._coef = (ah, su * math.sqrt(1.0 - ah * ah), aw, sw * math.sqrt(1.0 - aw * aw))
+        self._coef = ou_coefficients(self.dt, *self.wind.intensities(h))
         self._h = h
 
     def step(self, h: float = 0.0):

@@ -13,21 +13,26 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from ...control.stages import DONE, LAND, LANDING_OVERSHOOT, PILOT, RETURN, TAKEOFF, TOUCHDOWN_SPEED
+from ...control.trajectory import leg_timing
 from ...physics import G
 
 
+def _length(d):
+    """|d| summed in the core's order (``math.sqrt(sum(c * c for c in d))``), so a leg's
+    duration is the core's to the last bit and the stage switches on the same tick."""
+    return jnp.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] + d[..., 2] * d[..., 2])
+
+
 def leg(p0, p1, speed, accel, t):
-    """``Leg(p0, p1, speed, accel).fill(t, sp)``: (pos, vel, acc, duration)."""
+    """``Leg(p0, p1, speed, accel).fill(t, sp)``: (pos, vel, acc, duration); the timing is
+    the core's ``leg_timing``."""
     d = p1 - p0
-    L = jnp.sqrt(jnp.sum(d * d))
+    L = _length(d)
     ok = L > 1e-12
     Ls = jnp.where(ok, L, 1.0)
     u = jnp.where(ok, d / Ls, 0.0)
-    v = jnp.minimum(speed, jnp.sqrt(Ls * accel))
-    ta = v / accel
-    s_acc = 0.5 * accel * ta * ta
-    t_cr = (Ls - 2.0 * s_acc) / v
-    dur = jnp.where(ok, 2.0 * ta + t_cr, 0.0)
+    v, ta, s_acc, t_cr, dur = leg_timing(Ls, speed, accel, jnp)
+    dur = jnp.where(ok, dur, 0.0)
     r = dur - t
     s = jnp.where(t <= 0.0, 0.0, jnp.where(t < ta, 0.5 * accel * t * t, jnp.where(
         t < ta + t_cr, s_acc + v * (t - ta), jnp.where(t < dur, Ls - 0.5 * accel * r * r, Ls))))
@@ -42,15 +47,16 @@ def leg(p0, p1, speed, accel, t):
 def path(starts_p, ends_p, speed, accel, t):
     """``waypoint_path(...).fill(t, sp)`` over legs (starts_p[i] -> ends_p[i]):
     (pos, vel, acc, done)."""
-    d = ends_p - starts_p
-    L = jnp.sqrt(jnp.sum(d * d, axis=1))
-    v = jnp.minimum(speed, jnp.sqrt(L * accel))
-    vs = jnp.where(L > 1e-12, v, 1.0)
-    dur = jnp.where(L > 1e-12, 2.0 * (vs / accel) + (L - accel * (vs / accel) ** 2) / vs, 0.0)
-    starts = jnp.concatenate([jnp.zeros(1), jnp.cumsum(dur)[:-1]])
-    i = jnp.clip(jnp.sum(t >= starts[1:]), 0, len(dur) - 1)
+    L = _length(ends_p - starts_p)
+    ok = L > 1e-12
+    dur = jnp.where(ok, leg_timing(jnp.where(ok, L, 1.0), speed, accel, jnp)[4], 0.0)
+    ends = [dur[0]]                                  # the core's running sum, in its order
+    for k in range(1, dur.shape[0]):
+        ends.append(ends[-1] + dur[k])
+    starts = jnp.stack([jnp.zeros_like(dur[0])] + ends[:-1])
+    i = jnp.clip(jnp.sum(t >= starts[1:]), 0, dur.shape[0] - 1)
     pos, vel, acc, _ = leg(starts_p[i], ends_p[i], speed, accel, t - starts[i])
-    return pos, vel, acc, t >= jnp.sum(dur)
+    return pos, vel, acc, t >= ends[-1]
 
 
 def pilot_update(p, s, t, kind):
@@ -58,10 +64,10 @@ def pilot_update(p, s, t, kind):
     t0, start = s["pilot_t0"], s["pilot_start"]
     if kind[0] == "hover":
         sp9 = jnp.concatenate([start, jnp.zeros(6)])
-        return sp9, t - t0 >= p["duration"], t0, start
-    pts = p["points"]
-    pos, vel, acc, done = path(jnp.concatenate([start[None], pts[:-1]]), pts, p["speed"],
-                               p["accel"], t - t0)
+        return sp9, t - t0 >= p.pilot.duration, t0, start
+    pts = p.pilot.points
+    pos, vel, acc, done = path(jnp.concatenate([start[None], pts[:-1]]), pts, p.pilot.speed,
+                               p.mission.accel, t - t0)
     sp9 = jnp.concatenate([pos, vel, acc])
     if kind[2]:                                          # loop: start over from the last point
         t0 = jnp.where(done, t, t0)
@@ -73,7 +79,7 @@ def pilot_update(p, s, t, kind):
 def pilot_start(p, q, kind):
     """``pilot.start``: the position a Hover holds / a Waypoints path starts from."""
     if kind[0] == "hover":
-        return jnp.stack([q[0], q[1], p["altitude"]])
+        return jnp.stack([q[0], q[1], p.pilot.altitude])
     return q[:3]
 
 
@@ -81,11 +87,11 @@ def _after_pilot(p, s, here, force):
     """``StageMachine._after_pilot``: (stage, leg p0, leg p1, leg speed)."""
     home = s["home"]
     away = jnp.hypot(here[0] - home[0], here[1] - home[1]) > 0.5
-    ret = (p["return_home"] | force) & away
+    ret = (p.mission.return_home | force) & away
     home_air = jnp.stack([home[0], home[1], here[2]])
     land_to = jnp.stack([here[0], here[1], home[2] - LANDING_OVERSHOOT])
     return (jnp.where(ret, RETURN, LAND), here, jnp.where(ret, home_air, land_to),
-            jnp.where(ret, p["return_speed"], p["descent_speed"]))
+            jnp.where(ret, p.pilot.return_speed, p.mission.descent_speed))
 
 
 def stages(p, s, t, q, v, contact, kind):
@@ -95,12 +101,13 @@ def stages(p, s, t, q, v, contact, kind):
     psp, pdone, pt0, pstart = pilot_update(p, s, t, kind)
     a_stage, a_p0, a_p1, a_spd = _after_pilot(p, s, psp[:3], False)
     # leg stages (take-off, return, landing)
-    lpos, lvel, lacc, ldur = leg(s["leg_p0"], s["leg_p1"], s["leg_speed"], p["accel"],
+    lpos, lvel, lacc, ldur = leg(s["leg_p0"], s["leg_p1"], s["leg_speed"], p.mission.accel,
                                  t - s["t_stage"])
     lsp = jnp.concatenate([lpos, lvel, lacc])
     ldone = t - s["t_stage"] >= ldur
-    # take-off done: the pilot starts here and writes this tick's setpoint
-    s1 = {**s, "pilot_t0": t, "pilot_start": pilot_start(p, q, kind)}
+    # take-off done: the pilot starts over the climb's setpoint (the pad, not where a wind
+    # pushed the drone: control/stages.py) and writes this tick's setpoint
+    s1 = {**s, "pilot_t0": t, "pilot_start": pilot_start(p, jnp.stack([sp[0], sp[1], q[2]]), kind)}
     ssp, _, st0, sstart = pilot_update(p, s1, t, kind)
     # return done: land from the end of the return leg
     l_p1 = jnp.stack([lpos[0], lpos[1], s["home"][2] - LANDING_OVERSHOOT])
@@ -109,7 +116,7 @@ def stages(p, s, t, q, v, contact, kind):
     to_land = is_leg & ldone & (stage == RETURN)
     after = is_p & pdone
     sp9 = jnp.where(is_p, psp, jnp.where(to_pilot, ssp, jnp.where(is_leg, lsp, sp[:9])))
-    yaw = jnp.where(is_p | to_pilot, p["yaw"], sp[9])
+    yaw = jnp.where(is_p | to_pilot, p.pilot.yaw, sp[9])
     new_stage = jnp.where(after, a_stage, jnp.where(to_pilot, PILOT, jnp.where(to_land, LAND, stage)))
     out = {**s, "sp": jnp.concatenate([sp9, yaw[None]]), "stage": new_stage,
            "pilot_t0": jnp.where(to_pilot, st0, jnp.where(is_p, pt0, s["pilot_t0"])),
@@ -117,7 +124,7 @@ def stages(p, s, t, q, v, contact, kind):
            "t_stage": jnp.where(after | to_land, t, s["t_stage"]),
            "leg_p0": jnp.where(after, a_p0, jnp.where(to_land, lpos, s["leg_p0"])),
            "leg_p1": jnp.where(after, a_p1, jnp.where(to_land, l_p1, s["leg_p1"])),
-           "leg_speed": jnp.where(after, a_spd, jnp.where(to_land, p["descent_speed"],
+           "leg_speed": jnp.where(after, a_spd, jnp.where(to_land, p.mission.descent_speed,
                                                           s["leg_speed"]))}
     landed = (new_stage == LAND) & contact & (jnp.abs(v[2]) < TOUCHDOWN_SPEED)
     out["stage"] = jnp.where(landed, DONE, out["stage"])
@@ -138,25 +145,26 @@ def _clamp(x, lim):
     return jnp.minimum(lim, jnp.maximum(-lim, x))
 
 
-def controller(p, integ, q, v, sp, dt):
-    """``CascadedController.update``: (rotor thrusts (n,), new integrator state (3,))."""
+def controller(c, integ, q, v, sp, dt):
+    """``CascadedController.update`` with ``c = CascadedController.batch_params()``: (rotor
+    thrusts (n,), new integrator state (3,))."""
     pos, vel, quat, w = q[:3], v[:3], q[3:7], v[3:6]
-    vs = sp[3:6] + p["k_pos"] * (sp[0:3] - pos)
+    vs = sp[3:6] + c.k_pos * (sp[0:3] - pos)
     e = vs - vel
     rv = sp[3:6]
     rs = jnp.sqrt(jnp.sum(rv * rv))
-    kd = jnp.stack([p["kd_h"], p["kd_h"], p["kd_v"]]) * rs
-    a = sp[6:9] + p["k_vel"] * e + p["k_vel_i"] * integ + kd * rv
-    sat_z = (a[2] > p["a_up"]) | (a[2] < -p["a_down"])
-    az = jnp.clip(a[2], -p["a_down"], p["a_up"])
+    kd = jnp.stack([c.kd_h, c.kd_h, c.kd_v]) * rs
+    a = sp[6:9] + c.k_vel * e + c.k_vel_i * integ + kd * rv
+    sat_z = (a[2] > c.a_up) | (a[2] < -c.a_down)
+    az = jnp.clip(a[2], -c.a_down, c.a_up)
     fz = az + G
-    hmax = fz * p["tan_tilt"]
+    hmax = fz * c.tan_tilt
     h2 = a[0] * a[0] + a[1] * a[1]
     sat_h = h2 > hmax * hmax
     sc = jnp.where(sat_h, hmax / jnp.sqrt(jnp.where(sat_h, h2, 1.0)), 1.0)
     ax, ay = a[0] * sc, a[1] * sc
     sat = sat_z | sat_h
-    lim = jnp.stack([p["i_lim_h"], p["i_lim_h"], p["i_lim_z"]])
+    lim = jnp.stack([c.i_lim_h, c.i_lim_h, c.i_lim_z])
     integ = jnp.where(sat, integ, _clamp(integ + e * dt, lim))
     d2 = jnp.stack([ax, ay, fz]) / jnp.sqrt(ax * ax + ay * ay + fz * fz)
     cy, sy = jnp.cos(sp[9]), jnp.sin(sp[9])
@@ -166,13 +174,13 @@ def controller(p, integ, q, v, sp, dt):
     R = rotation(quat)                                   # columns r0 r1 r2
     r0, r1, r2 = R[:, 0], R[:, 1], R[:, 2]
     er = 0.5 * jnp.stack([d2 @ r1 - d1 @ r2, d0 @ r2 - d2 @ r0, d1 @ r0 - d0 @ r1])
-    J = p["J"]
-    kr, ka = p["k_rate"], p["k_att"]
+    J = c.J
+    kr, ka = c.k_rate, c.k_att
     tx = J[0] * kr * (-ka * er[0] - w[0]) + (J[2] - J[1]) * w[1] * w[2]
     ty = J[1] * kr * (-ka * er[1] - w[1]) + (J[0] - J[2]) * w[2] * w[0]
-    tz = J[2] * p["k_yaw_rate"] * (-p["k_yaw"] * er[2] - w[2]) + (J[1] - J[0]) * w[0] * w[1]
-    T = jnp.maximum(0.0, p["mass"] * (ax * r2[0] + ay * r2[1] + fz * r2[2]))
-    return mix(p["B"], p["fmax"], T, tx, ty, tz), integ
+    tz = J[2] * c.k_yaw_rate * (-c.k_yaw * er[2] - w[2]) + (J[1] - J[0]) * w[0] * w[1]
+    T = jnp.maximum(0.0, c.mass * (ax * r2[0] + ay * r2[1] + fz * r2[2]))
+    return mix(c.B, c.fmax, T, tx, ty, tz), integ
 
 
 def rotation(quat):

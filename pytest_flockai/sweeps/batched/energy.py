@@ -19,16 +19,16 @@ import jax.numpy as jnp
 from ...clock import CLOCK_EPS
 from ...comm.traffic import ACK_BYTES
 from ...control.stages import LAND, PILOT, TAKEOFF
-from ...energy.battery import CUTOFF_HOLD_S
-from ...energy.rotors import VRS_K
+from ...energy.battery import CUTOFF_HOLD_S, ocv_liion, ocv_lipo, resistance_shape, terminal_current
+from ...energy.rotors import VRS_K, wake_immersion
 from ...mission.book import ACCEL_SMOOTHING_S, ACCEL_THRESHOLD, HOVER_SPEED
-from ...world.wind import FT
+from ...world.wind import gust_intensities, ou_coefficients
 from .control import rotation
 
 MINVAL = 1e-15          # mjMINVAL: MuJoCo's guard in the projected-area quotient
 
 
-def drag(p, quat, vel, wind):
+def drag(a, quat, vel, wind):
     """World-frame force of MuJoCo's ellipsoid blunt drag (``fluid_coefs[0]``; the
     other coefficients are 0 and the air has no viscosity), as MuJoCo's
     ``mj_viscousForces`` computes it: in the ellipsoid's frame f = -rho C A_proj |v| v,
@@ -36,23 +36,23 @@ def drag(p, quat, vel, wind):
     v the velocity relative to the wind; pi s_j s_k along each axis)."""
     R = rotation(quat)
     lv = R.T @ (vel - wind)
-    s0, s1, s2 = p["aero_size"][0], p["aero_size"][1], p["aero_size"][2]
+    s0, s1, s2 = a.size[0], a.size[1], a.size[2]
     a2 = jnp.stack([(s1 * s2) ** 2, (s2 * s0) ** 2, (s0 * s1) ** 2])
     v2 = lv * lv
     area = jnp.pi * jnp.sqrt(jnp.sum(a2 * a2 * v2) / jnp.maximum(MINVAL, jnp.sum(a2 * v2)))
-    return R @ (-p["rho"] * jnp.sqrt(jnp.sum(v2)) * area * p["aero_c"] * lv)
+    return R @ (-a.rho * jnp.sqrt(jnp.sum(v2)) * area * a.c_blunt * lv)
 
 
-def rotor_drag(p, quat, qvel, wind, act):
+def rotor_drag(a, quat, qvel, wind, act):
     """World-frame (force, torque about the CoM) of every rotor's H-force, as
     ``airframe.rotor_drag.RotorDrag.step``: per hub, -c sqrt(T) times the in-plane part of
     the air-relative velocity plus omega x r (body frame), summed and rotated to the world."""
     R = rotation(quat)
     b = R.T @ (qvel[:3] - wind)
     wx, wy, wz = qvel[3], qvel[4], qvel[5]               # free joint: body-frame rates
-    x, y, h = p["h_hubs"][:, 0], p["h_hubs"][:, 1], p["h_hubs"][:, 2]
+    x, y, h = a.h_hubs[:, 0], a.h_hubs[:, 1], a.h_hubs[:, 2]
     on = act > 0.0
-    k = jnp.where(on, -p["h_c"] * jnp.sqrt(jnp.where(on, act, 0.0)), 0.0)
+    k = jnp.where(on, -a.h_c * jnp.sqrt(jnp.where(on, act, 0.0)), 0.0)
     hx = k * (b[0] + wy * h - wz * y)
     hy = k * (b[1] + wz * x - wx * h)
     f = jnp.stack([jnp.sum(hx), jnp.sum(hy), jnp.zeros_like(b[0])])
@@ -60,30 +60,18 @@ def rotor_drag(p, quat, qvel, wind, act):
     return R @ f, R @ tq
 
 
-def _dryden(h):
-    h = jnp.clip(h / FT, 10.0, 1000.0)
-    k = 0.177 + 0.000823 * h
-    return k ** -0.4, h / k ** 1.2 * FT, h * FT
-
-
-def wind_step(p, s, h, noise, dt):
-    """``WindSampler.step(h)``: (air velocity, new wind state)."""
-    ratio, lu, lw = _dryden(h)
-    given = p["w_gust_std"] >= 0.0
-    su = jnp.where(given, p["w_gust_std"], p["w_sigma_w20"] * ratio)
-    sw = jnp.where(given, p["w_gust_std"] / ratio, p["w_sigma_w20"])
-    fixed = p["w_gust_tau"] > 0.0
-    tu = jnp.where(fixed, p["w_gust_tau"], lu / p["w_carry"])
-    tw = jnp.where(fixed, p["w_gust_tau"], lw / p["w_carry"])
-    ah, aw = jnp.exp(-dt / tu), jnp.exp(-dt / tw)
-    fresh = jnp.stack([ah, su * jnp.sqrt(1.0 - ah * ah), aw, sw * jnp.sqrt(1.0 - aw * aw)])
+def wind_step(w, s, h, noise, dt):
+    """``WindSampler.step(h)`` (``w = Wind.batch_params()``): (air velocity, new wind
+    state); the intensities and the OU coefficients are the core's own formulas."""
+    coef = jnp.stack(ou_coefficients(dt, *gust_intensities(h, w.sigma_w20, w.gust_std,
+                                                            w.gust_tau_s, w.carry_mps, jnp), jnp))
     redo = jnp.isnan(s["w_h"]) | (jnp.abs(h - s["w_h"]) > 0.5)
-    coef = jnp.where(redo, fresh, s["w_coef"])
+    coef = jnp.where(redo, coef, s["w_coef"])
     g = s["w_g"]
     g = jnp.stack([coef[0] * g[0] + coef[1] * noise[0], coef[0] * g[1] + coef[1] * noise[1],
                    coef[2] * g[2] + coef[3] * noise[2]])
-    act = p["w_active"]
-    return (jnp.where(act, p["w_mean"] + g, p["w_mean"]),
+    act = w.active
+    return (jnp.where(act, w.mean + g, w.mean),
             {"w_g": jnp.where(act, g, s["w_g"]), "w_coef": jnp.where(act, coef, s["w_coef"]),
              "w_h": jnp.where(act & redo, h, s["w_h"])})
 
@@ -97,14 +85,14 @@ def _descent_inflow(vg, vax, vpar2, vh):
     return jnp.where((vh <= 0.0) | (x < -2.0), vg, v)
 
 
-def motors(p, thrust, vrel, vi):
+def motors(mp, thrust, vrel, vi):
     """``Motors.power_parts`` summed: (electrical power, new induced-velocity state)."""
     vx, vy, vax = vrel[0], vrel[1], vrel[2]
     vpar2 = vx * vx + vy * vy
     vpar = jnp.sqrt(vpar2)
     on = thrust > 1e-9
     T = jnp.where(on, thrust, 1.0)
-    vh2 = T * p["m_inv2rhoA"]
+    vh2 = T * mp.inv2rhoA
     v = jnp.where(vi <= 0.0, jnp.sqrt(vh2), vi)
     for _ in range(2):
         s = vax + v
@@ -113,88 +101,80 @@ def motors(p, thrust, vrel, vi):
         v = jnp.maximum(0.0, v - (v * root - vh2) / df)
     vi = jnp.where(on, v, vi)
     v = jnp.where(vax < 0.0, _descent_inflow(v, vax, vpar2, jnp.sqrt(vh2)), v)
-    induced = jnp.sum(jnp.where(on, p["m_kappa"] * T * v, 0.0))
+    induced = jnp.sum(jnp.where(on, mp.kappa * T * v, 0.0))
     axial = jnp.sum(jnp.where(on, T * vax, 0.0))
-    omega = jnp.sqrt(T * p["m_inv_kf"])
-    mu = vpar / (omega * p["m_R"])
-    p0h = p["m_c0"] * T * jnp.sqrt(T)
+    omega = jnp.sqrt(T * mp.inv_kf)
+    mu = vpar / (omega * mp.R)
+    p0h = mp.c0 * T * jnp.sqrt(T)
     # the H-force's work is paid through the tilt (energy/rotors.py, airframe/rotor_drag.py)
-    wr = omega * p["m_R"]
-    p0 = jnp.maximum(p0h, p0h * (1.0 + 4.65 * mu * mu) - p["m_hk"] * wr * wr * wr * mu * mu)
+    wr = omega * mp.R
+    p0 = jnp.maximum(p0h, p0h * (1.0 + 4.65 * mu * mu) - mp.hk * wr * wr * wr * mu * mu)
     profile = jnp.sum(jnp.where(on, p0, 0.0))
     wake_vi = jnp.sum(jnp.where(on, v, 0.0))
     n = thrust.shape[0]
     vps = jnp.where(vpar > 0.1, vpar, 1.0)
     vi_mean = wake_vi / n
-    skew = (vpar / jnp.sqrt(vpar2 + (vax + vi_mean) ** 2)) ** 2
-    ws = jnp.maximum(0.0, -(p["m_dirs"][:, 0] * vx / vps + p["m_dirs"][:, 1] * vy / vps))
+    ws = jnp.maximum(0.0, -(mp.dirs[:, 0] * vx / vps + mp.dirs[:, 1] * vy / vps))
     tot = jnp.sum(ws)
-    scale = p["m_wake"] * vi_mean * skew * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
-    use = (p["m_wake"] > 0.0) & (vpar > 0.1) & (wake_vi > 0.0) & (tot > 0.0)
-    induced = induced + jnp.where(use, jnp.sum(ws * thrust) * scale, 0.0)
-    shaft = jnp.where(on, p["m_kappa"] * T * v + T * vax + p0 + jnp.where(use, ws * thrust * scale,
-                                                                         0.0), 0.0)
+    scale = mp.wake * vi_mean * (0.5 * n) / jnp.where(tot > 0.0, tot, 1.0)
+    use = (mp.wake > 0.0) & (vpar > 0.1) & (wake_vi > 0.0) & (tot > 0.0)
+    # the aft rotors' immersion in the fore wake: the core's own formula, on arrays
+    extra = jnp.where(use, ws * thrust * scale * wake_immersion(
+        mp.L2 * ws, vax + vi_mean, vpar, mp.D, jnp.maximum, jnp.minimum), 0.0)
+    induced = induced + jnp.sum(extra)
+    shaft = jnp.where(on, mp.kappa * T * v + T * vax + p0 + extra, 0.0)
     total = induced + profile + axial
-    inv_eta = jnp.where(p["m_model"] & (total >= 0.0) & (total > 1e-12),
-                        _electrical(p, shaft, jnp.where(on, omega, 0.0))
-                        / (jnp.where(total > 1e-12, total, 1.0) * p["m_esc"]), p["m_inv_eta"])
+    inv_eta = jnp.where(mp.model & (total >= 0.0) & (total > 1e-12),
+                        _electrical(mp, shaft, jnp.where(on, omega, 0.0))
+                        / (jnp.where(total > 1e-12, total, 1.0) * mp.esc), mp.inv_eta)
     axial = jnp.where(total < 0.0, -(induced + profile), axial)
     return (induced + profile + axial) * inv_eta, vi
 
 
-def _electrical(p, shaft, omega):
+def _electrical(mp, shaft, omega):
     """``Motors._electrical``: the DC motor model's power at each rotor's operating point."""
     on = omega > 0.0
     om = jnp.where(on, omega, 1.0)
     q = jnp.where(shaft > 0.0, shaft / om, 0.0)
-    i_nl = p["m_i0"] * jnp.sqrt(om * p["m_inv_w0"])
-    cur = q * p["m_kv"] + i_nl
-    return jnp.sum(jnp.where(on, q * om + i_nl * om / p["m_kv"] + cur * cur * p["m_rm"], 0.0))
+    i_nl = mp.i0 * jnp.sqrt(om * mp.inv_w0)
+    cur = q * mp.kv + i_nl
+    return jnp.sum(jnp.where(on, q * om + i_nl * om / mp.kv + cur * cur * mp.rm, 0.0))
 
 
-def _ocv(p, soc):
-    lipo = -1.031 * jnp.exp(-35.0 * soc) + 3.685 + soc * (0.2156 + soc * (-0.1178 + soc * 0.3201))
-    sc = jnp.maximum(soc, 1e-3)
-    liion = 3.7348 - 0.00876 / sc + 0.468 * jnp.exp(-3.5294 * (1.0 - soc))
-    return p["b_cells"] * jnp.where(p["b_lipo"], lipo, liion)
-
-
-def battery(p, s, power, dt):
-    """``Circuit.draw(power, dt)``: (I^2 R loss, new battery state)."""
-    e = _ocv(p, s["b_soc"])
-    shape = (0.07446 + 0.1562 * jnp.exp(-24.37 * s["b_soc"])) / (0.07446 + 0.1562 * math.exp(-12.185))
-    r = p["b_rmid"] * shape
-    disc = e * e - 4.0 * r * power
-    over = disc < 0.0
-    i = jnp.where(over, e / (2.0 * r), jnp.where(
-        power > 0.0, (e - jnp.sqrt(jnp.maximum(disc, 0.0))) / (2.0 * r), 0.0))
+def battery(b, s, power, dt):
+    """``Circuit.draw(power, dt)`` (``b = Circuit.batch_params()``): (I^2 R loss, new
+    battery state); the voltage, resistance and current are the core's own formulas."""
+    soc = s["b_soc"]
+    e = b.cells * jnp.where(b.lipo, ocv_lipo(soc, jnp), ocv_liion(soc, jnp))
+    r = b.r_mid * resistance_shape(soc, jnp)
+    i, over = terminal_current(e, r, power, jnp)
     v = e - i * r
-    low = (i > 0.0) & (v < p["b_vcut"])
+    low = (i > 0.0) & (v < b.v_cut)
     below = jnp.where(low, s["b_below"] + dt, 0.0)
     cut = s["b_cut"] | over | (low & (below >= CUTOFF_HOLD_S - 1e-9))
-    return i * i * r, {"b_soc": s["b_soc"] - i * dt / p["b_qc"], "b_below": below, "b_cut": cut,
+    return i * i * r, {"b_soc": soc - i * dt / b.q_c, "b_below": below, "b_cut": cut,
                        "b_v": v, "b_vmin": jnp.minimum(s["b_vmin"], v)}
 
 
 def leaf_powers(p, s, thrust, vrel, airborne, edt, kinds):
     """The power of every leaf of the energy model (W) and the new motor state."""
     n_hb = s["hb_pending"]
-    tx_b, rx_b = n_hb * p["hb_bytes"], n_hb * ACK_BYTES
+    tx_b, rx_b = n_hb * p.mission.hb_bytes, n_hb * ACK_BYTES
     safe = jnp.where(edt > 0.0, edt, 1.0)
     out, vi, r_i, s_i = [], s["vi"], 0, 0
     for k, kind in enumerate(kinds):
-        base = p["const_w"][k]
+        base = p.energy.const_w[k]
         if kind == "Motors":
-            pw, vi = motors(p, thrust, vrel, s["vi"])
+            pw, vi = motors(p.motors, thrust, vrel, s["vi"])
         elif kind == "HoverPower":
             pw = jnp.where(airborne, base, 0.0)
         elif kind == "RadioLinear":
-            c = p["radio"][r_i]
+            c = p.energy.radio[r_i]
             r_i += 1
             pw = base + jnp.where(edt > 0.0, (c[0] * tx_b + c[1] * n_hb + c[2] * rx_b
                                               + c[3] * n_hb) * 1e-6 / safe, 0.0)
         elif kind == "RadioStates":
-            c = p["states"][s_i]
+            c = p.energy.states[s_i]
             s_i += 1
             t_tx, t_rx = tx_b * 8.0 / c[3], rx_b * 8.0 / c[3]
             idle = jnp.maximum(0.0, edt - t_tx - t_rx)
@@ -210,7 +190,7 @@ def integrate(p, s, t, thrust, vrel, airborne, kinds):
     edt = t - s["t_e"]
     pw, vi = leaf_powers(p, s, thrust, vrel, airborne, edt, kinds)
     total = jnp.sum(pw)
-    loss, bat = battery(p, s, total, edt)
+    loss, bat = battery(p.battery, s, total, edt)
     energy = s["energy_j"] + (total + loss) * edt
     return {**s, **bat, "vi": vi, "e_leaf": s["e_leaf"] + pw * edt, "loss_j": s["loss_j"] + loss * edt,
             "energy_j": energy, "t_e": t, "hb_drained": s["hb_drained"] + s["hb_pending"],

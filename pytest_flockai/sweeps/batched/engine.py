@@ -1,24 +1,25 @@
-"""Fly a sweep's variants in batches: MJX physics, the core's components in JAX.
+"""Fly a sweep's variants in batches: the core's components in JAX, on MJX's physics
+or the free-flying rigid body (``rigid.py``).
 
-Variants with the same structure (``params.variant``'s key: rates, rotor
-count, energy leaves, pilot) fly in one batch: their MuJoCo models go to MJX
-(``mjx.put_model``) and the fields that differ (mass, inertia, thrust limits)
-are stacked and ``jax.vmap``-ed with the state; one control tick is the core's
-loop (``mission/loop.py``) in the core's order: stage machine, controller,
-wind, heartbeats, energy integrator, flight book, end conditions, then
-``substeps`` MJX steps with the body drag applied as ``xfrc_applied`` and the
-crash check. ``jax.lax.scan`` runs ``CHUNK_S`` of simulated time per call; the
-host loops over chunks until every variant has ended, feeding each variant's
-own wind noise (the core's random stream: same seed, same gusts). A variant
-that has ended keeps its state. Float64 throughout (``jax.enable_x64`` around
-the backend): the time sum and the energy integral of a 30-minute flight drift
-visibly in float32.
+Variants with the same structure (``params.variant``'s key: rates, rotor count,
+energy leaves, pilot) fly in one batch, padded to a bucket size (``bucket``). With
+``physics="mjx"`` their MuJoCo models go to MJX (``mjx.put_model``) and the fields
+that differ (mass, inertia, thrust limits) are stacked; with ``"jax"`` each
+variant's ``RigidModel`` is. One control tick is the core's loop
+(``mission/loop.py``) in the core's order: stage machine, controller, wind,
+heartbeats, energy integrator, flight book, end conditions, then ``substeps``
+physics steps with the body and rotor drag applied at the centre of mass, and the
+crash check. ``jax.lax.scan`` runs ``CHUNK_S`` of simulated time per call; the host
+loops over chunks until every variant has ended, feeding each variant's own wind
+noise (the core's random stream: same seed, same gusts). A variant that has ended
+keeps its state. Float64 throughout (``jax.enable_x64`` around the backend): the
+time sum and the energy integral of a 30-minute flight drift visibly in float32.
 """
-
 from __future__ import annotations
 
 import functools
 import math
+import time
 
 import jax
 import jax.numpy as jnp
@@ -29,9 +30,11 @@ from mujoco import mjx
 from ...control.stages import DONE, TAKEOFF
 from ...errors import FlockAIError
 from .. import axes as _axes
+from . import compile_cache
 from . import control as C
 from . import energy as E
 from . import params as P
+from . import rigid as R
 from . import rows as _rows
 
 #: s of simulated time per compiled chunk (the host checks for the end between chunks)
@@ -39,10 +42,15 @@ CHUNK_S = 2.0
 #: XLA options of the chunk (see README: compile time against run time)
 COMPILER_OPTIONS: dict = {}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
+#: wall (and CPU) seconds of the last ``fly`` in this process: the variants' numbers and
+#: models (``variants_s``) and the batches (``batch_s``: states, compile or load, chunks)
+LAST_TIMINGS: dict = {}
 
 
-def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
-    """One row dict per variant, in the plan's order (as ``runner._fly``)."""
+def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx") -> list[dict]:
+    """One row dict per variant, in the plan's order (as ``runner._fly``); ``physics``:
+    "mjx" (MJX's ``mjx.step``) or "jax" (``rigid.step``, the free-flight body)."""
+    t0, c0 = time.perf_counter(), time.process_time()
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
     for i, values in enumerate(plan):
@@ -55,16 +63,24 @@ def fly(base, plan: list[dict], device: str | None = None) -> list[dict]:
             continue
         groups.setdefault(key, []).append((i, m, num, model))
     dev = jax.devices(device)[0] if device else jax.devices()[0]
+    compile_cache.enable()
+    LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0,
+                        variants_cpu_s=time.process_time() - c0, batch_cpu_s=0.0)
     with jax.enable_x64(True):
         for key, members in groups.items():
-            out = _fly_group(key, members, dev)
+            t1, c1 = time.perf_counter(), time.process_time()
+            out = _fly_group(key, members, dev, physics)
+            LAST_TIMINGS["batch_s"] += time.perf_counter() - t1
+            LAST_TIMINGS["batch_cpu_s"] += time.process_time() - c1
             for (i, _, _, _), row in zip(members, out):
                 rows[i] = {**plan[i], **row}
     return rows
 
 
-def _stack(items) -> dict:
-    return {k: jnp.asarray(np.stack([np.asarray(it[k]) for it in items])) for k in items[0]}
+def _stack(items):
+    """The variants' ``VariantParams`` stacked leaf by leaf (one pytree of batched arrays)."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])),
+                                  *items)
 
 
 def _models(models, dev):
@@ -80,27 +96,35 @@ def _models(models, dev):
     return leaves, diff, treedef
 
 
-def _init_state(num, model, sampler, dev):
+def _data(model, dev, physics):
+    """The physics' initial state: MJX data after ``mj_forward``, or the free body at ``qpos0``."""
+    if physics != "mjx":
+        return R.RigidData(0.0, np.array(model.qpos0, dtype=float), np.zeros(model.nv),
+                           np.zeros(model.na), False)
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    home = np.array([0.0, 0.0, float(data.qpos[2])])
-    n = model.nu
+    return mjx.put_data(model, data, device=dev)
+
+
+def _init_state(num, model, sampler, dev, physics):
+    home = np.array([0.0, 0.0, float(model.qpos0[2])])
     return {
-        "d": mjx.put_data(model, data, device=dev), "home": home, "stage": np.int32(TAKEOFF),
+        "d": _data(model, dev, physics), "home": home, "stage": np.int32(TAKEOFF),
         "sp": np.concatenate([home, np.zeros(7)]), "t_stage": 0.0, "leg_p0": home,
-        "leg_p1": np.array([0.0, 0.0, num["altitude"]]), "leg_speed": num["climb_speed"],
+        "leg_p1": np.array([0.0, 0.0, num.pilot.altitude]), "leg_speed": num.mission.climb_speed,
         "pilot_t0": 0.0, "pilot_start": np.zeros(3), "t_land": math.nan, "integ": np.zeros(3),
         "airborne": True, "end": np.int32(0), "t_end_at": math.nan,
         "w_g": np.asarray(sampler.g, dtype=float) if sampler is not None else np.zeros(3),
-        "w_coef": np.zeros(4), "w_h": math.nan, "w": np.zeros(3),
+        "w_coef": np.zeros(4), "w_h": math.nan, "w": np.asarray(num.wind.mean, dtype=float),
         "hb_next": 0.0, "hb_pending": 0.0, "hb_drained": 0.0,
-        "e_next": num["energy_period"], "t_e": 0.0, "energy_j": 0.0,
-        "e_leaf": np.zeros(len(num["const_w"])), "loss_j": 0.0,
-        "vi": num.get("m_vi0", np.zeros(n)), "vrel": np.zeros(3),
-        "b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": num["b_v0"],
+        "e_next": num.mission.energy_period, "t_e": 0.0, "energy_j": 0.0,
+        "e_leaf": np.zeros(len(num.energy.const_w)), "loss_j": 0.0,
+        "vi": num.motors.vi0, "vrel": np.zeros(3),
+        "b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": num.battery.v0,
         "b_next": 0.0, "t_book": 0.0, "acc": 0.0, "pv": np.zeros(3),
         "ticks": np.zeros(6, dtype=np.int32), "dist": 0.0, "vmax": 0.0, "terr": 0.0,
-        "ec_next": num["energy_period"], "speed": 0.0}
+        "ec_next": num.mission.energy_period, "speed": 0.0, "landed": False,
+        "ctrl": np.zeros(model.nu)}
 
 
 def _stack_states(states):
@@ -110,25 +134,41 @@ def _stack_states(states):
                                   *states)
 
 
-def _fly_group(key, members, dev) -> list[dict]:
+def bucket(n: int) -> int:
+    """The batch size ``n`` variants fly in: the next of 8, 16, 32, ... 1,024 and then
+    multiples of 1,024 (1,000 and 1,024 variants share one compiled chunk; the padding
+    repeats the last variant and its rows are dropped)."""
+    if n >= 1024:
+        return -(-n // 1024) * 1024
+    return max(8, 1 << (n - 1).bit_length())
+
+
+def _fly_group(key, members, dev, physics) -> list[dict]:
     nsub, _, ctrl_dt, book_dt, _, (kinds, tops), pkind = key[:7]
+    real = len(members)
+    members = members + [members[-1]] * (bucket(real) - real)
     nums = [num for _, _, num, _ in members]
     p = jax.device_put(_stack(nums), dev)     # committed, like the chunk's outputs:
     # uncommitted inputs would compile the chunk a second time
-    leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
+    if physics == "mjx":
+        leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
+        idx, dvals = tuple(sorted(diff)), tuple(diff[j] for j in sorted(diff))
+    else:
+        leaves, idx, treedef = (), None, None
+        R.model_of(members[0][3])             # refuses a model the free body cannot fly
+        dvals = _stack([R.model_of(mdl, check=False) for *_, mdl in members])
     samplers, states = [], []
     for _, m, num, model in members:
         rng = P.wind_rng(m)
         smp = m.wind.sampler(rng, ctrl_dt) if (m.wind is not None and m.wind.turbulent) else None
         samplers.append(smp)
-        states.append(_init_state(num, model, smp, dev))
+        states.append(_init_state(num, model, smp, dev, physics))
     s = jax.device_put(_stack_states(states), dev)
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
-    step = _chunk_fn(tuple(sorted(diff)), treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt,
-                     kinds, pkind)
-    dvals = jax.device_put(tuple(diff[j] for j in sorted(diff)), dev)
+    step = _chunk_fn(idx, treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt, kinds, pkind)
+    dvals = jax.device_put(dvals, dev)
     shared = jax.device_put(tuple(leaves), dev)
-    t_end = max(num["t_end"] for num in nums)
+    t_end = max(num.mission.t_end for num in nums)
     t = 0.0
     while True:
         noise = np.zeros((chunk_ticks, len(members), 3))
@@ -140,94 +180,153 @@ def _fly_group(key, members, dev) -> list[dict]:
         if bool(jnp.all(s["end"] != 0)) or t > t_end + 2 * CHUNK_S:
             break
     s = jax.vmap(lambda p1, s1: _finish(p1, s1, kinds))(p, s)
-    return _rows.rows(jax.device_get(s), nums, tops, book_dt)
+    return _rows.rows(jax.device_get(s), nums[:real], tops, book_dt)
 
 
 @functools.lru_cache(maxsize=16)
 def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
     """The compiled chunk of one batch structure (cached: a second sweep of the same
-    structure does not compile again)."""
-    def one(shared, dvals, p, s, noise):
+    structure does not compile again). One tick is vmapped in parts; the clocked parts
+    (energy, and the book when it is slower than the tick) run under a ``lax.cond`` on
+    the whole batch, so the ticks where no variant's clock is due skip them (every
+    variant starts at t = 0 on the same clock)."""
+    def model(shared, dvals):
+        if treedef is None:                   # the free-flight body: its model is dvals
+            return dvals
         ls = list(shared)
         for j, val in zip(diff_idx, dvals):
             ls[j] = val
-        m = jax.tree_util.tree_unflatten(treedef, ls)
-        new = _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind)
-        new = jax.tree_util.tree_map(lambda a, b: jnp.asarray(b, dtype=a.dtype), s, new)
-        return _sel(s["end"] != 0, s, new)
+        return jax.tree_util.tree_unflatten(treedef, ls)
 
-    batched = jax.vmap(one, in_axes=(None, 0, 0, 0, 0))
+    def clocked(fn, due, p, s):
+        """``fn`` on the batch where any variant is due (``fn`` selects per variant)."""
+        return jax.lax.cond(jnp.any(jax.vmap(due)(s)),
+                            lambda st: _like(st, jax.vmap(fn)(p, st)), lambda st: st, s)
+
+    def tick(shared, dvals, p, s, noise):
+        old = s
+        s = _like(old, jax.vmap(lambda p1, s1: _pre(p1, s1, ctrl_dt, pkind))(p, s))
+        s = jax.lax.cond(jnp.any(p.wind.active), lambda st: _like(st, jax.vmap(
+            lambda p1, s1, n1: _wind(p1, s1, n1, ctrl_dt))(p, st, noise)), lambda st: st, s)
+        s = clocked(lambda p1, s1: _energy(p1, s1, kinds), lambda s1: E.due(s1["d"].time, s1["e_next"]),
+                    p, s)
+        book = lambda p1, s1: _book(p1, s1, book_dt, book_every)  # noqa: E731
+        s = _like(old, jax.vmap(book)(p, s)) if book_every else clocked(
+            book, lambda s1: E.due(s1["d"].time, s1["b_next"]), p, s)
+        post = jax.vmap(lambda dv, p1, s1: _post(model(shared, dv), p1, s1, ctrl_dt, nsub),
+                        in_axes=(0, 0, 0))
+        s = _like(old, post(dvals, p, s))
+        return jax.vmap(lambda a, b: _sel(a["end"] != 0, a, b))(old, s)
 
     def run(shared, dvals, p, s, noise):
-        return jax.lax.scan(lambda st, n: (batched(shared, dvals, p, st, n), None), s, noise)[0]
+        return jax.lax.scan(lambda st, n: (tick(shared, dvals, p, st, n), None), s, noise)[0]
     return jax.jit(run, compiler_options=COMPILER_OPTIONS)
 
 
+def _like(ref, new):
+    """``new`` with the dtypes of ``ref`` (the scan's carry and both branches of a cond)."""
+    return jax.tree_util.tree_map(lambda a, b: jnp.asarray(b, dtype=a.dtype), ref, new)
+
+
 def _contact(d):
+    if isinstance(d, R.RigidData):
+        return d.contact
     c = d._impl.contact
     return jnp.any(c.dist < c.includemargin) if c.dist.shape[0] else jnp.zeros((), bool)
 
 
-def _tick(m, p, s, noise, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
+def _pre(p, s, ctrl_dt, pkind):
+    """The tick up to the wind: stage machine, controller, heartbeats."""
     d = s["d"]
     t, q, v = d.time, d.qpos, d.qvel
-    ok = jnp.isfinite(q[2]) & (jnp.abs(q[2]) < 1e5) & jnp.isfinite(v[0])
     speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
     s = {**s, "speed": speed}
     s, landed = C.stages(p, s, t, q, v, _contact(d), pkind)
-    f, integ = C.controller(p, s["integ"], q, v, s["sp"], ctrl_dt)
+    f, integ = C.controller(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt)
     off = s["stage"] == DONE
-    s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off}
-    ctrl = jnp.where(off, 0.0, f)
-    w, wst = E.wind_step(p, s, q[2], noise, ctrl_dt)
-    s = {**s, **wst, "w": w}
+    s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off,
+         "ctrl": jnp.where(off, 0.0, f), "landed": landed}
     hb = E.due(t, s["hb_next"])
-    s = {**s, "hb_next": s["hb_next"] + jnp.where(hb, p["hb_period"], 0.0),
-         "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
-    vrel = C.rotation(q[3:7]).T @ (v[:3] - w)
-    e_due = E.due(t, s["e_next"])
+    return {**s, "hb_next": s["hb_next"] + jnp.where(hb, p.mission.hb_period, 0.0),
+            "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
+
+
+def _wind(p, s, noise, ctrl_dt):
+    """``WindStep.step`` (skipped on a batch without turbulence: its air is the mean)."""
+    w, wst = E.wind_step(p.wind, s, s["d"].qpos[2], noise, ctrl_dt)
+    return {**s, **wst, "w": w}
+
+
+def _energy(p, s, kinds):
+    """``EnergyIntegrator.step`` where due: the interval charged at the tick's rotor state."""
+    d = s["d"]
+    t = d.time
+    vrel = C.rotation(d.qpos[3:7]).T @ (d.qvel[:3] - s["w"])
     es = E.integrate(p, {**s, "vrel": vrel}, t, d.act, vrel, s["airborne"], kinds)
-    es["e_next"] = s["e_next"] + p["energy_period"]
-    s = _sel(e_due, es, s)
-    b_due = True if book_every else E.due(t, s["b_next"])
-    bs = E.book(p, s, t, q, v, speed, book_dt, book_every)
-    s = _sel(b_due, {**s, **bs}, s)
-    s = _end_conditions(p, s, t, ctrl_dt, landed)
+    es["e_next"] = s["e_next"] + p.mission.energy_period
+    return _sel_keys(E.due(t, s["e_next"]), es, s)
+
+
+def _book(p, s, book_dt, book_every):
+    """``FlightBook.step`` where due."""
+    d = s["d"]
+    t = d.time
+    bs = E.book(p, s, t, d.qpos, d.qvel, s["speed"], book_dt, book_every)
+    return {**s, **bs} if book_every else _sel_keys(E.due(t, s["b_next"]), {**s, **bs}, s)
+
+
+def _post(m, p, s, ctrl_dt, nsub):
+    """End conditions, the divergence check, then the physics over the tick."""
+    d = s["d"]
+    t, q, v = d.time, d.qpos, d.qvel
+    ok = jnp.isfinite(q[2]) & (jnp.abs(q[2]) < 1e5) & jnp.isfinite(v[0])
+    s = _end_conditions(p, s, t, ctrl_dt, s["landed"])
     s = {**s, "end": jnp.where(ok, s["end"], _END["diverged"])}
-    stepped = _physics(m, p, s, d, ctrl, nsub)
-    return _sel(s["end"] != 0, s, stepped)
+    stepped = _physics(m, p, s, d, s["ctrl"], nsub)
+    return _sel_keys(s["end"] != 0, s, stepped, ("d", "end", "t_end_at"))
 
 
 def _end_conditions(p, s, t, dt, landed):
     """``EndConditions.step`` where due (its clock, and every tick near the end)."""
     on_clock = E.due(t, s["ec_next"])
-    run = on_clock | (t >= p["t_end"] - dt - E.CLOCK_EPS)
+    run = on_clock | (t >= p.mission.t_end - dt - E.CLOCK_EPS)
     end = jnp.where(landed, _END["landed"], s["end"])
     live = run & (end == 0)
-    empty = live & ((s["energy_j"] >= p["e_usable"]) | s["b_cut"])
+    empty = live & ((s["energy_j"] >= p.mission.e_usable) | s["b_cut"])
     end = jnp.where(empty, _END["battery_depleted"], end)
-    reserve = live & ~empty & p["use_reserve"] & (s["stage"] == C.PILOT) & (
-        p["e_usable"] - s["energy_j"] <= p["reserve_j"])
+    reserve = live & ~empty & p.mission.use_reserve & (s["stage"] == C.PILOT) & (
+        p.mission.e_usable - s["energy_j"] <= p.mission.reserve_j)
     s = C.go_home(p, s, t, reserve)
-    timeout = live & ~empty & (t + 0.5 * dt >= p["t_end"])
-    end = jnp.where(timeout, jnp.where(p["timed"], _END["time"], _END["time_cap"]), end)
-    return {**s, "end": end, "ec_next": s["ec_next"] + jnp.where(on_clock, p["energy_period"], 0.0)}
+    timeout = live & ~empty & (t + 0.5 * dt >= p.mission.t_end)
+    end = jnp.where(timeout, jnp.where(p.mission.timed, _END["time"], _END["time_cap"]), end)
+    return {**s, "end": end, "ec_next": s["ec_next"] + jnp.where(on_clock, p.mission.energy_period, 0.0)}
 
 
 def _physics(m, p, s, d, ctrl, nsub):
     """``substeps`` MJX steps with the body drag (every step, as MuJoCo's fluid model) and
     the rotor drag (from the tick's state, held over the tick as ``RotorDrag``), then the
     crash check (``loop._impact``)."""
-    hf, hm = E.rotor_drag(p, d.qpos[3:7], d.qvel, s["w"], d.act)
+    hf, hm = E.rotor_drag(p.aero, d.qpos[3:7], d.qvel, s["w"], d.act)
+    if isinstance(d, R.RigidData):
+        def free(_, dd):
+            f = E.drag(p.aero, dd.qpos[3:7], dd.qvel[:3], s["w"])
+            return R.step(m, dd, ctrl, jnp.concatenate([f + hf, hm]))
+        for k in range(nsub):                 # unrolled: XLA fuses across the substeps
+            d = free(k, d)
+        return _crash(s, d, R.up_z(d) < 0.0)
     d = d.replace(ctrl=ctrl)
 
     def sub(_, dd):
-        f = E.drag(p, dd.qpos[3:7], dd.qvel[:3], s["w"])
+        f = E.drag(p.aero, dd.qpos[3:7], dd.qvel[:3], s["w"])
         xf = jnp.zeros_like(dd.xfrc_applied).at[1, :3].set(f + hf).at[1, 3:].set(hm)
         out = mjx.step(m, dd.replace(xfrc_applied=xf))
         return jax.tree_util.tree_map(lambda a, b: b.astype(a.dtype), dd, out)
     d = jax.lax.fori_loop(0, nsub, sub, d)
-    flipped = d.xmat[1, 2, 2] < 0.0
+    return _crash(s, d, d.xmat[1, 2, 2] < 0.0)
+
+
+def _crash(s, d, flipped):
+    """``loop._impact``: touching the ground upside down, or fast away from the pad."""
     on_pad = (s["stage"] == TAKEOFF) & (s["d"].qpos[2] < s["home"][2] + 0.05)
     crash = _contact(d) & (s["stage"] != DONE) & (flipped | (~on_pad & (s["speed"] > 2.0)))
     return {**s, "d": d, "end": jnp.where(crash, _END["crashed"], s["end"]),
@@ -240,6 +339,13 @@ def _finish(p, s, kinds):
     t = s["d"].time
     es = E.integrate(p, s, t, s["d"].act, s["vrel"], s["airborne"], kinds)
     return _sel(t > s["t_e"], es, s)
+
+
+def _sel_keys(cond, a: dict, b: dict, keys=None) -> dict:
+    """``_sel`` on the entries that may differ (``keys``, else those not the same object):
+    the rest of the state is passed through, not selected leaf by leaf."""
+    keys = [k for k in a if a[k] is not b[k]] if keys is None else keys
+    return {**b, **_sel(cond, {k: a[k] for k in keys}, {k: b[k] for k in keys})}
 
 
 def _sel(cond, a: dict, b: dict) -> dict:

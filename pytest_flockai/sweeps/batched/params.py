@@ -1,35 +1,37 @@
-"""What the batched (MJX) backend flies, and each variant's numbers.
+"""What the batched backends (``jax``, ``mjx``) fly, and each variant's numbers.
 
 ``check(mission)`` raises a ``ConfigError`` naming whatever the batched path
 does not fly (it stays per flight: ``backend="process"``): camera / ML tasks,
 pilots other than Hover, Waypoints and ZigZag, a world, flying on estimates,
 user components or probes, a dataset, energy components other than the
-built-in ones. ``variant(mission)`` turns one resolved variant into plain
-numbers (numpy), read from the core's own objects: the controller's gains from
-``CascadedController``, the energy coefficients from the bound ``Meter``, the
-battery circuit from the blueprint, the MuJoCo model from ``build_spec``. No
-JAX here.
+built-in ones. ``variant(mission)`` turns one resolved variant into typed
+numbers (``VariantParams``, NamedTuples of numpy values), exported by the core's
+own objects built by the flight's own factories (``mission/parts.py``): the
+controller's ``batch_params()``, the bound motors' and battery circuit's, the
+wind's, and the MuJoCo model from ``build_spec``. No JAX here.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from ...airframe.model import build_spec
 from ...airframe.rotor_drag import h_coefficient, hubs
-from ...control.controller import CascadedController
+from ...control.controller import ControllerParams
 from ...control.pilots import Hover, Waypoints, ZigZag
+from ...energy.battery import BatteryParams
 from ...energy.components import Constant, RadioLinear, RadioStates, SoC
-from ...energy.factory import flight_energy_model
-from ...energy.model import Meter
-from ...energy.rotors import HoverPower, Motors
+from ...energy.rotors import HoverPower, MotorParams, Motors
 from ...errors import ConfigError
+from ...mission import parts
 from ...mission.book import book_period
 from ...mission.plan import resolve, seed_sequence
 from ...ml.scheduler import memory_utilization
-from ...physics import G
+from ...world.wind import WindParams
+from .rigid_model import unsupported
 
 PILOTS = (Hover, Waypoints, ZigZag)
 ENERGY_KINDS = (Motors, Constant, SoC, RadioLinear, RadioStates, HoverPower)
@@ -64,87 +66,141 @@ def check(m) -> None:
         raise _refuse("dataset_dir", str(m.dataset_dir), "recording a dataset renders frames")
     if m.max_wall_s is not None:
         raise _refuse("max_wall_s", m.max_wall_s, "a per-flight host-time guard")
-    plan = resolve(m)
-    model = flight_energy_model(m.drone.energy, extra_sensors=list(m.drone.extra_sensors)
-                                + list(m.sensors), device=plan.onboard_device,
-                                blueprint_device=m.drone.device)
-    for path, comp in model.leaves():
+    for path, comp in parts.energy_model(resolve(m)).leaves():
         if type(comp) not in ENERGY_KINDS:
             raise _refuse(f"energy component {path!r}", comp, "a user energy component has no "
                           "batched version")
 
 
-def _energy(meter) -> tuple[tuple, dict]:
-    """(structure, numbers) of the energy model's leaves: one power per leaf."""
-    kinds, tops, num = [], [], {"const_w": [], "radio": [], "states": []}
-    motors = None
+class EnergyLeaves(NamedTuple):
+    """Per leaf of the energy model: its constant power (W; 0 for motors and radio states),
+    the ``RadioLinear`` coefficients (uJ per byte / packet, tx then rx) and the
+    ``RadioStates`` powers (tx, rx, idle W, bit rate), in leaf order."""
+
+    const_w: np.ndarray
+    radio: np.ndarray
+    states: np.ndarray
+
+
+class PilotParams(NamedTuple):
+    """A Hover's or a Waypoints' numbers (``points`` (k, 3): the waypoints)."""
+
+    points: np.ndarray
+    speed: float
+    yaw: float
+    duration: float
+    return_speed: float
+    altitude: float
+
+
+class MissionParams(NamedTuple):
+    """The plan's numbers: stages, clocks, end conditions, heartbeats."""
+
+    accel: float
+    climb_speed: float
+    descent_speed: float
+    return_home: bool
+    t_end: float
+    timed: bool
+    use_reserve: bool
+    energy_period: float
+    e_usable: float
+    reserve_j: float
+    hb_period: float
+    hb_bytes: float
+    mem_utilization: float
+
+
+class AeroParams(NamedTuple):
+    """Air density, the fluid ellipsoid (semi-axes, blunt drag coefficient) and the rotors'
+    H-force (coefficient, hubs (n, 3) in the body frame)."""
+
+    rho: float
+    size: np.ndarray
+    c_blunt: float
+    h_c: float
+    h_hubs: np.ndarray
+
+
+class VariantParams(NamedTuple):
+    """One variant's numbers, grouped by the core object that exports them (a pytree of
+    arrays: stacked over a batch, ``jax.vmap``-ed)."""
+
+    ctrl: ControllerParams
+    motors: MotorParams
+    battery: BatteryParams
+    wind: WindParams
+    energy: EnergyLeaves
+    pilot: PilotParams
+    mission: MissionParams
+    aero: AeroParams
+
+
+def _no_motors(n: int) -> MotorParams:
+    """Placeholder coefficients where the model has no ``Motors`` (never evaluated)."""
+    return MotorParams(1.0, 0.0, 1.0, 1.0, 1.0, 0.0, 1.0, 0.0, np.zeros((n, 2)), np.zeros(n),
+                       False, 1.0, 1.0, 0.0, 0.0, 0.0)
+
+
+def _energy(meter, n: int) -> tuple[tuple, EnergyLeaves, MotorParams]:
+    """(structure, leaves' numbers, motor coefficients) of the energy model."""
+    kinds, tops, const, radio, states = [], [], [], [], []
+    motors = _no_motors(n)
     for path, comp in meter.model.leaves():
         kinds.append(type(comp).__name__)
         tops.append(path.split(".", 1)[0])
         if isinstance(comp, Motors):
-            motors = comp
-            num["const_w"].append(0.0)
+            motors = comp.batch_params()
+            const.append(0.0)
         elif isinstance(comp, HoverPower):
-            num["const_w"].append(comp._p)              # airborne only (energy.py)
+            const.append(comp.airborne_power_w)          # airborne only (energy.py)
         elif isinstance(comp, SoC):
-            num["const_w"].append(comp.idle_w)          # no tasks: never busy
+            const.append(comp.idle_w)                    # no tasks: never busy
         elif isinstance(comp, Constant):
-            num["const_w"].append(comp.power_w)
+            const.append(comp.power_w)
         elif isinstance(comp, RadioLinear):
-            num["const_w"].append(comp.idle_w)
-            num["radio"].append([comp.tx_uj_per_byte, comp.tx_uj_per_packet,
-                                 comp.rx_uj_per_byte, comp.rx_uj_per_packet])
-        else:                                           # RadioStates
-            num["const_w"].append(0.0)
-            num["states"].append([comp.tx_w, comp.rx_w, comp.idle_w, comp.bitrate_bps])
-    for key in ("radio", "states"):
-        num[key] = np.asarray(num[key] or np.zeros((0, 4)), dtype=float).reshape(-1, 4)
-    num["const_w"] = np.asarray(num["const_w"], dtype=float)
-    if motors is not None:
-        num.update(m_inv2rhoA=motors._inv2rhoA, m_c0=motors._c0, m_R=motors._R,
-                   m_inv_kf=motors._inv_kf, m_inv_eta=motors._inv_eta, m_hk=motors._hk,
-                   m_kappa=motors.induced_power_factor, m_wake=motors.wake_interference,
-                   m_dirs=np.asarray(motors._dirs, dtype=float),
-                   m_vi0=np.asarray(motors._vi, dtype=float),
-                   # the DC motor model (datasheet blueprints), else a constant efficiency
-                   m_model=motors._kv is not None, m_esc=motors.esc_efficiency,
-                   m_kv=motors._kv or 1.0, m_rm=motors.motor_rm_ohm or 0.0,
-                   m_i0=motors.motor_i0_a or 0.0,
-                   m_inv_w0=1.0 / motors.motor_i0_rad_s if motors.motor_i0_rad_s else 0.0)
-    return (tuple(kinds), tuple(tops)), num
+            const.append(comp.idle_w)
+            radio.append([comp.tx_uj_per_byte, comp.tx_uj_per_packet, comp.rx_uj_per_byte,
+                          comp.rx_uj_per_packet])
+        else:                                            # RadioStates
+            const.append(0.0)
+            states.append([comp.tx_w, comp.rx_w, comp.idle_w, comp.bitrate_bps])
+    leaves = EnergyLeaves(np.asarray(const, dtype=float),
+                          np.asarray(radio or np.zeros((0, 4)), dtype=float).reshape(-1, 4),
+                          np.asarray(states or np.zeros((0, 4)), dtype=float).reshape(-1, 4))
+    return (tuple(kinds), tuple(tops)), leaves, motors
 
 
-def _controller(c: CascadedController) -> dict:
-    return {"mass": c.mass, "J": np.asarray(c.J, dtype=float), "fmax": c.fmax,
-            "k_rate": c.k_rate, "k_att": c.k_att, "k_yaw_rate": c.k_yaw_rate, "k_yaw": c.k_yaw,
-            "k_vel": c.k_vel, "k_vel_i": c.k_vel_i, "k_pos": c.k_pos, "tan_tilt": c.tan_tilt,
-            "a_up": c.a_up, "a_down": c.a_down, "i_lim_h": c.i_lim_h, "i_lim_z": c.i_lim_z,
-            "kd_h": c.kd_h, "kd_v": c.kd_v, "B": np.asarray(c.B, dtype=float)}
-
-
-def _pilot(p) -> tuple[tuple, dict]:
+def _pilot(p) -> tuple[tuple, PilotParams]:
+    alt = float(p.altitude)
     if isinstance(p, Waypoints):
         pts = np.asarray(p.points, dtype=float)
         return (("waypoints", len(pts), bool(p.loop)),
-                {"points": pts, "speed": p.speed, "yaw": p.yaw, "duration": math.inf,
-                 "return_speed": p.speed})
-    return (("hover",), {"points": np.zeros((1, 3)), "speed": 0.0, "yaw": p.yaw,
-                         "duration": math.inf if p.duration is None else p.duration,
-                         "return_speed": getattr(p, "speed", 5.0)})
+                PilotParams(pts, p.speed, p.yaw, math.inf, p.speed, alt))
+    return (("hover",), PilotParams(np.zeros((1, 3)), 0.0, p.yaw,
+                                    math.inf if p.duration is None else p.duration,
+                                    getattr(p, "speed", 5.0), alt))
 
 
-def _wind(plan) -> dict:
-    w = plan.wind
-    if w is None:
-        return {"w_mean": np.zeros(3), "w_active": False, "w_gust_std": -1.0, "w_gust_tau": -1.0,
-                "w_sigma_w20": 0.0, "w_carry": 1.0}
-    return {"w_mean": np.asarray(w.mean, dtype=float), "w_active": bool(w.turbulent),
-            "w_gust_std": -1.0 if w.gust_std is None else w.gust_std,
-            "w_gust_tau": -1.0 if w.gust_tau_s is None else w.gust_tau_s,
-            "w_sigma_w20": w.sigma_w20, "w_carry": w.carry_mps}
+def _wind(plan) -> WindParams:
+    if plan.wind is None:
+        return WindParams(np.zeros(3), False, -1.0, -1.0, 0.0, 1.0)
+    return plan.wind.batch_params()
 
 
-def variant(m) -> tuple[tuple, dict, object]:
+def _mission(plan, drone, meter, ctrl) -> MissionParams:
+    bat = drone.battery
+    return MissionParams(
+        accel=parts.trajectory_accel(plan, ctrl),
+        climb_speed=plan.climb_speed, descent_speed=plan.descent_speed,
+        return_home=plan.return_home, t_end=plan.t_end, timed=not isinstance(plan.until, str),
+        use_reserve=plan.use_reserve, energy_period=1.0 / plan.energy_hz,
+        e_usable=bat.energy_j, reserve_j=bat.reserve_fraction * bat.energy_j,
+        hb_period=drone.radio.heartbeat_period_s, hb_bytes=float(drone.radio.heartbeat_bytes),
+        mem_utilization=memory_utilization((), plan.onboard_device))
+
+
+def variant(m) -> tuple[tuple, VariantParams, object]:
     """(structure key, numbers, MuJoCo model) of one variant mission ``m``: variants
     with the same key fly in one batch."""
     plan = resolve(m)
@@ -154,33 +210,31 @@ def variant(m) -> tuple[tuple, dict, object]:
     sizes, c_blunt = np.asarray(aero.size, dtype=float), float(aero.fluid_coefs[0])
     spec.option.density = 0.0           # MJX has only the inertia-box fluid model: drag is ours
     model = spec.compile()
-    ctrl = CascadedController(drone, plan.ctrl_dt, rho=rho)
-    meter = Meter(flight_energy_model(
-        drone.energy, extra_sensors=list(drone.extra_sensors) + list(plan.sensors),
-        device=plan.onboard_device, blueprint_device=drone.device), drone, rho=rho)
-    e_key, e_num = _energy(meter)
-    p_key, p_num = _pilot(plan.pilot)
-    tw = drone.thrust_to_weight_at(rho)
-    bat, circ = drone.battery, meter.battery
-    num = {**_controller(ctrl), **e_num, **p_num, **_wind(plan),
-           "accel": min(2.5, 0.25 * (tw - 1.0) * G, 1.5 * ctrl.k_vel),
-           "altitude": float(plan.pilot.altitude), "climb_speed": plan.climb_speed,
-           "descent_speed": plan.descent_speed, "return_home": plan.return_home,
-           "rho": rho, "aero_size": sizes, "aero_c": c_blunt,
-           # rotor drag (airframe/rotor_drag.py RotorDrag; blade_drag 0: none)
-           "h_c": h_coefficient(drone.rotor.blade_drag, drone.rotor.diameter_m,
-                                drone.rotor.thrust_coeff, rho),
-           "h_hubs": np.asarray(hubs(drone), dtype=float),
-           "e_usable": bat.energy_j, "reserve_j": bat.reserve_fraction * bat.energy_j,
-           "b_lipo": circ.chemistry == "lipo", "b_cells": float(circ.cells), "b_qc": circ.q_c,
-           "b_rmid": circ.r_mid, "b_vcut": circ.v_cut, "b_v0": circ.voltage_v,
-           "hb_period": drone.radio.heartbeat_period_s, "hb_bytes": float(drone.radio.heartbeat_bytes),
-           "t_end": plan.t_end, "timed": not isinstance(plan.until, str),
-           "use_reserve": plan.use_reserve, "energy_period": 1.0 / plan.energy_hz,
-           "mem_utilization": memory_utilization((), plan.onboard_device)}
+    ctrl = parts.controller(plan)
+    meter = parts.meter(plan)
+    e_key, leaves, motors = _energy(meter, drone.airframe.rotor_count)
+    p_key, pilot = _pilot(plan.pilot)
+    num = VariantParams(
+        ctrl=ctrl.batch_params(), motors=motors, battery=meter.battery.batch_params(),
+        wind=_wind(plan), energy=leaves, pilot=pilot, mission=_mission(plan, drone, meter, ctrl),
+        # the fluid ellipsoid (airframe/model.py) and the rotors' H-force
+        # (airframe/rotor_drag.py RotorDrag; blade_drag 0: none)
+        aero=AeroParams(rho=rho, size=sizes, c_blunt=c_blunt,
+                        h_c=h_coefficient(drone.rotor.blade_drag, drone.rotor.diameter_m,
+                                          drone.rotor.thrust_coeff, rho),
+                        h_hubs=np.asarray(hubs(drone), dtype=float)))
     key = (plan.substeps, plan.physics_dt, plan.ctrl_dt, book_period(plan.ctrl_dt),
            drone.airframe.rotor_count, e_key, p_key, model.nq, model.nv, model.ngeom, model.nu)
     return key, num, model
+
+
+def free_flight_unsupported(m) -> str | None:
+    """Why the free-flight body (``backend="jax"``) cannot fly mission ``m``'s drone (None:
+    it can; then ``backend="mjx"`` is not needed)."""
+    plan = resolve(m)
+    spec = build_spec(plan.drone, None, physics_dt=plan.physics_dt, rho=plan.atmosphere.density)
+    spec.option.density = 0.0
+    return unsupported(spec.compile())
 
 
 def wind_rng(m) -> np.random.Generator:

@@ -27,10 +27,10 @@ def rows(s, nums, tops, book_dt) -> list[dict]:
         row.update(_energy(s, b, num, tops, t))
         n_hb = float(s["hb_drained"][b])
         row.update({"kbytes_in": n_hb * ACK_BYTES / 1000.0,
-                    "kbytes_out": n_hb * num["hb_bytes"] / 1000.0,
+                    "kbytes_out": n_hb * num.mission.hb_bytes / 1000.0,
                     "packets_in": n_hb, "packets_out": n_hb,
                     "cpu_utilization": 0.0, "cpu_time_s": 0.0, "io_time_s": 0.0,
-                    "mem_utilization": float(num["mem_utilization"])})
+                    "mem_utilization": float(num.mission.mem_utilization)})
         out.append({k: row[k] for k in _ORDER if k in row})
     return out
 
@@ -57,7 +57,7 @@ def _energy(s, b, num, tops, t) -> dict:
     e_m, e_p, e_c = by_top.get("motors", 0.0), by_top.get("proc", 0.0), by_top.get("comm", 0.0)
     loss = float(s["loss_j"][b])
     drain = e_tot + loss
-    usable = float(num["e_usable"])
+    usable = float(num.mission.e_usable)
     share = (lambda e: e / e_tot) if e_tot > 0 else (lambda e: 0.0)
     return {"energy_total_j": e_tot, "energy_motors_j": e_m, "energy_proc_j": e_p,
             "energy_comm_j": e_c, "energy_battery_loss_j": loss,

@@ -1,0 +1,76 @@
+"""A fleet that searches together: detections go up the shared radio to one ground
+station, which sends the nearest free drone to confirm each new one; fleet KPIs are
+scored against where the five walkers really were."""
+
+import math
+
+import pytest
+
+import pytest_flockai as fa
+from pytest_flockai.errors import ConfigError
+
+AREA = ((-60.0, -60.0), (60.0, 60.0))
+
+
+def search(n, *, station=None, orbit_s=10.0):
+    people = fa.actors.walkers(5, ((-55.0, -55.0), (55.0, 55.0)), seed=4)
+    station = station or fa.policy.GroundStation((0.0, 0.0, 0.0))
+    drones = []
+    for i, (pilot, pad) in enumerate(fa.fleet.survey(AREA, n, altitude=20.0, spacing=15.0,
+                                                     speed=6.0)):
+        eye = fa.Task(fa.ml.Oracle(classes=["person"]), period_s=0.5, evaluate="detection",
+                      name="eye")
+        drones.append(fa.FleetDrone(
+            f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad, tasks=[eye], seed=i,
+            policies=[fa.policy.SharedSearch("eye", station, orbit_s=orbit_s)]))
+    return fa.Fleet(drones, world=fa.World.scene(size=(140.0, 140.0)), actors=people)
+
+
+@pytest.fixture(scope="module")
+def two():
+    return search(2).run()
+
+
+def test_two_drones_find_all_five_and_share_the_work(two):
+    k = two.kpis
+    assert k["fleet.targets_found"] == 5
+    assert k["fleet.time_to_find_all_s"] < k["fleet.makespan_s"]
+    assert k["fleet.assignments"] >= 5
+    # both drones were sent to confirm, each after a report reached the station
+    confirm = {e["drone"] for e in two.events if e["kind"] == "policy_mode"
+               and e["mode"] == "confirm"}
+    assert confirm == {"d1", "d2"}
+    assert k["d1.policy.team.time_confirm_s"] > 0 and k["d2.policy.team.time_confirm_s"] > 0
+
+
+def test_an_assignment_reaches_the_drone_after_the_radio():
+    res = search(2).run()
+    orbits = [e for e in res.events if e["kind"] == "policy" and e["action"] == "orbit"]
+    first = orbits[0]
+    # the nearest walker at that time stands within the station's gate of the orbit
+    people = fa.actors.walkers(5, ((-55.0, -55.0), (55.0, 55.0)), seed=4)
+    assert min(math.dist((first["x"], first["y"]), p.at(first["t"])[:2]) for p in people) < 10.0
+    plan = min(e["t"] for e in res.events if e["kind"] == "stage" and e["stage"] == "pilot")
+    assert first["t"] > plan
+
+
+def test_more_drones_find_everyone_sooner(two):
+    four = search(4).run().kpis
+    assert four["fleet.targets_found"] == 5
+    assert four["fleet.time_to_find_all_s"] < two.kpis["fleet.time_to_find_all_s"]
+
+
+def test_a_shared_search_needs_a_ground_station():
+    with pytest.raises(ConfigError, match="is not a fa.policy.GroundStation"):
+        fa.policy.SharedSearch("eye", station="base")
+    with pytest.raises(ConfigError, match="report_bytes = 0"):
+        fa.policy.GroundStation(report_bytes=0)
+
+
+def test_the_flight_cache_key_holds_the_search_and_survives_a_flight():
+    from pytest_flockai.cache.key import flight_key
+    f = search(2, orbit_s=5.0)
+    before = flight_key(f)
+    f.run()
+    assert flight_key(f) == before
+    assert flight_key(search(2, orbit_s=6.0)) != before
