@@ -272,6 +272,14 @@ def test_the_scenario_summary_names_the_model_by_its_file_hash(tmp_path):
                           "conditions": {"visibility_m": 300.0, "severity": 0}})
     assert s["model"] == f"cnn sha256:{digest[:8]} (onboard)"
     assert s["seed"] == "3" and s["conditions"] == '{"visibility_m":300.0}'
+    hover = {"type": "Hover", "altitude": 10.0, "duration": 5.0, "yaw": 0.0}
+    assert scenario.summary({"pilot": hover})["pilot"] == "Hover(altitude=10, duration=5, yaw=0)"
+    assert scenario.diff(scenario.summary({"pilot": hover}),
+                         scenario.summary({"pilot": dict(hover, duration=6.0)})) == [
+        "pilot: Hover(altitude=10, duration=5, yaw=0) -> Hover(altitude=10, duration=6, yaw=0)"]
+    long = {"type": "Waypoints", "points": [[float(i), 0.0, 10.0] for i in range(40)]}
+    a, b = (scenario.summary({"pilot": p})["pilot"] for p in (long, dict(long, speed=3.0)))
+    assert a.startswith("Waypoints sha256:") and a != b     # long settings: a hash that differs
     other = dict(s, model="cnn sha256:00000000 (onboard)")
     assert scenario.diff(s, other) == [f"model: cnn sha256:{digest[:8]} (onboard) -> "
                                        f"cnn sha256:00000000 (onboard)"]
