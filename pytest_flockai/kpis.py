@@ -113,6 +113,10 @@ _ROWS = [
      "every person was confirmed (NaN unless all were)"),
     ("fleet.reports", "count", None, "a search together: detections reported to the ground station"),
     ("fleet.assignments", "count", None, "a search together: drones sent to confirm a report"),
+    ("fleet.associations", "count", None, "a search together: reports taken as a known target "
+     "(inside its gate), not assigned again"),
+    ("fleet.handoffs", "count", None, "a search together: diverted drones whose unflown legs "
+     "were shared with the free drones (GroundStation share)"),
     ("offload.latency_p95_s", "s", "lower", "fleet offload: 95th percentile capture-to-result latency"),
     ("link.queue_delay_p95_s", "s", "lower", "fleet offload: 95th percentile wait for the channel"),
     ("ground.queue_delay_mean_s", "s", "lower", "fleet offload: mean wait for the ground device"),
@@ -152,8 +156,23 @@ def abs_tolerance(name: str) -> float:
 
 
 def get(name: str) -> KPI | None:
-    """The KPI ``name``: built in, registered, a family member (``recall.person``)
-    or a task's own (``<task>.<kpi>``, e.g. ``cnn.recall.person``)."""
+    """The KPI ``name``: built in, registered, a family member (``recall.person``),
+    a task's own (``<task>.<kpi>``, e.g. ``cnn.recall.person``) or one drone's of a
+    fleet (``<drone>.<any of those>``, e.g. ``d1.policy.team.time_confirm_s``)."""
+    k = _resolve(name)
+    if k is not None or not isinstance(name, str) or "." not in name:
+        return k
+    drone, rest = name.split(".", 1)
+    if not drone or rest.startswith("fleet."):     # fleet-wide KPIs have no per-drone copy
+        return None
+    k = _resolve(rest)
+    if k is None:
+        return None
+    return KPI(name, k.unit, k.better, f"drone {drone}: {k.description}", k.abs_tol)
+
+
+def _resolve(name: str) -> KPI | None:
+    """``get`` without the fleet drone prefix."""
     k = REGISTRY.get(name)
     if k is not None or not isinstance(name, str) or "." not in name:
         return k

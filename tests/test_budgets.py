@@ -163,6 +163,26 @@ def test_custom_dotted_kpi_after_registration_checks_the_unit():
     assert parse("budgettest.temp", "<= 70").limit == 70.0
 
 
+def test_a_fleet_drones_dotted_kpi_resolves_like_its_own_name():
+    from pytest_flockai.policy import register_kpis
+    register_kpis("budgetteam", ("confirm",))
+    name = "d1.policy.budgetteam.time_confirm_s"
+    b = parse(name, "<= 2 min")
+    assert (b.limit, b.dimension) == (120.0, "s")
+    assert b.verdict(100.0).passed and not b.verdict(130.0).passed
+    assert b.verdict(130.0).margin_text == "-0.1667 min"
+    assert "measures length" in _error(name, "<= 3 m")
+    assert kpis.get(name).unit == "s" and "drone d1" in kpis.get(name).description
+    assert kpis.abs_tolerance(name) == kpis.UNIT_ABS_TOL["s"]
+    # every way an un-prefixed name resolves, a drone's name resolves the same way
+    for plain in ("flight_time_s", "cnn.recall.person", "recall.alt_0_10m", "cnn.energy_j",
+                  "policy.budgetteam.triggers"):
+        k, d = kpis.get(plain), kpis.get(f"drone-2.{plain}")
+        assert (d.unit, d.better) == (k.unit, k.better), plain
+    assert kpis.get("d1.fleet.makespan_s") is None      # fleet-wide: no per-drone copy
+    assert kpis.get("d1.d2.policy.budgetteam.triggers") is None    # one drone prefix
+
+
 def test_percent_only_for_fractions_not_counts():
     from pytest_flockai.budgets import parse
     from pytest_flockai import ConfigError

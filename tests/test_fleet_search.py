@@ -12,8 +12,8 @@ from pytest_flockai.errors import ConfigError
 AREA = ((-60.0, -60.0), (60.0, 60.0))
 
 
-def search(n, *, station=None, orbit_s=10.0):
-    people = fa.actors.walkers(5, ((-55.0, -55.0), (55.0, 55.0)), seed=4)
+def search(n, *, station=None, orbit_s=10.0, people=None):
+    people = people or fa.actors.walkers(5, ((-55.0, -55.0), (55.0, 55.0)), seed=4)
     station = station or fa.policy.GroundStation((0.0, 0.0, 0.0))
     drones = []
     for i, (pilot, pad) in enumerate(fa.fleet.survey(AREA, n, altitude=20.0, spacing=15.0,
@@ -74,3 +74,58 @@ def test_the_flight_cache_key_holds_the_search_and_survives_a_flight():
     f.run()
     assert flight_key(f) == before
     assert flight_key(search(2, orbit_s=6.0)) != before
+
+
+def test_a_report_near_a_known_target_is_associated_not_assigned_again():
+    # five people standing where the walkers start: each is seen by several drones, but
+    # every later report falls inside its target's gate, so one assignment per person
+    standing = [fa.actors.Person([w.path[0]], name=w.name)
+                for w in fa.actors.walkers(5, ((-55.0, -55.0), (55.0, 55.0)), seed=4)]
+    station = fa.policy.GroundStation((0.0, 0.0, 0.0))
+    k = search(4, station=station, people=standing).run().kpis
+    assert k["fleet.targets_found"] == 5
+    assert k["fleet.assignments"] == 5 == len(station.targets)
+    assert k["fleet.associations"] >= 1
+    assert k["fleet.reports"] == k["fleet.associations"] + len(station.targets)
+
+
+def test_the_association_rule_is_a_gate_around_each_targets_last_fix():
+    s = fa.policy.GroundStation(gate_m=10.0, walk_mps=1.4, gate_max_m=20.0)
+    s.fix = [(0.0, 0.0, 0.0, 0.0, 0.0), (30.0, 0.0, 0.0, 0.0, 0.0)]
+    assert s.associate((9.0, 0.0), 0.0) == 0
+    assert s.associate((12.0, 0.0), 0.0) is None             # outside 10 m at age 0
+    assert s.associate((12.0, 0.0), 5.0) == 0                # 10 + 1.4 * 5 = 17 m
+    assert s.associate((18.0, 0.0), 5.0) == 1                # the nearest of the two
+    assert s.associate((0.0, 31.0), 100.0) is None           # growth capped at 20 m
+    s.predict, s.fix = True, [(0.0, 0.0, 0.0, 1.0, 0.0)]     # walking east at 1 m/s
+    assert s.associate((40.0, 0.0), 40.0) == 0
+
+
+def test_free_drones_replan_to_cover_a_diverted_drones_legs(two):
+    station = fa.policy.GroundStation((0.0, 0.0, 0.0), share="tail")
+    res = search(2, station=station).run()
+    ev = res.events
+    covers = [e for e in ev if e["kind"] == "policy" and e["action"] == "replan" and "cover" in e]
+    assert covers and station.kpis()["fleet.handoffs"] >= 1
+    for c in covers:
+        # the covered drone had left its strip for an orbit before, and is not the coverer
+        assert c["cover"] != c["drone"]
+        assert any(e["kind"] == "policy" and e["action"] == "orbit" and
+                   e["drone"] == c["cover"] and e["t"] < c["t"] for e in ev)
+    kept = [e for e in ev if e["kind"] == "policy" and e["action"] == "replan" and "kept" in e]
+    assert {e["drone"] for e in kept} <= {c["cover"] for c in covers}
+    # with two drones sharing the legs, everyone is found sooner than without (171 s)
+    k = res.kpis
+    assert k["fleet.targets_found"] == 5
+    assert k["fleet.time_to_find_all_s"] < two.kpis["fleet.time_to_find_all_s"]
+
+
+def test_a_ground_station_refuses_an_unknown_share():
+    with pytest.raises(ConfigError, match="share = 'some'"):
+        fa.policy.GroundStation(share="some")
+
+
+@pytest.mark.kpi({"d1.policy.team.time_confirm_s": "<= 2 min", "d2.policy.team.triggers": ">= 1",
+                  "fleet.targets_found": ">= 5"})
+def test_budgets_on_a_drones_policy_kpis_parse_and_are_checked():
+    search(2).run()

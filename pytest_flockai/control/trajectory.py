@@ -80,6 +80,11 @@ class Path:
         self.length = sum(leg.length for leg in self.legs)
         self._i = 0
 
+    @property
+    def leg(self) -> int:
+        """Index of the leg being flown (the last one ``fill`` reached)."""
+        return self._i
+
     def fill(self, t: float, sp) -> bool:
         legs, starts = self.legs, self.starts
         i = self._i

@@ -33,7 +33,7 @@ from .. import _check
 from .. import kpis as _kpis
 from ..clock import Clocked
 from ..control.follow import Goto, Resume, yaw_of
-from ..control.pilots import Hover, Orbit, Pilot
+from ..control.pilots import Hover, Orbit, Pilot, Waypoints
 from ..control.stages import LAND, PILOT, RETURN, STAGES, TAKEOFF
 from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
@@ -237,6 +237,39 @@ class Cockpit:
         self._survey = None
         self._stages.replace_pilot(self.t, Resume(plan, t_left, sp, getattr(plan, "speed", 5.0)))
         self._log("resume")
+        return True
+
+    @property
+    def plan_pilot(self):
+        """The mission's plan (the pilot left for an orbit or goto, else the one flown)."""
+        return self._survey[0] if self._survey is not None else self._stages.pilot
+
+    def plan_ahead(self) -> list:
+        """The mission plan's waypoints not reached yet, [(x, y, z), ...]; when the plan
+        was left (orbit, goto), first the setpoint where it was left. [] outside the pilot
+        stage or when the plan is not a ``Waypoints`` pilot (``ZigZag`` is one)."""
+        plan, left = self.plan_pilot, None
+        if self._survey is not None:
+            left = self._survey[2]
+        if isinstance(plan, Resume):           # on the way back to a plan left earlier
+            plan, left = plan.plan, (left if getattr(plan, "_back", False) else plan.at)
+        if self._st.stage != PILOT or not isinstance(plan, Waypoints):
+            return []
+        path = getattr(plan, "path", None)
+        ahead = list(plan.points[path.leg if path is not None else 0:])
+        if left is not None:
+            ahead.insert(0, tuple(float(v) for v in left[:3]))
+        return ahead
+
+    def replan(self, points, **info) -> bool:
+        """Make ``Waypoints(points)`` the mission's plan from now on (at the plan's speed;
+        a later ``resume`` comes back to it); False when refused (outside the pilot stage)."""
+        if self._st.stage != PILOT:
+            return self._refuse("replan")
+        plan = self._survey[0] if self._survey is not None else self._stages.pilot
+        self._survey = None
+        self._stages.replace_pilot(self.t, Waypoints(points, getattr(plan, "speed", 5.0)))
+        self._log("replan", points=len(points), **info)
         return True
 
     def return_home(self) -> bool:
