@@ -8,6 +8,8 @@ import os
 
 import pytest
 
+from ..errors import ConfigError
+
 DEFAULT_DRONE = "dji-mavic-2-pro"
 
 
@@ -30,8 +32,19 @@ def drone(request):
     value = setting(request, "drone", DEFAULT_DRONE)
     if isinstance(value, (str, os.PathLike)):
         from ..airframe import drone as make_drone     # lazy: the core loads on first use
-        return make_drone(value)
+        return _built(request, make_drone, value)
     return value
+
+
+def _built(request, make, *args, **kw):
+    """``make(*args, **kw)``; a setting it refuses fails the test in one line naming the
+    test, as a bad marker does (no traceback into the core)."""
+    try:
+        return make(*args, **kw)
+    except ConfigError as exc:
+        error = str(exc)
+    pytest.fail(f"pytest-flockai: bad mission setting (@pytest.mark.flockai or fixture) on "
+                f"{request.node.nodeid}: {error}", pytrace=False)
 
 
 @pytest.fixture
@@ -67,9 +80,9 @@ def mission(request, drone, pilot, world, tasks, probes):
 
     ``pytest_flockai_adjust_mission(mission, item)`` hooks run on it last."""
     from ..mission import Mission                      # lazy: the core loads on first use
-    m = Mission(drone, pilot, world=world, tasks=tasks, probes=probes,
-                wind=setting(request, "wind", None), seed=setting(request, "seed", 0),
-                until=setting(request, "until", "landed"), name=setting(request, "name", None))
+    m = _built(request, Mission, drone, pilot, world=world, tasks=tasks, probes=probes,
+               wind=setting(request, "wind", None), seed=setting(request, "seed", 0),
+               until=setting(request, "until", "landed"), name=setting(request, "name", None))
     request.config.hook.pytest_flockai_adjust_mission(mission=m, item=request.node)
     return m
 
