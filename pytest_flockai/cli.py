@@ -17,6 +17,7 @@ stderr naming it), 3 an internal error (a bug: one line, never a traceback).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -130,7 +131,12 @@ def _cache_cmd(a) -> int:
 def main(argv=None) -> int:
     a = _parser().parse_args(argv)          # a usage error exits 2 (argparse)
     try:
-        return _run(a)
+        status = _run(a)
+        sys.stdout.flush()                   # a reader that left shows here, not at exit
+        return status
+    except BrokenPipeError:                 # `flockai blueprints | head`: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return OK
     except (FlockAIError, OSError, RecursionError, MemoryError) as exc:
         _say(a.cmd, str(exc) if isinstance(exc, FlockAIError) else
              f"{type(exc).__name__}: {exc}")

@@ -93,7 +93,7 @@ def pytest_configure(config):
         "flight_time_s='>= 24 min', checked against the flights of this test (pytest-flockai)")
     config.addinivalue_line(
         "markers", "flockai(drone=, pilot=, world=, tasks=, probes=, seed=, until=, wind=, "
-        "name=, max_regression=): quick settings for the pytest-flockai fixtures")
+        "name=, max_regression=, abs_tol=): quick settings for the pytest-flockai fixtures")
     config.addinivalue_line(
         "markers", "flockai_sweep(**axes, samples=None, method='grid', seed=0, workers=None, "
         "executor=None, batch_size=None, progress=None): "

@@ -146,6 +146,16 @@ def test_a_usage_error_exits_2_and_the_module_runs_without_traceback(tmp_path):
     assert out.returncode == 2 and "Traceback" not in out.stderr
 
 
+def test_a_reader_that_leaves_early_is_not_an_error():
+    """``flockai blueprints | head -1``: the closed pipe is neither a message nor a failure."""
+    p = subprocess.Popen([sys.executable, "-m", "pytest_flockai", "blueprints"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.close()                        # before the command has printed anything
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=60) == 0
+    assert "BrokenPipe" not in err and "Exception ignored" not in err, err
+
+
 # -- cache info / prune -------------------------------------------------------------------------
 def test_cache_info_and_prune(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("FLOCKAI_CACHE_KEY", "k")

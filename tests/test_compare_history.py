@@ -127,6 +127,15 @@ def test_history_takes_the_commit_from_git(tmp_path, monkeypatch):
     assert history.git_info(repo)["dirty"] is True
 
 
+def test_history_of_a_kpi_no_run_has_exits_2_naming_the_close_ones(tmp_path, capsys):
+    history.record(tmp_path / "h", entries(1000.0), tmp_path)
+    assert cli.main(["history", str(tmp_path / "h"), "--kpi", "endurnce_s"]) == 2
+    err = capsys.readouterr().err
+    assert "--kpi 'endurnce_s': no run in" in err and "(did you mean: endurance_s?)" in err
+    assert cli.main(["history", str(tmp_path / "h"), "--kpi", "endurance_s", "--test", "nope"]) == 2
+    assert "in a test matching --test 'nope'" in capsys.readouterr().err
+
+
 def test_history_of_a_missing_directory_exits_2(tmp_path, capsys):
     assert cli.main(["history", str(tmp_path / "none"), "--kpi", "endurance_s"]) == 2
     assert "does not exist" in capsys.readouterr().err

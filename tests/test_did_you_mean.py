@@ -68,3 +68,30 @@ def test_a_misspelled_probe_kpi_in_a_budget_fails_before_the_flight(pytester):
     res.stdout.fnmatch_lines(["*budget on 'app.detections_per_mn': probe 'app' has no KPI "
                               "'app.detections_per_mn' (did you mean: app.detections_per_min?)*"])
     assert not (pytester.path / "flew.txt").exists()
+
+
+BAD_SETTINGS = '''
+import pytest
+
+@pytest.mark.flockai(drone="mavic-2")
+def test_drone_typo(flight):
+    pass
+
+@pytest.mark.flockai(drone="crazyflie-2-1", pilot="hover")
+def test_pilot_by_name(flight):
+    pass
+'''
+
+
+def test_a_mission_setting_the_core_refuses_is_one_line_naming_the_test(pytester):
+    """A misspelled blueprint or a pilot given by name fails at setup with the core's
+    message and the test's id, not a traceback into the core."""
+    pytester.makepyfile(test_settings=BAD_SETTINGS)
+    res = pytester.runpytest_inprocess("-p", "no:cacheprovider")
+    res.assert_outcomes(errors=2)
+    res.stdout.fnmatch_lines([
+        "pytest-flockai: bad mission setting * on test_settings.py::test_drone_typo: unknown "
+        "blueprint 'mavic-2' (did you mean: *dji-mavic-2-pro*",
+        "pytest-flockai: bad mission setting * on test_settings.py::test_pilot_by_name: Mission: "
+        "pilot = 'hover' is not a Pilot*"])
+    assert "Traceback" not in res.stdout.str() and "raise ConfigError" not in res.stdout.str()

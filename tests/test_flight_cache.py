@@ -60,6 +60,23 @@ def test_a_cached_result_equals_the_flown_one(tmp_path):
     assert plain.cache is None and plain == again
 
 
+def test_a_cached_detection_flight_keeps_its_worst_frames(tmp_path):
+    """The dashboard's ML gallery (a detection task's worst frames, drawn) comes back from
+    the cache: a second run of a detection test shows the same gallery as the first."""
+    world = fa.World.urban(seed=3, size=(60.0, 60.0), people=30, vehicles=10)
+
+    def mission():
+        return fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(altitude=15.0, duration=3.0),
+                          world=world, tasks=[fa.Task(fa.ml.shipped("detector"), period_s=1.0,
+                                                      evaluate="detection", name="det")])
+    with caching(FlightCache(tmp_path, "readwrite")):
+        flown = mission().run()
+        again = mission().run()
+    assert again.cache["status"] == "hit"
+    assert flown.ml_gallery["det"] and flown.ml_gallery["det"][0]["png"]
+    assert again.ml_gallery == flown.ml_gallery
+
+
 def test_modes_read_write_and_off(tmp_path):
     with caching(FlightCache(tmp_path, "read")):
         assert hover().run().cache["status"] == "flown"

@@ -85,3 +85,25 @@ def test_classes_for_labels_that_name_their_own_categories_are_refused(tmp_path)
     make_set(tmp_path, "coco", n=2)
     with pytest.raises(fa.ConfigError, match=r"classes = \['person', 'vehicle'\] names YOLO class"):
         fa.sensors.ReplayCamera(tmp_path, classes=["person", "vehicle"])
+
+
+def test_a_missing_or_empty_folder_names_evaluate_dataset_and_the_path(tmp_path):
+    task = fa.Task(lambda f: f, evaluate="detection", latency="measured", name="det")
+    with pytest.raises(fa.ConfigError, match=r"^evaluate_dataset\(task 'det'\): .*path = '.*nowhere'"
+                                             r": no such folder"):
+        fa.ml.evaluate_dataset(task, tmp_path / "nowhere")
+    with pytest.raises(fa.ConfigError, match=r"^evaluate_dataset\(task 'det'\): .*holds no images"):
+        fa.ml.evaluate_dataset(task, tmp_path)
+
+
+def test_a_model_that_fails_on_every_image_is_a_config_error_naming_why(tmp_path):
+    """decode='boxes' on a model that returns a YOLO head: not map50 0.0 and a count of
+    failures, but the first failure's reason."""
+    import numpy as np
+
+    make_set(tmp_path, "coco", n=3)
+    yolo_head = fa.ml.PythonModel(lambda f: np.zeros((1, 6, 80), np.float32), macs=1e6)
+    task = fa.Task(yolo_head, evaluate="detection", decode="boxes", name="det")
+    with pytest.raises(fa.ConfigError, match=r"^evaluate_dataset\(task 'det'\): the model failed on "
+                                             r"every one of the 3 image\(s\); the first, .*shape"):
+        fa.ml.evaluate_dataset(task, tmp_path)

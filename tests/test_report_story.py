@@ -54,7 +54,7 @@ def test_a_green_run_with_xfail_budget_failures_is_green(pytester, monkeypatch):
     test is in the JSON, Markdown and HTML reports, with the budgets it checked itself."""
     step = pytester.path / "step.md"
     monkeypatch.setenv("GITHUB_STEP_SUMMARY", str(step))
-    pytester.makepyfile(test_ml=ML_SUITE)
+    pytester.makepyfile(test_team_suite=ML_SUITE)   # not test_ml: tests/test_ml.py may be imported
     res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--flockai-json", "r.json",
                                        "--flockai-md", "s.md", "--flockai-html", "d.html")
     res.assert_outcomes(passed=3, xfailed=1, skipped=1)
@@ -76,6 +76,7 @@ def test_a_green_run_with_xfail_budget_failures_is_green(pytester, monkeypatch):
     assert step.read_text() == md
     page = (pytester.path / "d.html").read_text()
     assert 'id="status" class="ok"' in page and "passed: 5 test(s)" in page
+    assert "3 budget(s) broken where expected (2 xfail, 1 caught by pytest.raises)" in page
     tests = [r for r in _rows(page, "tests")]
     assert sorted(r[1].split("::")[-1] for r in tests) == sorted(outcomes)
     assert {r[1].split("::")[-1]: r[0] for r in tests} == outcomes      # verdict first
@@ -225,6 +226,10 @@ def test_absolute_tolerance_from_the_registry_and_overrides():
                                                                    "recall": 0.01}
     with pytest.raises(ValueError, match="KPI=VALUE"):
         cmp.parse_abs_tol(["energy_total_j"])
+    # a misspelled KPI is an error (it would silently tolerate nothing), a custom one is not
+    with pytest.raises(ValueError, match=r"unknown KPI 'energy_totl_j' \(did you mean: energy_total_j"):
+        cmp.parse_abs_tol(["energy_totl_j=5"])
+    assert cmp.parse_abs_tol(["app.detections_per_min=1"]) == {"app.detections_per_min": 1.0}
 
 
 def test_abs_tol_on_the_command_line_of_compare(tmp_path, capsys):
@@ -235,6 +240,8 @@ def test_abs_tol_on_the_command_line_of_compare(tmp_path, capsys):
     assert cli.main(args + ["--abs-tol", "energy_total_j=5"]) == 0
     assert cli.main(args + ["--abs-tol", "energy_total_j=lots"]) == 2
     assert "KPI=VALUE" in capsys.readouterr().err
+    assert cli.main(args + ["--abs-tol", "energy_totl_j=5"]) == 2
+    assert "unknown KPI 'energy_totl_j'" in capsys.readouterr().err
 
 
 def test_the_dashboard_has_a_place_for_more_sections():
@@ -265,6 +272,14 @@ def test_the_scenario_summary_names_the_model_by_its_file_hash(tmp_path):
                           "conditions": {"visibility_m": 300.0, "severity": 0}})
     assert s["model"] == f"cnn sha256:{digest[:8]} (onboard)"
     assert s["seed"] == "3" and s["conditions"] == '{"visibility_m":300.0}'
+    hover = {"type": "Hover", "altitude": 10.0, "duration": 5.0, "yaw": 0.0}
+    assert scenario.summary({"pilot": hover})["pilot"] == "Hover(altitude=10, duration=5, yaw=0)"
+    assert scenario.diff(scenario.summary({"pilot": hover}),
+                         scenario.summary({"pilot": dict(hover, duration=6.0)})) == [
+        "pilot: Hover(altitude=10, duration=5, yaw=0) -> Hover(altitude=10, duration=6, yaw=0)"]
+    long = {"type": "Waypoints", "points": [[float(i), 0.0, 10.0] for i in range(40)]}
+    a, b = (scenario.summary({"pilot": p})["pilot"] for p in (long, dict(long, speed=3.0)))
+    assert a.startswith("Waypoints sha256:") and a != b     # long settings: a hash that differs
     other = dict(s, model="cnn sha256:00000000 (onboard)")
     assert scenario.diff(s, other) == [f"model: cnn sha256:{digest[:8]} (onboard) -> "
                                        f"cnn sha256:00000000 (onboard)"]

@@ -335,6 +335,9 @@ def _arrays(r: FlightResult, prefix: str, arrays: dict) -> dict:
     people = getattr(r, "people", None)
     if people is not None:                 # the world's people, drawn on the flight path
         arrays[f"{prefix}people"] = np.asarray(people)
+    gallery = getattr(r, "ml_gallery", None)
+    if gallery:                            # the detection tasks' worst frames, for the dashboard
+        header["ml_gallery"] = gallery
     return header
 
 
@@ -345,6 +348,8 @@ def _result(h: dict, prefix: str, arrays: dict, result_type: type[FlightResult])
                       probe_samples=samples, probe_errors=h["probe_errors"])
     if f"{prefix}people" in arrays:
         out.people = arrays[f"{prefix}people"]
+    if h.get("ml_gallery"):
+        out.ml_gallery = h["ml_gallery"]
     return out
 
 

@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
+from ..errors import ConfigError
+
 if TYPE_CHECKING:      # the core loads on first use
     from ..airframe.drone import Drone
     from ..control.pilots import Pilot
@@ -39,8 +41,19 @@ def drone(request: pytest.FixtureRequest) -> Drone:
     value = setting(request, "drone", DEFAULT_DRONE)
     if isinstance(value, (str, os.PathLike)):
         from ..airframe import drone as make_drone  # lazy: the core loads on first use
-        return make_drone(value if isinstance(value, str) else Path(value))
+        return _built(request, make_drone, value if isinstance(value, str) else Path(value))
     return value
+
+
+def _built(request, make, *args, **kw):
+    """``make(*args, **kw)``; a setting it refuses fails the test in one line naming the
+    test, as a bad marker does (no traceback into the core)."""
+    try:
+        return make(*args, **kw)
+    except ConfigError as exc:
+        error = str(exc)
+    pytest.fail(f"pytest-flockai: bad mission setting (@pytest.mark.flockai or fixture) on "
+                f"{request.node.nodeid}: {error}", pytrace=False)
 
 
 @pytest.fixture
@@ -77,9 +90,9 @@ def mission(request: pytest.FixtureRequest, drone: Drone, pilot: Pilot, world: W
 
     ``pytest_flockai_adjust_mission(mission, item)`` hooks run on it last."""
     from ..mission import Mission  # lazy: the core loads on first use
-    m = Mission(drone, pilot, world=world, tasks=tasks, probes=probes,
-                wind=setting(request, "wind", None), seed=setting(request, "seed", 0),
-                until=setting(request, "until", "landed"), name=setting(request, "name", None))
+    m = _built(request, Mission, drone, pilot, world=world, tasks=tasks, probes=probes,
+               wind=setting(request, "wind", None), seed=setting(request, "seed", 0),
+               until=setting(request, "until", "landed"), name=setting(request, "name", None))
     request.config.hook.pytest_flockai_adjust_mission(mission=m, item=request.node)
     return m
 

@@ -66,8 +66,11 @@ def evaluate_dataset(task: Task, path, *, annotations="auto", split=None, classe
     if task.evaluate == "count":
         raise ConfigError(f"evaluate_dataset: task {task.name!r} has evaluate='count'; dataset "
                           f"scoring needs evaluate='detection', 'classification' or a callable")
-    cam = ReplayCamera(path, rate_hz=1.0, loop=False, annotations=annotations, split=split,
-                       classes=classes, name=task.sensor)
+    try:
+        cam = ReplayCamera(path, rate_hz=1.0, loop=False, annotations=annotations, split=split,
+                           classes=classes, name=task.sensor)
+    except ConfigError as exc:    # say which call read the folder, not only the camera
+        raise ConfigError(f"evaluate_dataset(task {task.name!r}): {exc}") from None
     if cam.files is None or cam._truth is None:
         raise ConfigError(f"evaluate_dataset: {os.fspath(path)!r} has no labels to score "
                           f"against (COCO, YOLO or VisDrone-DET)")
@@ -76,6 +79,10 @@ def evaluate_dataset(task: Task, path, *, annotations="auto", split=None, classe
     for k in range(len(cam.files)):          # n_frames of an image folder
         frame = cam.read(float(k))
         _score_one(task, scorer, k, frame, cam.last_truth, altitude_m, failures, cam.files[k])
+    if failures and len(failures) == cam.n_frames:     # a setting, not the data: say which
+        raise ConfigError(f"evaluate_dataset(task {task.name!r}): the model failed on every one of "
+                          f"the {cam.n_frames} image(s); the first, {failures[0][0]!r}: "
+                          f"{failures[0][1]}")
     kpis = {"images_scored": 0.0, **scorer.evaluation()}
     kpis["inference_failures"] = float(len(failures))
     recs = [scorer.records[k] for k in sorted(scorer.records)]

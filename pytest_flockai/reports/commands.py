@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from .. import report as _report
+from ..errors import close_matches
 from . import compare as _compare
 from . import history as _history
 
@@ -73,8 +74,20 @@ def _history_cmd(a) -> int:
     for path, why in skipped:
         print(_report.printable(f"flockai history: WARNING: skipped {path}: {why}"),
               file=sys.stderr)
+    if runs and not _history.series(runs, a.kpi, a.test):
+        raise _report.ReportError(_missing_kpi(runs, a))
     print(_report.printable(_history.render(runs, a.kpi, a.test), newlines=True))
     if a.plot is not None:
         _history.plot(runs, a.kpi, a.plot, a.test)
         print(_report.printable(f"trend drawn to {a.plot}"))
     return 0
+
+
+def _missing_kpi(runs: list[dict], a) -> str:
+    """Why ``--kpi`` (with ``--test``) has no series: a misspelling, or a test filter."""
+    where = f" in a test matching --test {a.test!r}" if a.test else ""
+    known = sorted({k for r in runs for nodeid, flights in r["tests"].items()
+                    if a.test is None or a.test in nodeid for kp in flights.values() for k in kp})
+    shown = ", ".join(known[:12]) + (f" and {len(known) - 12} more" if len(known) > 12 else "")
+    return (f"--kpi {a.kpi!r}: no run in {str(a.directory)!r} has it{where}"
+            f"{close_matches(a.kpi, known)}; KPIs there: {shown or 'none'}")

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from .. import kpis as _kpis
 from .. import report as _report
+from ..errors import close_matches
 from . import scenario as _scenario
 
 #: a relative change below this is float noise, whatever the KPI
@@ -115,7 +116,12 @@ def parse_abs_tol(items) -> dict:
             if not sep or not kpi.strip() or not (v >= 0 and math.isfinite(v)):
                 raise ValueError(f"abs tolerance {part!r} is not allowed; expected KPI=VALUE "
                                  f"with VALUE >= 0 in the KPI's SI unit, e.g. energy_total_j=5")
-            out[kpi.strip()] = v
+            kpi = kpi.strip()
+            if _kpis.get(kpi) is None and "." not in kpi:     # as the abs_tol marker setting
+                raise ValueError(f"abs tolerance {part!r}: unknown KPI {kpi!r}"
+                                 f"{close_matches(kpi, _kpis.names())}; allowed: a name from "
+                                 f"pytest_flockai.kpis.names() or a custom '<probe>.<metric>'")
+            out[kpi] = v
     return out
 
 

@@ -10,6 +10,7 @@ summary and the dashboard print before any KPI.
 
 from __future__ import annotations
 
+import hashlib
 import json
 
 #: the order the fields are printed in
@@ -93,8 +94,19 @@ def summary(scenario) -> dict:
         out["seed"] = s.get("seed")
     pilot = s.get("pilot")
     if isinstance(pilot, dict):
-        out["pilot"] = pilot.get("type")
+        out["pilot"] = _pilot(pilot)
     return {k: _text(out[k]) for k in FIELDS if out.get(k) not in (None, "")}
+
+
+def _pilot(p: dict) -> str:
+    """``Hover(altitude=10, duration=6, yaw=0)``, so that a changed waypoint or duration is
+    a scenario change; past 72 characters, the type and a hash of its settings."""
+    args = ", ".join(f"{k}={_text(v)}" for k, v in p.items() if k != "type")
+    text = f"{p.get('type')}({args})"
+    if len(text) <= 72:
+        return text
+    blob = json.dumps(p, sort_keys=True, default=str).encode()
+    return f"{p.get('type')} sha256:{hashlib.sha256(blob).hexdigest()[:8]}"
 
 
 def diff(base: dict | None, new: dict | None) -> list[str]:

@@ -135,15 +135,24 @@ def counts(doc: dict) -> str:
            f"{s.get('flights', 0)} flight(s)"
 
 
+def _expected_why(expected: list[dict]) -> str:
+    """``"1 xfail, 2 caught by pytest.raises"``: where the expected broken budgets were."""
+    n_xfail = sum(b["state"] == "xfail" for b in expected)
+    parts = [f"{n_xfail} xfail" if n_xfail else "",
+             f"{len(expected) - n_xfail} caught by pytest.raises" if len(expected) > n_xfail else ""]
+    return ", ".join(p for p in parts if p)
+
+
 def headline(doc: dict) -> str:
     """The one line of a run: pytest's counts, then the budgets and regressions."""
     broken, expected = broken_budgets(doc), expected_broken(doc)
     regs, _ = regression_groups(doc)
     cached = sum(r["cache"] == "hit" for r in flights(doc))
+    why = _expected_why(expected)
     extra = [f"{len(broken)} budget(s) broken" if broken else "every budget holds"
-             if not expected else f"{len(expected)} budget(s) broken where expected (xfail)"]
+             if not expected else f"{len(expected)} budget(s) broken where expected ({why})"]
     if broken and expected:
-        extra.append(f"{len(expected)} more where expected (xfail)")
+        extra.append(f"{len(expected)} more where expected ({why})")
     if regs:
         extra.append(f"{len(regs)} regression(s) (KPI families)")
     if cached:

@@ -45,8 +45,14 @@ FRAME_TOL = 1e-6
 
 
 class ReplayCamera(Sensor):
-    """A camera that shows recorded frames (a folder of images or a video) at
-    ``rate_hz``, with their labels as the truth (see the module docstring)."""
+    """A camera that shows recorded frames: a folder of images (with COCO, YOLO or
+    VisDrone-DET labels, scored by a detection task) or a video file.
+
+    ``rate_hz``: frames per second of the mission clock, from the task's first read;
+    ``loop=False`` shows each image once (a task with ``period_s = 1 / rate_hz`` scores
+    each once); ``annotations``, ``split`` and ``classes`` choose the labels (see
+    ``sensors.labelsets``); ``conditions`` applies what a recorded frame allows (blur,
+    light, noise, weather; not haze or a new sun direction)."""
 
     on_demand = True
 
