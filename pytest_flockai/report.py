@@ -1,64 +1,10 @@
 """Reports: the JSON report, baselines, artifacts and the text tables.
 
-JSON report (``--flockai-json PATH``), schema ``"pytest-flockai/1"``::
-
-    {
-      "schema": "pytest-flockai/1",
-      "created": "2024-01-01T12:00:00+00:00",     # wall clock of the writer, metadata only
-      "interrupted": false,                        # the session was interrupted
-      "exitstatus": 0,
-      "environment": {"python": "3.12.1", "implementation": "CPython",
-                      "platform": "Linux-...", "machine": "x86_64",
-                      "packages": {"pytest-flockai": "0.1.0", "pytest": "...",
-                                   "mujoco": "...", "numpy": "...", "pandas": "...",
-                                   "pytest-xdist": "..." or null}},
-      "options": {"baseline": path or null, "max_regression_pct": 5.0},
-      "summary": {"tests": 3, "passed": 2, "failed": 1, "flights": 4},
-      "tests": [
-        {"nodeid": "tests/test_x.py::test_hover",
-         "outcome": "passed" | "failed" | "error" | "skipped" | "xfailed" | "xpassed",
-         "error": null or "the flockai configuration error of this test",
-         "flights": [{"name": "flight", "end_reason": "landed", "sim_time_s": 45.9,
-                      "wall_time_s": 0.21,        # host time of the flight, metadata only
-                      "scenario": {...}, "kpis": {"flight_time_s": 45.96, ...},
-                      "cache": {"status": "hit" | "stored" | "flown" | "replaced" | "bypass",
-                                "key": "<sha256>" or null, "reason": str or null}
-                               or null (no flight cache; see pytest_flockai/cache)}],
-         "budgets": [{"flight": "flight", "kpi": "flight_time_s", "budget": ">= 24 min",
-                      "op": ">=", "limit": 1440.0, "actual": 45.96, "margin": -1394.04,
-                      "verdict": "pass" | "fail",
-                      "actual_text": "0.766 min", "margin_text": "-23.23 min",
-                      "source": "check", "checked": 3}],   # only for budgets.check() calls
-         "regressions": [{"flight": "flight", "kpi": "energy_total_j", "baseline": 100.0,
-                          "actual": 110.0, "change_pct": 10.0, "better": "lower"}]}
-      ]
-    }
-
-Numbers are SI (see ``kpis.py``; ``limit``, ``actual`` and ``margin`` too, the
-``*_text`` fields repeat them in the unit the budget was written in); the
-margin is positive inside the budget. Non-finite numbers are written as
-``null``. ``budgets`` is empty when the test body failed before the check or
-the marker was bad (then ``error`` says why).
-The file lists every test pytest ran, with pytest's outcome (a test that
-flew nothing has no flights; the budgets it checked itself with
-``budgets.check`` carry ``"source": "check"``). It is written atomically (a temporary file in the same directory, then
-``os.replace``), at the end of the session, also when tests fail or the
-session is interrupted.
-
-Baseline (``--flockai-save PATH``), schema ``"pytest-flockai-baseline/1"``::
-
-    {"schema": "pytest-flockai-baseline/1",
-     "tests": {"<nodeid>": {"<flight>": {"<kpi>": value, ...}, ...}, ...},
-     "scenarios": {"<nodeid>": {"<flight>": {"drone": ..., "computer": ..., ...}}}}
-
-``scenarios`` (``reports/scenario.summary``) lets a later comparison say what
-changed (``computer: jetson-nano-10w -> raspberry-pi-4``); older baselines
-without it still load.
-
-``load_baseline`` also accepts a bare ``{nodeid: {flight: kpis}}`` mapping and
-a JSON report (``pytest-flockai/1``).
-
-This module is used by the plugin only (it needs no pytest itself).
+The JSON report (schema ``"pytest-flockai/1"``) and the baseline
+(``"pytest-flockai-baseline/1"``) are described field by field in
+docs/reference/json-report.md. Reports are written atomically, at the end of the
+session, also when tests fail or the session is interrupted. This module is used by
+the plugin only (it needs no pytest itself).
 """
 
 from __future__ import annotations
