@@ -38,7 +38,8 @@ for _name in ("numpy", "pandas", "mujoco", "cv2", "onnxruntime", "matplotlib.pyp
 
 #: whole files whose every test is slow
 SLOW_FILES = {"test_sweep_mjx.py", "test_sweep_batched.py", "test_interrupted_runs.py",
-              "test_packaging.py", "test_baseline_gate.py", "test_fuzz.py"}
+              "test_packaging.py", "test_baseline_gate.py", "test_fuzz.py",
+              "test_sweep_cluster.py", "test_sweep_failures.py"}
 #: single slow tests, by function name (all their parametrizations)
 SLOW_TESTS = {
     "test_hypothesis_finds_wind_breaking_a_flight_time_budget",
@@ -63,9 +64,14 @@ SLOW_TESTS = {
     "test_remote_task_latency_grows_with_the_fleet_on_a_shared_link",
     "test_the_dashboard_in_a_headless_browser",
     "test_the_example_suite_dashboard_at_1280_px",
+    "test_cruise_beats_hover_on_a_small_folding_drone",
+    "test_the_wheel_carries_the_shipped_models",
+    "test_a_slow_radio_degrades_the_loop",
+    "test_lands_on_the_marker",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",
+                 "test_the_worst_frames_are_in_the_dashboard_with_boxes_on_the_right_objects",
                  "test_the_example_suite_dashboard_at_1280_px"}
 
 
