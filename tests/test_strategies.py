@@ -39,6 +39,9 @@ def test_check_and_evaluate_without_pytest():
 
 
 def test_hypothesis_finds_wind_breaking_a_flight_time_budget(pytester):
+    # the Crazyflie's 1 m hover lasts 6.96 min in still air and more up to ~6 m/s (translational
+    # lift), then less: 6.10 min at 8 m/s, 4.95 at 10; winds up to 12 m/s put the broken part of
+    # the range within reach of the 15 derandomized examples on every hypothesis version tested
     pytester.makepyfile(
         """
         from hypothesis import given, settings
@@ -47,7 +50,7 @@ def test_hypothesis_finds_wind_breaking_a_flight_time_budget(pytester):
         from pytest_flockai.budgets import check
 
         @settings(max_examples=15, deadline=None, database=None, derandomize=True)
-        @given(wind=fst.winds(max_speed=10.0, gusts=False))
+        @given(wind=fst.winds(max_speed=12.0, gusts=False))
         def test_hover_endurance(wind):
             r = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(1.0, 0.5), wind=wind).run()
             fst.target_margin(r, endurance_s=">= 6.8 min")
