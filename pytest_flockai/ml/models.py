@@ -1,20 +1,19 @@
 """Models: one calling convention, ``model(frame) -> prediction``.
 
-Every model has ``macs`` (multiply-accumulates per inference, int, or None
-when unknown), ``params`` (parameter count) and ``name``. ``macs_for(frame)``
-gives the MACs for a given frame (fully-convolutional ONNX models fed at the
-frame's native size cost more on bigger frames; their ``macs`` is the cost at
-the reference 320 x 240 frame, ``REFERENCE_HW``, and latency uses ``macs_for``).
+Every model has ``macs`` (multiply-accumulates per inference, int, or None when unknown),
+``params`` (parameter count) and ``name``. ``macs_for(frame)`` gives the MACs for a given frame
+(fully-convolutional ONNX models fed at the frame's native size cost more on bigger frames; their
+``macs`` is the cost at the reference 320 x 240 frame, ``REFERENCE_HW``, and latency uses
+``macs_for``).
 
-- ``OnnxModel``: an ONNX file run with ONNX Runtime; the frame is preprocessed
-  from what the model's input declares (size, layout, dtype).
-- ``OpenCVModel``: a classical OpenCV pipeline, ``fn(frame) -> prediction``,
-  with the MAC-equivalent cost stated by the user.
+- ``OnnxModel``: an ONNX file run with ONNX Runtime; the frame is preprocessed from what the
+  model's input declares (size, layout, dtype).
+- ``OpenCVModel``: a classical OpenCV pipeline, ``fn(frame) -> prediction``, with the
+  MAC-equivalent cost stated by the user.
 - ``PythonModel``: any Python function.
 
-Frames are uint8 ``H x W x 3`` arrays in RGB order (the camera renders RGB),
-or ``H x W`` greyscale.
-"""
+Frames are uint8 ``H x W x 3`` arrays in RGB order (the camera renders RGB), or ``H x W``
+greyscale."""
 
 from __future__ import annotations
 
@@ -367,9 +366,8 @@ class OnnxModel(Model):
         return np.ascontiguousarray(x)
 
     def run(self, x: np.ndarray):
-        """Run on an already preprocessed batch; raw outputs. Memoised
-        (``pytest_flockai.memo``) on the model file's bytes, the execution providers
-        and the input's bytes."""
+        """Raw outputs for a preprocessed batch; memoised (``pytest_flockai.memo``) on the model
+        file's bytes, the execution providers and the input's bytes."""
         inputs = {"model": Path(self.path), "providers": self.session.get_providers(),
                   "input": x}
         return memo.recall("onnx-run", inputs, lambda: self.session.run(None, {self.input_name: x}),

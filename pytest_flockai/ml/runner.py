@@ -1,35 +1,32 @@
-"""The task runner: one ML task (``ml.task.Task``) executed during a mission, on simulated
-seconds: ``bind(rng)`` before a flight; ``on_frame(t, frame, truth, drone_pos)`` when
-``due(t)``; ``advance(t)`` every tick; ``take_usage()`` per energy tick; ``kpis()`` at the end.
+"""The task runner: one ML task (``ml.task.Task``) executed during a mission, on simulated seconds:
+``bind(rng)`` before a flight; ``on_frame(t, frame, truth, drone_pos)`` when ``due(t)``;
+``advance(t)`` every tick; ``take_usage()`` per energy tick; ``kpis()`` at the end.
 
-What happens on a frame (``on_frame``): if the previous inference is still running, the
-frame is dropped (``on_busy="drop"``, counted in ``frames_dropped``) or queued
-(``on_busy="queue"``, up to ``max_queue`` waiting frames, then dropped). Otherwise the
-runner RUNS the real model on the frame now (the prediction is real) and schedules its
-simulated timeline:
+What happens on a frame (``on_frame``): if the previous inference is still running, the frame is
+dropped (``on_busy="drop"``, counted in ``frames_dropped``) or queued (``on_busy="queue"``, up to
+``max_queue`` waiting frames, then dropped). Otherwise the runner RUNS the real model on the frame
+now (the prediction is real) and schedules its simulated timeline:
 
 - ``onboard``: compute on the drone's device for the modeled latency ``overhead_s + MACs /
-  macs_per_s`` (or the measured, scaled host time). The result is on board at the end:
-  that is the inference latency. Then, as in the paper's scenario 1 (section 5.2), the
-  drone sends the frame, annotated with the count and position and JPEG-encoded with
-  OpenCV (real size), when the predicted count reaches ``crowd_threshold``
-  (``alert="frame"``); otherwise a ``result_bytes`` result message (count, position,
-  time). ``alert="result"`` always sends the small message.
-- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame (``cv2.imencode``,
-  quality ``jpeg_quality``: real byte size), sends it up the link at the current distance
-  to ``ground_station``, the ground decodes it and runs the model on the *decoded* frame
-  (so JPEG artefacts reach the model) for the modeled latency on ``ground_device``, then
-  sends ``result_bytes`` back down. Latency = capture to result back on the drone.
-  One request is in flight at a time (a synchronous client, like the paper's): while it
-  is, the task is busy. In a fleet (``share``) the uplink waits for the shared channel
-  and the inference for the shared ground device. In flight the model always runs, never
-  a memoised answer (the flight is cached whole; ``latency="measured"`` times the model).
+  macs_per_s`` (or the measured, scaled host time). The result is on board at the end: that is the
+  inference latency. Then, as in the paper's scenario 1 (section 5.2), the drone sends the frame,
+  annotated with the count and position and JPEG-encoded with OpenCV (real size), when the
+  predicted count reaches ``crowd_threshold`` (``alert="frame"``); otherwise a ``result_bytes``
+  result message (count, position, time). ``alert="result"`` always sends the small message.
+- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame (``cv2.imencode``, quality
+  ``jpeg_quality``: real byte size), sends it up the link at the current distance to
+  ``ground_station``, the ground decodes it and runs the model on the *decoded* frame (so JPEG
+  artefacts reach the model) for the modeled latency on ``ground_device``, then sends
+  ``result_bytes`` back down. Latency = capture to result back on the drone. One request is in
+  flight at a time (a synchronous client, like the paper's): while it is, the task is busy. In a
+  fleet (``share``) the uplink waits for the shared channel and the inference for the shared ground
+  device. In flight the model always runs, never a memoised answer (the flight is cached whole;
+  ``latency="measured"`` times the model).
 
-SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and
-alerts (``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight.
-A model raising (or a link out of range) gives a failed inference (``ok=False``, the text
-in ``error``, ``inference_failures``); the flight goes on.
-"""
+SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and alerts
+(``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight. A model
+raising (or a link out of range) gives a failed inference (``ok=False``, the text in ``error``,
+``inference_failures``); the flight goes on."""
 
 from __future__ import annotations
 
@@ -73,11 +70,10 @@ class TaskRunner:
     # -- set-up ----------------------------------------------------------------
     def bind(self, rng, *, device=None, ground_device=None, link=None, t0: float = 0.0,
              calibration=None, device_clock: DeviceClock | None = None) -> TaskRunner:
-        """Reset for a flight. ``rng``: a numpy Generator (or seed) spawned from the
-        mission seed, used for the link's loss and jitter. ``device`` /
-        ``ground_device`` / ``link`` override the task's (e.g. the drone's own
-        computer from its blueprint). ``t0``: the flight's start time.
-        ``device_clock``: a DeviceClock shared by the on-board tasks of one drone."""
+        """Reset for a flight. ``rng``: a numpy Generator (or seed) spawned from the mission seed,
+        used for the link's loss and jitter. ``device`` / ``ground_device`` / ``link`` override
+        the task's (e.g. the drone's own computer from its blueprint). ``t0``: the flight's start
+        time. ``device_clock``: a DeviceClock shared by the on-board tasks of one drone."""
         t = self.task
         self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
         if device is None:          # outside a Mission there is no drone: the paper's Pi 4
@@ -139,8 +135,7 @@ class TaskRunner:
         self._next_frame_t = max(self._next_frame_t, self._t0 + (k + 1) * self.task.period_s)
 
     def on_frame(self, t: float, frame, truth=None, drone_pos=(0.0, 0.0, 0.0)) -> None:
-        """A frame from the task's sensor at time t. Frames before ``next_frame_t``
-        are ignored, so the loop may pass every sensor frame."""
+        """A frame from the task's sensor at t; frames before ``next_frame_t`` are ignored."""
         self._need_bind()
         task = self.task
         if t < self._next_frame_t - 1e-9:
@@ -193,8 +188,7 @@ class TaskRunner:
         return out
 
     def take_usage(self):
-        """(SoC busy s, tx bytes, tx packets, rx bytes, rx packets) between the
-        previous call and the last ``advance(t)``; resets the counters."""
+        """(SoC busy s, tx/rx bytes and packets) since the previous call; resets the counters."""
         a, b = self._usage_t, self._clock
         self._usage_t = b
         if not self._busy and not self._radio:

@@ -1,29 +1,25 @@
 """Policies: clocked components that decide during the flight from what the drone knows.
 
-A ``Policy`` runs every ``period_s`` simulated seconds (after the built-in
-components of that tick) and calls ``decide(t, drone)``. ``drone`` is a
-``Cockpit``: the drone's own view, never the simulator's truth:
+A ``Policy`` runs every ``period_s`` simulated seconds (after the built-in components of that tick)
+and calls ``decide(t, drone)``. ``drone`` is a ``Cockpit``: the drone's own view, never the
+simulator's truth:
 
-- ``drone.results(task)``: the task results *delivered* since the last call
-  (``Delivered``: capture and delivery time, detections, the pose the drone
-  believed it had at capture), after inference latency, queueing and the link;
-- ``drone.position`` / ``velocity`` / ``yaw``: the navigation state it flies on
-  (the estimate with ``Mission(fly_on="estimate")``); ``drone.battery``: the
-  battery monitor's remaining fraction; ``drone.link``: distance to the ground
-  station and whether the tasks' radio reaches it; ``drone.stage``;
-  ``drone.probe(name)``: the last sample of a probe (``energy``, ``compute``,
+- ``drone.results(task)``: the task results *delivered* since the last call (``Delivered``: capture
+  and delivery time, detections, the pose the drone believed it had at capture), after inference
+  latency, queueing and the link;
+- ``drone.position`` / ``velocity`` / ``yaw``: the navigation state it flies on (the estimate with
+  ``Mission(fly_on="estimate")``); ``drone.battery``: the battery monitor's remaining fraction;
+  ``drone.link``: distance to the ground station and whether the tasks' radio reaches it;
+  ``drone.stage``; ``drone.probe(name)``: the last sample of a probe (``energy``, ``compute``,
   ``comm``, yours; not ``flight`` or ``ml``, which are scored against the truth).
 
-Actions (each an event ``{"kind": "policy", "policy": name, "action": ...}`` in
-``result.events``, counted in ``policy.<name>.triggers``): ``set_period``,
-``set_model``, ``set_execution``, ``enable``, ``disable`` a task; ``fly(pilot)``
-(replace the plan), ``goto``, ``orbit``, ``hold``, ``resume`` (back to the
-mission's own plan where it was left), ``return_home``, ``land``. Plan actions
-need the pilot stage (or the way home, which they end); asked at another stage
-(take-off, landing) they are refused (an event
-``policy_refused``, the flight goes on). ``drone.mode(name)`` names what the
-policy is doing; ``policy.<name>.time_<mode>_s`` is the time spent in each.
-"""
+Actions (each an event ``{"kind": "policy", "policy": name, "action": ...}`` in ``result.events``,
+counted in ``policy.<name>.triggers``): ``set_period``, ``set_model``, ``set_execution``,
+``enable``, ``disable`` a task; ``fly(pilot)`` (replace the plan), ``goto``, ``orbit``, ``hold``,
+``resume`` (back to the mission's own plan where it was left), ``return_home``, ``land``. Plan
+actions need the pilot stage (or the way home, which they end); asked at another stage (take-off,
+landing) they are refused (an event ``policy_refused``, the flight goes on). ``drone.mode(name)``
+names what the policy is doing; ``policy.<name>.time_<mode>_s`` is the time spent in each."""
 
 from __future__ import annotations
 

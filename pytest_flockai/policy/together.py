@@ -1,50 +1,44 @@
-"""A fleet that searches together, through one ground station (the paper's future work,
-in its simplest useful form).
+"""A fleet that searches together, through one ground station (the paper's future work, in its
+simplest useful form).
 
-Every drone of a ``fa.Fleet`` flies its own strip with a detection task and a
-``SharedSearch(task, station)`` policy; all of them hold the same ``GroundStation``.
-A drone whose tracker confirms a target it has not reported sends the point to the
-station (``report_bytes`` up the shared radio channel: one message at a time, timed
-by the link model at the drone's distance). When a report reaches the station and
-the point is new (farther than ``gate_m`` from every known target), the station
-assigns the nearest free drone (by the positions the drones last sent) to confirm
-it; the assignment reaches that drone after the downlink. The assigned drone leaves
-its strip, orbits the point for ``orbit_s``, and confirms the target when its own
-detector sees it there (another message up).
+Every drone of a ``fa.Fleet`` flies its own strip with a detection task and a ``SharedSearch(task,
+station)`` policy; all of them hold the same ``GroundStation``. A drone whose tracker confirms a
+target it has not reported sends the point to the station (``report_bytes`` up the shared radio
+channel: one message at a time, timed by the link model at the drone's distance). When a report
+reaches the station and the point is new (farther than ``gate_m`` from every known target), the
+station assigns the nearest free drone (by the positions the drones last sent) to confirm it; the
+assignment reaches that drone after the downlink. The assigned drone leaves its strip, orbits the
+point for ``orbit_s``, and confirms the target when its own detector sees it there (another message
+up).
 
-Re-planning together (``share``, default "none": every drone keeps its own strip):
-the diverted drone sends the unflown part of its plan (``plan_ahead``: where it left
-the plan, then the waypoints not reached) up in a ``handoff`` message. With "tail"
-the station cuts off the tail the drone would have flown in its time away
-(``2 * distance + orbit_s * speed`` metres) and splits it into contiguous parts, one
-per free drone; with "all" it splits all of it into one part per free drone plus one
-that the diverted drone keeps. Each part goes to the nearest free drone not yet
-given one (by the positions last sent), which appends it to its own unflown plan
-(``replan`` event: ``cover`` = whose legs, ``added`` = waypoints); after the orbit
-the diverted drone flies what the station left it (``replan`` with ``kept``), plus
-any part it was given meanwhile. A target reported while no drone is free waits for
-the next drone that reports itself free (``free`` message up).
+Re-planning together (``share``, default "none": every drone keeps its own strip): the diverted
+drone sends the unflown part of its plan (``plan_ahead``: where it left the plan, then the
+waypoints not reached) up in a ``handoff`` message. With "tail" the station cuts off the tail the
+drone would have flown in its time away (``2 * distance + orbit_s * speed`` metres) and splits it
+into contiguous parts, one per free drone; with "all" it splits all of it into one part per free
+drone plus one that the diverted drone keeps. Each part goes to the nearest free drone not yet
+given one (by the positions last sent), which appends it to its own unflown plan (``replan`` event:
+``cover`` = whose legs, ``added`` = waypoints); after the orbit the diverted drone flies what the
+station left it (``replan`` with ``kept``), plus any part it was given meanwhile. A target reported
+while no drone is free waits for the next drone that reports itself free (``free`` message up).
 
-Association (nearest neighbour with a gate): the station keeps each target's last
-fix (its report or the last report associated with it: where and when; not a
-confirmation, which may be of another person walking by; with ``predict`` also the
-reporting tracker's velocity, and the fix moves on with it). A report is the same
-target as the nearest one whose fix lies within ``gate_m + min(walk_mps * age,
-gate_max_m)`` (age: time since that fix), and only moves its fix; a report outside
-every gate is a new target and gets an assignment. ``gate_m`` (10 m) covers the
-position error of one fix (box noise and the nav estimate at 20 m altitude);
-``walk_mps`` 1.4 m/s is a comfortable walking pace (Bohannon 1997, Age and Ageing
-26(1): 127-146 cm/s, adults 20-79), the farthest a person is likely to have gone
-since the fix; ``gate_max_m`` (default 0, a fixed gate) caps that growth: a growing
-gate also merges two people who pass each other (tests/test_fleet_search.py).
+Association (nearest neighbour with a gate): the station keeps each target's last fix (its report
+or the last report associated with it: where and when; not a confirmation, which may be of another
+person walking by; with ``predict`` also the reporting tracker's velocity, and the fix moves on
+with it). A report is the same target as the nearest one whose fix lies within ``gate_m +
+min(walk_mps * age, gate_max_m)`` (age: time since that fix), and only moves its fix; a report
+outside every gate is a new target and gets an assignment. ``gate_m`` (10 m) covers the position
+error of one fix (box noise and the nav estimate at 20 m altitude); ``walk_mps`` 1.4 m/s is a
+comfortable walking pace (Bohannon 1997, Age and Ageing 26(1): 127-146 cm/s, adults 20-79), the
+farthest a person is likely to have gone since the fix; ``gate_max_m`` (default 0, a fixed gate)
+caps that growth: a growing gate also merges two people who pass each other
+(tests/test_fleet_search.py).
 
-Fleet KPIs (scored against the truth after the flight): ``fleet.targets_found``
-(distinct people within 5 m of a confirmed target), ``fleet.time_to_find_all_s``
-(first plan start to the last confirmation reaching the station; NaN unless all
-were found), ``fleet.reports``, ``fleet.assignments``, ``fleet.associations``
-(reports taken as a known target), ``fleet.handoffs``; per drone (prefixed with its
-name) ``policy.<name>.time_confirm_s``.
-"""
+Fleet KPIs (scored against the truth after the flight): ``fleet.targets_found`` (distinct people
+within 5 m of a confirmed target), ``fleet.time_to_find_all_s`` (first plan start to the last
+confirmation reaching the station; NaN unless all were found), ``fleet.reports``,
+``fleet.assignments``, ``fleet.associations`` (reports taken as a known target),
+``fleet.handoffs``; per drone (prefixed with its name) ``policy.<name>.time_confirm_s``."""
 
 from __future__ import annotations
 
