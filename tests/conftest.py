@@ -58,6 +58,7 @@ SLOW_TESTS = {
     "test_recall_falls_with_haze_and_with_blur",
     "test_blur_length_is_speed_times_exposure_times_focal_over_altitude",
     "test_the_tutorial_test_file_passes_under_pytest",
+    "test_the_readme_test_file_passes_under_pytest",
     "test_modeled_latency_identical_measured_reports_spread",
     "test_a_warm_sweep_reads_every_variant_and_starts_no_worker",
     "test_same_dataframe_with_one_or_two_worker_processes",

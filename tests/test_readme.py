@@ -41,3 +41,11 @@ def test_every_link_of_the_readme_and_docs_exists():
             if not (page.parent / target).exists():
                 missing.append(f"{page.relative_to(ROOT)} -> {target}")
     assert missing == []
+
+
+def test_the_readme_test_file_passes_under_pytest(pytester):
+    """'A test in 20 lines', saved as a test file: both tests pass with the plugin, the
+    marked one included (its budgets are checked against the survey flight)."""
+    pytester.makepyfile(test_readme_example=BLOCKS[0])
+    res = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-q")
+    res.assert_outcomes(passed=2)
