@@ -13,6 +13,8 @@ without recursion) and ``printable`` (control characters escaped for a terminal)
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import os
 import stat
 import tempfile
@@ -123,3 +125,24 @@ def printable(text: object, *, newlines: bool = False) -> str:
     """``text`` with control characters (ANSI escapes, carriage returns, ...) shown as
     ``\\xNN``, safe to print on a terminal; ``newlines`` keeps line breaks."""
     return str(text).translate(_CONTROL_KEEP_NL if newlines else _CONTROL)
+
+
+def sha256_of(path: str | os.PathLike) -> str:
+    """SHA-256 of a file's bytes, read in 1 MiB blocks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=256)
+def _sha256_memo(path: str, mtime_ns: int, size: int) -> str:
+    return sha256_of(path)
+
+
+def file_digest(path: str | os.PathLike) -> str:
+    """SHA-256 of a file's bytes, memoised on its path, mtime and size (model files, blueprints:
+    read once per process unless they change)."""
+    st = os.stat(path)
+    return _sha256_memo(os.fspath(path), st.st_mtime_ns, st.st_size)

@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from . import notebook as _notebook
-from ._io import atomic_write
+from ._io import atomic_write, sha256_of
 from .errors import ConfigError, WriteError
 from .phases import PHASES, STAGES
 
@@ -156,7 +156,7 @@ class FlightResult:
         else:
             _atomic(p, lambda fh: self.telemetry.to_csv(fh, float_format="%.17g"), text=True)
         header = _sealed({**self._header(), "telemetry": {
-            "file": p.name, "rows": int(len(self.telemetry)), "sha256": _file_sha256(p)}})
+            "file": p.name, "rows": int(len(self.telemetry)), "sha256": sha256_of(p)}})
         _atomic(_sidecar(p), lambda fh: json.dump(header, fh), text=True)
         return p
 
@@ -241,14 +241,6 @@ def _jsonl_rows(tel) -> list[str]:
             for t, row in zip(tel.index.tolist(), tel.itertuples(index=False))]
 
 
-def _file_sha256(p: Path) -> str:
-    h = hashlib.sha256()
-    with open(p, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def _digest(header: dict) -> str:
     body = {k: v for k, v in header.items() if k != "sha256"}
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode("utf-8")).hexdigest()
@@ -295,7 +287,7 @@ def _read(p: Path, ext: str):
     with open(side, encoding="utf-8") as fh:
         header = json.load(fh)
     info = _check_header(header, p, f"sidecar {str(side)!r}")
-    digest = _file_sha256(p)
+    digest = sha256_of(p)
     tel = (pd.read_parquet(p) if ext == ".parquet"
            else pd.read_csv(p, index_col="t", **_CSV_FLOATS))
     _check_rows(p, len(tel), info, digest)

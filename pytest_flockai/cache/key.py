@@ -45,6 +45,8 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from .._io import file_digest
+
 T = TypeVar("T")
 
 _PKG = "pytest_flockai"
@@ -122,21 +124,6 @@ def memo_key(kind: str, inputs: object, env: dict | None = None) -> str:
            "environment": env if env is not None else environment()}
     text = json.dumps(doc, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-@functools.lru_cache(maxsize=256)
-def _file_digest(path: str, mtime_ns: int, size: int) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
-def file_digest(path: str | os.PathLike) -> str:
-    """SHA-256 of a file's bytes (memoised on its mtime and size)."""
-    st = os.stat(path)
-    return _file_digest(os.fspath(path), st.st_mtime_ns, st.st_size)
 
 
 def _own(module: str | None) -> bool:

@@ -8,14 +8,12 @@ link), and how its predictions are scored against the simulator's truth
 
 from __future__ import annotations
 
-import functools
-import hashlib
 import os
 from collections.abc import Callable, Sequence
 from numbers import Integral
 from typing import Any
 
-from .. import _check, limits
+from .. import _check, _io, limits
 from ..comm.link import Link
 from ..comm.link import link as _link
 from ..compute.devices import Device
@@ -194,16 +192,7 @@ def model_sha256(model) -> str | None:
     if not isinstance(path, (str, os.PathLike)):
         return None
     try:
-        st = os.stat(path)
+        return _io.file_digest(path)
     except OSError:
         return None
-    return _file_sha256(os.fspath(path), st.st_mtime_ns, st.st_size)
 
-
-@functools.lru_cache(maxsize=64)
-def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
