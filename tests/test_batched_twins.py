@@ -328,8 +328,8 @@ def _stage_twin(mission):
     from pytest_flockai.mission import parts
     from pytest_flockai.sweeps.batched import engine
     plan = resolve(mission)
-    key, num, model = P.variant(mission)
-    home = (0.0, 0.0, float(model.qpos0[2]))
+    key, num, body = P.variant(mission, physics="jax")
+    home = (0.0, 0.0, float(body.qpos0[2]))
     st = SimpleNamespace(home=home, stage=None, sp=[0.0] * 10, qc=list(home), vc=[0.0] * 3,
                          v=[0.0] * 6, t_land=None, end_reason=None)
     events = SimpleNamespace(add=lambda *a, **k: None)
@@ -337,8 +337,10 @@ def _stage_twin(mission):
     accel = parts.trajectory_accel(plan, parts.controller(plan))
     core = StageMachine(st, plan.pilot, events, data, accel=accel, climb_speed=plan.climb_speed,
                         descent_speed=plan.descent_speed, return_home=plan.return_home)
-    s0 = engine._init_state(num, model, None, None, "jax")
-    s = {k: jnp.asarray(v) for k, v in s0.items() if k != "d"}
+    s0 = engine._init_states(engine._stack([num], to_jax=False),
+                             engine._data([(0, mission, num, body)], None, "jax"), np.zeros((1, 3)),
+                             len(body.rigid.tau))
+    s = {k: jnp.asarray(v[0]) for k, v in s0.items() if k != "d"}
     return core, st, data, _tree(num), s, key[6], plan.ctrl_dt
 
 

@@ -40,11 +40,14 @@ from . import rows as _rows
 
 #: s of simulated time per compiled chunk (the host checks for the end between chunks)
 CHUNK_S = 2.0
+#: members of a batch whose derived free body is checked against a compiled model
+CHECKED = 8
 #: XLA options of the chunk (see README: compile time against run time)
 COMPILER_OPTIONS: dict = {}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
 #: wall (and CPU) seconds of the last ``fly`` in this process: the variants' numbers and
-#: models (``variants_s``) and the batches (``batch_s``: states, compile or load, chunks)
+#: models (``variants_s``) and the batches (``batch_s``: states, compile or load, chunks);
+#: ``compiled``: MuJoCo models compiled (the free body derives the others, ``_checked``)
 LAST_TIMINGS: dict = {}
 
 
@@ -56,17 +59,19 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
     groups: dict = {}
     for i, values in enumerate(plan):
         try:
-            m = _axes.apply(base, values)
-            key, num, model = P.variant(m)
+            m, fp = _axes.resolved(base, values, share=True)     # read only: never flown
+            key, num, model = P.variant(m, fp, physics)
         except FlockAIError as exc:
             rows[i] = {**values, "end_reason": "error", "error": f"{type(exc).__name__}: {exc}",
                        "sim_time_s": math.nan}
             continue
         groups.setdefault(key, []).append((i, m, num, model))
+    groups, compiled = _checked(groups)
     dev = jax.devices(device)[0] if device else jax.devices()[0]
     compile_cache.enable()
     LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0,
-                        variants_cpu_s=time.process_time() - c0, batch_cpu_s=0.0)
+                        variants_cpu_s=time.process_time() - c0, batch_cpu_s=0.0,
+                        compiled=compiled)
     with jax.enable_x64(True):
         for key, members in groups.items():
             t1, c1 = time.perf_counter(), time.process_time()
@@ -78,10 +83,40 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
     return cast(list[dict], rows)       # every variant has its row (flown, or its error)
 
 
-def _stack(items):
-    """The variants' ``VariantParams`` stacked leaf by leaf (one pytree of batched arrays)."""
-    return jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])),
-                                  *items)
+def _checked(groups: dict) -> tuple[dict, int]:
+    """The groups with every derived free body (``rigid_model.free_body``, key ending in
+    ``("free", n)``) checked: ``CHECKED`` members of each group, evenly spread from the
+    first to the last, are compiled and must hold the same numbers to 1e-12; where one
+    differs, every member of that group is compiled (never a wrong number). Also the
+    number of models compiled."""
+    out: dict = {}
+    compiled = 0
+    for key, members in groups.items():
+        if key[-1][0] != "free":
+            compiled += len(members)
+            out.setdefault(key, []).extend(members)
+            continue
+        picks = sorted(set(np.linspace(0, len(members) - 1, CHECKED).round().astype(int)))
+        compiled += len(picks)
+        same = [R.same_body(members[j][3], P.compiled_body(members[j][1])) for j in picks]
+        if all(same):
+            out.setdefault(key, []).extend(members)
+            continue
+        for i, m, _, _ in members:                      # the derivation is off: compile all
+            k, num, mdl = P.variant(m, None, "jax", derive=False)
+            compiled += 1
+            out.setdefault(k, []).append((i, m, num, mdl))
+    return out, compiled
+
+
+def _stack(items, to_jax: bool = True):
+    """The variants' pytrees (``VariantParams``, states) stacked leaf by leaf into one
+    pytree of batched arrays (numpy first: strongly typed, so the scan's output has the
+    input's types and the chunk compiles once)."""
+    treedef = jax.tree_util.tree_structure(items[0])
+    cols = zip(*[treedef.flatten_up_to(x) for x in items])
+    out = [np.asarray(c) if np.ndim(c[0]) == 0 else np.stack(c) for c in cols]
+    return treedef.unflatten([jnp.asarray(x) for x in out] if to_jax else out)
 
 
 def _models(models, dev):
@@ -97,42 +132,43 @@ def _models(models, dev):
     return leaves, diff, treedef
 
 
-def _data(model, dev, physics):
-    """The physics' initial state: MJX data after ``mj_forward``, or the free body at ``qpos0``."""
+def _data(members, dev, physics):
+    """The physics' initial states, batched: MJX data after ``mj_forward``, or the free
+    bodies at ``qpos0``."""
     if physics != "mjx":
-        return R.RigidData(0.0, np.array(model.qpos0, dtype=float), np.zeros(model.nv),
-                           np.zeros(model.na), False)
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    return mjx.put_data(model, data, device=dev)
+        q0 = np.stack([mdl.qpos0 for *_, mdl in members])
+        n, nu = q0.shape[0], len(members[0][3].rigid.tau)
+        return R.RigidData(np.zeros(n), q0, np.zeros((n, 6)), np.zeros((n, nu)), np.zeros(n, bool))
+    datas = []
+    for *_, model in members:
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        datas.append(mjx.put_data(model, data, device=dev))
+    return _stack(datas)
 
 
-def _init_state(num, model, sampler, dev, physics):
-    home = np.array([0.0, 0.0, float(model.qpos0[2])])
+def _init_states(p, d, w_g, nu: int) -> dict:
+    """The variants' flight states, batched (numpy), from their stacked numbers ``p``
+    (numpy), initial physics states ``d`` and wind filter states ``w_g`` (n, 3)."""
+    n = len(w_g)
+    z, f = np.zeros(n), (lambda *shape: np.zeros((n, *shape)))
+    home = np.stack([z, z, np.asarray(d.qpos[:, 2], dtype=float)], axis=1)
+    e_period = np.asarray(p.mission.energy_period, dtype=float)
     return {
-        "d": _data(model, dev, physics), "home": home, "stage": np.int32(TAKEOFF),
-        "sp": np.concatenate([home, np.zeros(7)]), "t_stage": 0.0, "leg_p0": home,
-        "leg_p1": np.array([0.0, 0.0, num.pilot.altitude]), "leg_speed": num.mission.climb_speed,
-        "pilot_t0": 0.0, "pilot_start": np.zeros(3), "t_land": math.nan, "integ": np.zeros(3),
-        "airborne": True, "end": np.int32(0), "t_end_at": math.nan,
-        "w_g": np.asarray(sampler.g, dtype=float) if sampler is not None else np.zeros(3),
-        "w_coef": np.zeros(4), "w_h": math.nan, "w": np.asarray(num.wind.mean, dtype=float),
-        "hb_next": 0.0, "hb_pending": 0.0, "hb_drained": 0.0,
-        "e_next": num.mission.energy_period, "t_e": 0.0, "energy_j": 0.0,
-        "e_leaf": np.zeros(len(num.energy.const_w)), "loss_j": 0.0,
-        "vi": num.motors.vi0, "vrel": np.zeros(3),
-        "b_soc": 1.0, "b_below": 0.0, "b_cut": False, "b_v": 0.0, "b_vmin": num.battery.v0,
-        "b_next": 0.0, "t_book": 0.0, "acc": 0.0, "pv": np.zeros(3),
-        "ticks": np.zeros(6, dtype=np.int32), "dist": 0.0, "vmax": 0.0, "terr": 0.0,
-        "ec_next": num.mission.energy_period, "speed": 0.0, "landed": False,
-        "ctrl": np.zeros(model.nu)}
-
-
-def _stack_states(states):
-    """The variants' states stacked; strongly typed (numpy first), so the scan's output
-    has the input's types and the chunk compiles once."""
-    return jax.tree_util.tree_map(lambda *xs: jnp.asarray(np.stack([np.asarray(x) for x in xs])),
-                                  *states)
+        "d": d, "home": home, "stage": np.full(n, TAKEOFF, np.int32),
+        "sp": np.concatenate([home, f(7)], axis=1), "t_stage": z, "leg_p0": home,
+        "leg_p1": np.stack([z, z, np.asarray(p.pilot.altitude, dtype=float)], axis=1),
+        "leg_speed": np.asarray(p.mission.climb_speed, dtype=float),
+        "pilot_t0": z, "pilot_start": f(3), "t_land": np.full(n, math.nan), "integ": f(3),
+        "airborne": np.ones(n, bool), "end": np.zeros(n, np.int32), "t_end_at": np.full(n, math.nan),
+        "w_g": w_g, "w_coef": f(4), "w_h": np.full(n, math.nan),
+        "w": np.asarray(p.wind.mean, dtype=float), "hb_next": z, "hb_pending": z, "hb_drained": z,
+        "e_next": e_period, "t_e": z, "energy_j": z, "e_leaf": f(p.energy.const_w.shape[1]),
+        "loss_j": z, "vi": np.asarray(p.motors.vi0, dtype=float), "vrel": f(3),
+        "b_soc": np.ones(n), "b_below": z, "b_cut": np.zeros(n, bool), "b_v": z,
+        "b_vmin": np.asarray(p.battery.v0, dtype=float), "b_next": z, "t_book": z, "acc": z,
+        "pv": f(3), "ticks": np.zeros((n, 6), np.int32), "dist": z, "vmax": z, "terr": z,
+        "ec_next": e_period, "speed": z, "landed": np.zeros(n, bool), "ctrl": f(nu)}
 
 
 def bucket(n: int) -> int:
@@ -149,22 +185,27 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
     real = len(members)
     members = members + [members[-1]] * (bucket(real) - real)
     nums = [num for _, _, num, _ in members]
-    p = jax.device_put(_stack(nums), dev)     # committed, like the chunk's outputs:
-    # uncommitted inputs would compile the chunk a second time
+    p_np = _stack(nums, to_jax=False)
+    p = jax.device_put(jax.tree_util.tree_map(jnp.asarray, p_np), dev)  # committed, like
+    # the chunk's outputs: uncommitted inputs would compile the chunk a second time
     if physics == "mjx":
         leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
         idx, dvals = tuple(sorted(diff)), tuple(diff[j] for j in sorted(diff))
+        nu = members[0][3].nu
     else:
         leaves, idx, treedef = (), None, None
-        R.model_of(members[0][3])             # refuses a model the free body cannot fly
-        dvals = _stack([R.model_of(mdl, check=False) for *_, mdl in members])
-    samplers, states = [], []
-    for _, m, num, model in members:
-        rng = P.wind_rng(m)
-        smp = m.wind.sampler(rng, ctrl_dt) if (m.wind is not None and m.wind.turbulent) else None
+        dvals = _stack([mdl.rigid for *_, mdl in members])
+        nu = len(members[0][3].rigid.tau)
+    samplers = []
+    w_g = np.zeros((len(members), 3))
+    for b, (_, m, _, _) in enumerate(members):
+        smp = None
+        if m.wind is not None and m.wind.turbulent:
+            smp = m.wind.sampler(P.wind_rng(m), ctrl_dt)
+            w_g[b] = np.asarray(smp.g, dtype=float)
         samplers.append(smp)
-        states.append(_init_state(num, model, smp, dev, physics))
-    s = jax.device_put(_stack_states(states), dev)
+    s = jax.device_put(jax.tree_util.tree_map(
+        jnp.asarray, _init_states(p_np, _data(members, dev, physics), w_g, nu)), dev)
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
     step = _chunk_fn(idx, treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt, kinds, pkind)
     dvals = jax.device_put(dvals, dev)

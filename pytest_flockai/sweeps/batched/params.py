@@ -31,7 +31,7 @@ from ...mission.book import book_period
 from ...mission.plan import resolve, seed_sequence
 from ...ml.scheduler import memory_utilization
 from ...world.wind import WindParams
-from .rigid_model import unsupported
+from .rigid_model import FreeBody, free_body, free_body_of, unsupported
 
 PILOTS = (Hover, Waypoints, ZigZag)
 ENERGY_KINDS = (Motors, Constant, SoC, RadioLinear, RadioStates, HoverPower)
@@ -200,16 +200,23 @@ def _mission(plan, drone, meter, ctrl) -> MissionParams:
         mem_utilization=memory_utilization((), plan.onboard_device))
 
 
-def variant(m) -> tuple[tuple, VariantParams, object]:
-    """(structure key, numbers, MuJoCo model) of one variant mission ``m``: variants
-    with the same key fly in one batch."""
-    plan = resolve(m)
+def variant(m, plan=None, physics: str = "mjx", derive: bool = True) -> tuple[tuple, VariantParams, object]:
+    """(structure key, numbers, model) of one variant mission ``m`` (``plan``: its resolved
+    plan, if the caller has it): variants with the same key fly in one batch. The model:
+    the compiled MuJoCo model (``physics="mjx"``), or the ``FreeBody`` (``"jax"``), derived
+    from the blueprint without compiling (``rigid_model.free_body``; key ending in
+    ``("free", n)``) unless ``derive=False`` or it cannot, then from the compiled model."""
+    plan = resolve(m) if plan is None else plan
     drone, rho = plan.drone, plan.atmosphere.density
-    spec = build_spec(drone, None, physics_dt=plan.physics_dt, rho=rho)
-    aero = spec.geom("aero")
-    sizes, c_blunt = np.asarray(aero.size, dtype=float), float(aero.fluid_coefs[0])
-    spec.option.density = 0.0           # MJX has only the inertia-box fluid model: drag is ours
-    model = spec.compile()
+    model = free_body(drone, plan.physics_dt, rho) if physics == "jax" and derive else None
+    if model is not None:
+        shape: tuple = ("free", len(model.rigid.tau))
+        sizes, c_blunt = model.aero_size, model.c_blunt
+    else:
+        model, sizes, c_blunt = compiled(plan)
+        shape = (model.nq, model.nv, model.ngeom, model.nu)
+        if physics == "jax":
+            model = free_body_of(model, sizes, c_blunt)
     ctrl = parts.controller(plan)
     meter = parts.meter(plan)
     e_key, leaves, motors = _energy(meter, drone.airframe.rotor_count)
@@ -224,17 +231,32 @@ def variant(m) -> tuple[tuple, VariantParams, object]:
                                           drone.rotor.thrust_coeff, rho),
                         h_hubs=np.asarray(hubs(drone), dtype=float)))
     key = (plan.substeps, plan.physics_dt, plan.ctrl_dt, book_period(plan.ctrl_dt),
-           drone.airframe.rotor_count, e_key, p_key, model.nq, model.nv, model.ngeom, model.nu)
+           drone.airframe.rotor_count, e_key, p_key, shape)
     return key, num, model
+
+
+def compiled(plan) -> tuple:
+    """(compiled MuJoCo model, fluid ellipsoid's semi-axes, blunt drag coefficient) of the
+    plan's drone, MuJoCo's own fluid model off (MJX has only the inertia-box one: the body
+    drag is ours)."""
+    spec = build_spec(plan.drone, None, physics_dt=plan.physics_dt, rho=plan.atmosphere.density)
+    aero = spec.geom("aero")
+    sizes, c_blunt = np.asarray(aero.size, dtype=float), float(aero.fluid_coefs[0])
+    spec.option.density = 0.0
+    return spec.compile(), sizes, c_blunt
+
+
+def compiled_body(m) -> FreeBody:
+    """The ``FreeBody`` of mission ``m``'s drone read from its compiled MuJoCo model (the
+    reference ``free_body`` is checked against)."""
+    model, sizes, c_blunt = compiled(resolve(m))
+    return free_body_of(model, sizes, c_blunt)
 
 
 def free_flight_unsupported(m) -> str | None:
     """Why the free-flight body (``backend="jax"``) cannot fly mission ``m``'s drone (None:
     it can; then ``backend="mjx"`` is not needed)."""
-    plan = resolve(m)
-    spec = build_spec(plan.drone, None, physics_dt=plan.physics_dt, rho=plan.atmosphere.density)
-    spec.option.density = 0.0
-    return unsupported(spec.compile())
+    return unsupported(compiled(resolve(m))[0])
 
 
 def wind_rng(m) -> np.random.Generator:

@@ -31,9 +31,9 @@ from __future__ import annotations
 import jax.numpy as jnp
 import mujoco
 
-from .rigid_model import RigidData, RigidModel, data_of, model_of, unsupported
+from .rigid_model import RigidData, RigidModel, data_of, model_of, same_body, unsupported
 
-__all__ = ["RigidData", "RigidModel", "data_of", "model_of", "unsupported", "step", "ground", "up_z"]
+__all__ = ["RigidData", "RigidModel", "data_of", "model_of", "same_body", "unsupported", "step", "ground", "up_z"]
 
 
 def rotation(q):

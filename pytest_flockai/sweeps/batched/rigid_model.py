@@ -9,7 +9,9 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
+from ...airframe.model import AERO_SCALE, drag_ellipsoid
 from ...errors import ConfigError
+from ...physics import RHO_SEA_LEVEL, G
 
 _FREE, _BOX, _SITE = mujoco.mjtJoint.mjJNT_FREE, mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtTrn.mjTRN_SITE
 
@@ -28,6 +30,16 @@ class RigidModel(NamedTuple):
     ctrl_lo: np.ndarray
     ctrl_hi: np.ndarray
     half: np.ndarray             # (3,) collision box half sizes
+
+
+class FreeBody(NamedTuple):
+    """A variant's free body: its ``RigidModel``, the initial ``qpos`` (``qpos0``) and the
+    body drag's fluid ellipsoid (semi-axes, blunt drag coefficient)."""
+
+    rigid: RigidModel
+    qpos0: np.ndarray
+    aero_size: np.ndarray
+    c_blunt: float
 
 
 class RigidData(NamedTuple):
@@ -96,3 +108,58 @@ def data_of(data) -> RigidData:
     """The free-flight state of an ``MjData`` (after ``mj_forward``)."""
     return RigidData(float(data.time), np.array(data.qpos, dtype=float),
                      np.array(data.qvel, dtype=float), np.array(data.act, dtype=float), False)
+
+
+def free_body_of(model, aero_size, c_blunt: float, check: bool = True) -> FreeBody:
+    """The ``FreeBody`` of a compiled MuJoCo model (``model_of``'s check)."""
+    return FreeBody(model_of(model, check), np.array(model.qpos0, dtype=float),
+                    np.asarray(aero_size, dtype=float), float(c_blunt))
+
+
+def free_body(drone, physics_dt: float, rho: float) -> FreeBody | None:
+    """The ``FreeBody`` of ``drone`` computed from its blueprint without building and
+    compiling its MuJoCo model, with ``airframe/model.py``'s formulas (``add_drone``:
+    mass and inertia explicit at the body origin, one site per rotor on the hull's top,
+    gear (0, 0, 1, 0, 0, -spin km/kf), filter time constant, thrust range [0, max thrust
+    scaled with rho], hull box, fluid ellipsoid); MuJoCo's compile copies these numbers.
+    The sweep checks the result against compiled members (``engine``) and compiles every
+    variant where they differ. None where the compile would refuse the numbers (mass or
+    inertia below ``mjMINVAL``, an inertia that breaks the triangle inequality, no
+    thrust): the caller compiles, and the compile says what is wrong."""
+    af, rotor = drone.airframe, drone.rotor
+    mass, inertia = float(drone.mass_kg), np.array(af.inertia_kg_m2, dtype=float)
+    fmax = rotor.max_thrust_n * rho / RHO_SEA_LEVEL
+    if inertia.shape != (3,) or not (mass >= mujoco.mjMINVAL and np.all(inertia >= mujoco.mjMINVAL)
+                                      and fmax > 0.0) or np.any(
+            inertia[[0, 1, 2]] + inertia[[1, 2, 0]] < inertia[[2, 0, 1]]):
+        return None
+    L, W, H = af.body_size_m
+    k = rotor.torque_coeff / rotor.thrust_coeff
+    layout = drone.rotor_layout()
+    n = len(layout)
+    gear = np.zeros((n, 6))
+    gear[:, 2] = 1.0
+    gear[:, 5] = [-spin * k for _, _, spin in layout]
+    tau = np.full(n, max(mujoco.mjMINVAL, float(rotor.time_constant_s)))
+    dt = float(physics_dt)
+    rigid = RigidModel(
+        mass=mass, inertia=inertia, gravity=np.array([0.0, 0.0, -G]), dt=dt,
+        site=np.array([[x, y, 0.5 * H] for x, y, _ in layout], dtype=float), gear=gear,
+        tau=tau, fade=1.0 - np.exp(-dt / tau), ctrl_lo=np.zeros(n), ctrl_hi=np.full(n, fmax),
+        half=np.array([0.5 * L, 0.5 * W, 0.5 * H], dtype=float))
+    return FreeBody(rigid, np.array([0.0, 0.0, 0.5 * H + 1e-3, 1.0, 0.0, 0.0, 0.0]),
+                    np.array([AERO_SCALE * r for r in drag_ellipsoid(af.drag_area_m2)]),
+                    0.5 / AERO_SCALE ** 2)
+
+
+def same_body(a: FreeBody, b: FreeBody, rtol: float = 1e-12) -> bool:
+    """Whether two free bodies hold the same numbers (to ``rtol``, relative)."""
+    la, lb = _leaves(a), _leaves(b)
+    return len(la) == len(lb) and all(
+        x.shape == y.shape and bool(np.all((x == y) | (np.abs(x - y) <= rtol * np.abs(y))))
+        for x, y in zip(la, lb))
+
+
+def _leaves(body: FreeBody) -> list[np.ndarray]:
+    """The free body's numbers as flat float arrays (``same_body``)."""
+    return [np.atleast_1d(np.asarray(x, dtype=float)) for x in (*body.rigid, *body[1:])]
