@@ -148,6 +148,13 @@ def _clamp(x, lim):
 def controller(c, integ, q, v, sp, dt):
     """``CascadedController.update`` with ``c = CascadedController.batch_params()``: (rotor
     thrusts (n,), new integrator state (3,))."""
+    (T, tx, ty, tz), integ = wrench(c, integ, q, v, sp, dt)
+    return mix(c.B, c.fmax, T, tx, ty, tz), integ
+
+
+def wrench(c, integ, q, v, sp, dt):
+    """``controller`` up to the mixer: ((collective thrust, torques x y z), new integrator
+    state)."""
     pos, vel, quat, w = q[:3], v[:3], q[3:7], v[3:6]
     vs = sp[3:6] + c.k_pos * (sp[0:3] - pos)
     e = vs - vel
@@ -180,7 +187,7 @@ def controller(c, integ, q, v, sp, dt):
     ty = J[1] * kr * (-ka * er[1] - w[1]) + (J[0] - J[2]) * w[2] * w[0]
     tz = J[2] * c.k_yaw_rate * (-c.k_yaw * er[2] - w[2]) + (J[1] - J[0]) * w[0] * w[1]
     T = jnp.maximum(0.0, c.mass * (ax * r2[0] + ay * r2[1] + fz * r2[2]))
-    return mix(c.B, c.fmax, T, tx, ty, tz), integ
+    return (T, tx, ty, tz), integ
 
 
 def rotation(quat):
@@ -197,8 +204,22 @@ def rotation(quat):
 def mix(B, fmax, T, tx, ty, tz):
     """``CascadedController._mix``: the allocation, and when a rotor saturates,
     roll/pitch first (moving the collective if it can), then yaw scaled."""
-    f = B[:, 0] * T + B[:, 1] * tx + B[:, 2] * ty + B[:, 3] * tz
-    fits = (jnp.min(f) >= 0.0) & (jnp.max(f) <= fmax)
+    f = allocate(B, T, tx, ty, tz)
+    return jnp.where(fits(f, fmax), f, saturated(B, fmax, T, tx, ty, tz))
+
+
+def allocate(B, T, tx, ty, tz):
+    """The mixer's allocation (every rotor within its range: the thrusts)."""
+    return B[:, 0] * T + B[:, 1] * tx + B[:, 2] * ty + B[:, 3] * tz
+
+
+def fits(f, fmax):
+    """Whether the allocation ``f`` keeps every rotor within [0, fmax]."""
+    return (jnp.min(f) >= 0.0) & (jnp.max(f) <= fmax)
+
+
+def saturated(B, fmax, T, tx, ty, tz):
+    """The mixer where a rotor saturates: roll/pitch first, then yaw scaled."""
     rp = B[:, 1] * tx + B[:, 2] * ty
     yw = B[:, 3] * tz
     lo, hi = jnp.min(rp), jnp.max(rp)
@@ -212,4 +233,4 @@ def mix(B, fmax, T, tx, ty, tz):
     lim = jnp.where(yw > 0.0, jnp.maximum(0.0, (fmax - g) / ysafe),
                     jnp.where(yw < 0.0, jnp.maximum(0.0, -g / ysafe), 1.0))
     s_y = jnp.minimum(1.0, jnp.min(lim))
-    return jnp.where(fits, f, jnp.clip(g + s_y * yw, 0.0, fmax))
+    return jnp.clip(g + s_y * yw, 0.0, fmax)

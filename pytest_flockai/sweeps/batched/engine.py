@@ -247,7 +247,8 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
 
     def tick(shared, dvals, p, s, noise):
         old = s
-        s = _like(old, jax.vmap(lambda p1, s1: _pre(p1, s1, ctrl_dt, pkind))(p, s))
+        s, w = jax.vmap(lambda p1, s1: _pre(p1, s1, ctrl_dt, pkind))(p, s)
+        s = _like(old, {**s, "ctrl": _mix(p, w, s["stage"] == DONE)})
         s = jax.lax.cond(jnp.any(p.wind.active), lambda st: _like(st, jax.vmap(
             lambda p1, s1, n1: _wind(p1, s1, n1, ctrl_dt))(p, st, noise)), lambda st: st, s)
         s = clocked(lambda p1, s1: _energy(p1, s1, kinds), lambda s1: E.due(s1["d"].time, s1["e_next"]),
@@ -258,7 +259,8 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
         post = jax.vmap(lambda dv, p1, s1: _post(model(shared, dv), p1, s1, ctrl_dt, nsub),
                         in_axes=(0, 0, 0))
         s = _like(old, post(dvals, p, s))
-        return jax.vmap(lambda a, b: _sel(a["end"] != 0, a, b))(old, s)
+        return jax.lax.cond(jnp.any(old["end"] != 0), lambda: jax.vmap(  # an ended variant
+            lambda a, b: _sel(a["end"] != 0, a, b))(old, s), lambda: s)  # keeps its state
 
     def run(shared, dvals, p, s, noise):
         return jax.lax.scan(lambda st, n: (tick(shared, dvals, p, st, n), None), s, noise)[0]
@@ -277,20 +279,32 @@ def _contact(d):
     return jnp.any(c.dist < c.includemargin) if c.dist.shape[0] else jnp.zeros((), bool)
 
 
+def _mix(p, w, off):
+    """The rotor thrusts of the controllers' wrenches ``w`` (``C.mix``): the saturated
+    mixer only when some variant's allocation leaves a rotor's range (batch-level
+    ``lax.cond``); 0 where the flight is done."""
+    f = jax.vmap(lambda p1, w1: C.allocate(p1.ctrl.B, *w1))(p, w)
+    ok = jax.vmap(C.fits)(f, p.ctrl.fmax)
+    f = jax.lax.cond(jnp.all(ok), lambda: f, lambda: jnp.where(ok[:, None], f, jax.vmap(
+        lambda p1, w1: C.saturated(p1.ctrl.B, p1.ctrl.fmax, *w1))(p, w)))
+    return jnp.where(off[:, None], 0.0, f)
+
+
 def _pre(p, s, ctrl_dt, pkind):
-    """The tick up to the wind: stage machine, controller, heartbeats."""
+    """The tick up to the wind: stage machine, controller (up to the mixer: ``_mix``),
+    heartbeats: (state, wrench)."""
     d = s["d"]
     t, q, v = d.time, d.qpos, d.qvel
     speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
     s = {**s, "speed": speed}
     s, landed = C.stages(p, s, t, q, v, _contact(d), pkind)
-    f, integ = C.controller(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt)
+    w, integ = C.wrench(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt)
     off = s["stage"] == DONE
     s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off,
-         "ctrl": jnp.where(off, 0.0, f), "landed": landed}
+         "landed": landed}
     hb = E.due(t, s["hb_next"])
     return {**s, "hb_next": s["hb_next"] + jnp.where(hb, p.mission.hb_period, 0.0),
-            "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}
+            "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}, w
 
 
 def _wind(p, s, noise, ctrl_dt):
