@@ -83,7 +83,7 @@ def pilot_start(p, q, kind):
     return q[:3]
 
 
-def _after_pilot(p, s, here, force):
+def after_pilot(p, s, here, force):
     """``StageMachine._after_pilot``: (stage, leg p0, leg p1, leg speed)."""
     home = s["home"]
     away = jnp.hypot(here[0] - home[0], here[1] - home[1]) > 0.5
@@ -95,20 +95,40 @@ def _after_pilot(p, s, here, force):
 
 
 def stages(p, s, t, q, v, contact, kind):
-    """``StageMachine.step``: the new setpoint, stage, leg and pilot state."""
-    stage, sp = s["stage"], s["sp"]
-    # pilot stage
-    psp, pdone, pt0, pstart = pilot_update(p, s, t, kind)
-    a_stage, a_p0, a_p1, a_spd = _after_pilot(p, s, psp[:3], False)
-    # leg stages (take-off, return, landing)
-    lpos, lvel, lacc, ldur = leg(s["leg_p0"], s["leg_p1"], s["leg_speed"], p.mission.accel,
-                                 t - s["t_stage"])
-    lsp = jnp.concatenate([lpos, lvel, lacc])
-    ldone = t - s["t_stage"] >= ldur
-    # take-off done: the pilot starts over the climb's setpoint (the pad, not where a wind
-    # pushed the drone: control/stages.py) and writes this tick's setpoint
+    """``StageMachine.step``: the new setpoint, stage, leg and pilot state. In parts, so
+    that the batch (``engine._stages``) computes the leg, the take-off's end and the
+    pilot's end only on ticks where some variant needs them."""
+    pil = pilot_update(p, s, t, kind)
+    return combine(p, s, t, v, contact, pil, leg_setpoint(p, s, t),
+                   takeoff_done(p, s, t, q, kind), after_pilot(p, s, pil[0][:3], False))
+
+
+def leg_setpoint(p, s, t):
+    """The leg stages' (take-off, return, landing) setpoint: (pos, vel, acc, duration)."""
+    return leg(s["leg_p0"], s["leg_p1"], s["leg_speed"], p.mission.accel, t - s["t_stage"])
+
+
+def takeoff_done(p, s, t, q, kind):
+    """Take-off done: the pilot starts over the climb's setpoint (the pad, not where a
+    wind pushed the drone: control/stages.py) and writes this tick's setpoint: (sp[0:9],
+    pilot t0, pilot start)."""
+    sp = s["sp"]
     s1 = {**s, "pilot_t0": t, "pilot_start": pilot_start(p, jnp.stack([sp[0], sp[1], q[2]]), kind)}
     ssp, _, st0, sstart = pilot_update(p, s1, t, kind)
+    return ssp, st0, sstart
+
+
+def combine(p, s, t, v, contact, pil, lg, take, aft):
+    """``stages`` from its parts: the pilot's update ``pil``, the leg's setpoint ``lg``,
+    the take-off's end ``take`` and what follows the pilot ``aft`` (each read only where
+    it applies)."""
+    stage, sp = s["stage"], s["sp"]
+    psp, pdone, pt0, pstart = pil
+    lpos, lvel, lacc, ldur = lg
+    ssp, st0, sstart = take
+    a_stage, a_p0, a_p1, a_spd = aft
+    lsp = jnp.concatenate([lpos, lvel, lacc])
+    ldone = t - s["t_stage"] >= ldur
     # return done: land from the end of the return leg
     l_p1 = jnp.stack([lpos[0], lpos[1], s["home"][2] - LANDING_OVERSHOOT])
     is_p, is_leg = stage == PILOT, (stage != PILOT) & (stage != DONE)
@@ -134,7 +154,7 @@ def stages(p, s, t, q, v, contact, kind):
 
 def go_home(p, s, t, when):
     """``StageMachine.go_home`` (battery reserve) where ``when``."""
-    st, p0, p1, spd = _after_pilot(p, s, s["sp"][:3], True)
+    st, p0, p1, spd = after_pilot(p, s, s["sp"][:3], True)
     return {**s, "stage": jnp.where(when, st, s["stage"]),
             "t_stage": jnp.where(when, t, s["t_stage"]),
             "leg_p0": jnp.where(when, p0, s["leg_p0"]), "leg_p1": jnp.where(when, p1, s["leg_p1"]),
@@ -152,9 +172,9 @@ def controller(c, integ, q, v, sp, dt):
     return mix(c.B, c.fmax, T, tx, ty, tz), integ
 
 
-def wrench(c, integ, q, v, sp, dt):
+def wrench(c, integ, q, v, sp, dt, yaw_cs=None):
     """``controller`` up to the mixer: ((collective thrust, torques x y z), new integrator
-    state)."""
+    state); ``yaw_cs``: (cos, sin) of the yaw setpoint ``sp[9]`` if the caller has them."""
     pos, vel, quat, w = q[:3], v[:3], q[3:7], v[3:6]
     vs = sp[3:6] + c.k_pos * (sp[0:3] - pos)
     e = vs - vel
@@ -174,7 +194,7 @@ def wrench(c, integ, q, v, sp, dt):
     lim = jnp.stack([c.i_lim_h, c.i_lim_h, c.i_lim_z])
     integ = jnp.where(sat, integ, _clamp(integ + e * dt, lim))
     d2 = jnp.stack([ax, ay, fz]) / jnp.sqrt(ax * ax + ay * ay + fz * fz)
-    cy, sy = jnp.cos(sp[9]), jnp.sin(sp[9])
+    cy, sy = (jnp.cos(sp[9]), jnp.sin(sp[9])) if yaw_cs is None else yaw_cs
     b2 = jnp.stack([-d2[2] * sy, d2[2] * cy, d2[0] * sy - d2[1] * cy])
     d1 = b2 / jnp.sqrt(jnp.sum(b2 * b2))
     d0 = jnp.cross(d1, d2)

@@ -247,7 +247,11 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
 
     def tick(shared, dvals, p, s, noise):
         old = s
-        s, w = jax.vmap(lambda p1, s1: _pre(p1, s1, ctrl_dt, pkind))(p, s)
+        s, landed = _stages(p, s, pkind)
+        yaw = s["sp"][:, 9]                   # cos/sin of the yaw setpoints (1, 0 for 0)
+        cs = jax.lax.cond(jnp.all(yaw == 0.0), lambda: (jnp.ones_like(yaw), jnp.zeros_like(yaw)),
+                          lambda: (jnp.cos(yaw), jnp.sin(yaw)))
+        s, w = jax.vmap(lambda p1, s1, l1, c1: _pre(p1, s1, l1, c1, ctrl_dt))(p, s, landed, cs)
         s = _like(old, {**s, "ctrl": _mix(p, w, s["stage"] == DONE)})
         s = jax.lax.cond(jnp.any(p.wind.active), lambda st: _like(st, jax.vmap(
             lambda p1, s1, n1: _wind(p1, s1, n1, ctrl_dt))(p, st, noise)), lambda st: st, s)
@@ -290,18 +294,43 @@ def _mix(p, w, off):
     return jnp.where(off[:, None], 0.0, f)
 
 
-def _pre(p, s, ctrl_dt, pkind):
-    """The tick up to the wind: stage machine, controller (up to the mixer: ``_mix``),
-    heartbeats: (state, wrench)."""
+def _when(flag, fn, *args):
+    """``fn(*args)`` if ``flag`` (a batch-level ``lax.cond``), else zeros of its shape (read
+    by no variant: the caller's ``flag`` says where the result applies)."""
+    shape = jax.eval_shape(fn, *args)
+    return jax.lax.cond(flag, lambda: fn(*args), lambda: jax.tree_util.tree_map(
+        lambda x: jnp.zeros(x.shape, x.dtype), shape))
+
+
+def _stages(p, s, pkind):
+    """``C.stages`` on the batch: the leg's setpoint, the take-off's end and what follows
+    the pilot only on ticks where some variant is in a leg stage / ends its take-off /
+    ends its pilot (the same parts, so the same numbers): (state, landed)."""
+    V = jax.vmap
+    d, stage = s["d"], s["stage"]
+    pil = V(lambda p1, s1: C.pilot_update(p1, s1, s1["d"].time, pkind))(p, s)
+    is_leg = (stage != C.PILOT) & (stage != DONE)
+    lg = _when(jnp.any(is_leg), V(lambda p1, s1: C.leg_setpoint(p1, s1, s1["d"].time)), p, s)
+    to_pilot = is_leg & (d.time - s["t_stage"] >= lg[3]) & (stage == TAKEOFF)
+    take = _when(jnp.any(to_pilot), V(
+        lambda p1, s1: C.takeoff_done(p1, s1, s1["d"].time, s1["d"].qpos, pkind)), p, s)
+    aft = _when(jnp.any((stage == C.PILOT) & pil[1]), V(
+        lambda p1, s1, h: C.after_pilot(p1, s1, h, False)), p, s, pil[0][:, :3])
+    return V(lambda p1, s1, pl, lg1, tk, af: C.combine(
+        p1, s1, s1["d"].time, s1["d"].qvel, _contact(s1["d"]), pl, lg1, tk, af))(
+        p, s, pil, lg, take, aft)
+
+
+def _pre(p, s, landed, yaw_cs, ctrl_dt):
+    """The tick after the stage machine (``_stages``) up to the wind: controller (up to the
+    mixer: ``_mix``), heartbeats: (state, wrench)."""
     d = s["d"]
     t, q, v = d.time, d.qpos, d.qvel
     speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
-    s = {**s, "speed": speed}
-    s, landed = C.stages(p, s, t, q, v, _contact(d), pkind)
-    w, integ = C.wrench(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt)
+    w, integ = C.wrench(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt, yaw_cs)
     off = s["stage"] == DONE
-    s = {**s, "integ": jnp.where(off, s["integ"], integ), "airborne": s["airborne"] & ~off,
-         "landed": landed}
+    s = {**s, "speed": speed, "integ": jnp.where(off, s["integ"], integ),
+         "airborne": s["airborne"] & ~off, "landed": landed}
     hb = E.due(t, s["hb_next"])
     return {**s, "hb_next": s["hb_next"] + jnp.where(hb, p.mission.hb_period, 0.0),
             "hb_pending": s["hb_pending"] + jnp.where(hb, 1.0, 0.0)}, w
