@@ -80,7 +80,7 @@ def test_numbers_the_compile_refuses_are_left_to_the_compile():
 @pytest.mark.jax
 def test_a_derivation_that_differs_from_the_compile_compiles_every_member():
     pytest.importorskip("jax", reason=NEEDS_JAX)
-    from pytest_flockai.sweeps.batched import engine
+    from pytest_flockai.sweeps.batched import setup
     base = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=1.0))
     members, groups = [], {}
     for i, p in enumerate([0.0, 0.001, 0.002, 0.003]):
@@ -88,12 +88,12 @@ def test_a_derivation_that_differs_from_the_compile_compiles_every_member():
         key, num, body = P.variant(m, physics="jax")
         members.append((i, m, num, body))
     groups[key] = members
-    good, compiled = engine._checked(dict(groups))
+    good, compiled = setup.checked(dict(groups))
     assert compiled == 4 and list(good) == [key] and good[key] == members
     wrong = members[:2] + [(2, members[2][1], members[2][2],
                             members[2][3]._replace(c_blunt=members[2][3].c_blunt * (1 + 1e-9)))] \
         + members[3:]
-    fixed, compiled = engine._checked({key: wrong})
+    fixed, compiled = setup.checked({key: wrong})
     assert compiled == 4 + 4                                # the checks, then all four
     (ckey, got), = fixed.items()
     assert ckey[-1][0] != "free" and [g[0] for g in got] == [0, 1, 2, 3]

@@ -326,7 +326,7 @@ def _stage_twin(mission):
     """The core's StageMachine and the JAX twin's initial state, for a perfect tracker."""
     from pytest_flockai.control.stages import StageMachine
     from pytest_flockai.mission import parts
-    from pytest_flockai.sweeps.batched import engine
+    from pytest_flockai.sweeps.batched import setup
     plan = resolve(mission)
     key, num, body = P.variant(mission, physics="jax")
     home = (0.0, 0.0, float(body.qpos0[2]))
@@ -337,9 +337,9 @@ def _stage_twin(mission):
     accel = parts.trajectory_accel(plan, parts.controller(plan))
     core = StageMachine(st, plan.pilot, events, data, accel=accel, climb_speed=plan.climb_speed,
                         descent_speed=plan.descent_speed, return_home=plan.return_home)
-    s0 = engine._init_states(engine._stack([num], to_jax=False),
-                             engine._data([(0, mission, num, body)], None, "jax"), np.zeros((1, 3)),
-                             len(body.rigid.tau))
+    s0 = setup.init_states(setup.stack([num], to_jax=False),
+                           setup.data([(0, mission, num, body)], None, "jax"), np.zeros((1, 3)),
+                           len(body.rigid.tau))
     s = {k: jnp.asarray(v[0]) for k, v in s0.items() if k != "d"}
     return core, st, data, _tree(num), s, key[6], plan.ctrl_dt
 
@@ -359,7 +359,7 @@ def test_stage_machine_twin_matches_the_core_tick_by_tick(pilot, home_at):
     step = jax.jit(lambda s1, t, q, v, c: C.stages(p, s1, t, q, v, c, pkind))
     home = jax.jit(lambda s1, t: C.go_home(p, s1, t, True))
     q, v = list(st.home), [0.0, 0.0, 0.0]
-    stages_seen, landed_at = set(), None
+    stages_seen, landed_at, seen = set(), None, []
     for k in range(4000):
         t = k * dt
         if home_at is not None and abs(t - home_at) < 0.5 * dt:
@@ -369,6 +369,7 @@ def test_stage_machine_twin_matches_the_core_tick_by_tick(pilot, home_at):
         data.ncon = int(contact)
         st.qc, st.vc, st.v = list(q), list(v), list(v) + [0.0] * 3
         core.step(t)
+        seen.append((s, t, q + [1.0, 0.0, 0.0, 0.0], v + [0.0] * 3, contact))
         s, landed = step(s, t, jnp.asarray(q + [1.0, 0.0, 0.0, 0.0]),
                          jnp.asarray(v + [0.0] * 3), contact)
         assert int(s["stage"]) == st.stage, (t, int(s["stage"]), st.stage)
@@ -383,6 +384,38 @@ def test_stage_machine_twin_matches_the_core_tick_by_tick(pilot, home_at):
             q[2], v = st.home[2], [0.0, 0.0, 0.0]
     assert landed_at is not None and stages_seen >= {0, 1, 3, 4}
     assert (2 in stages_seen) == (pilot.__class__.__name__ != "Hover")   # returned home
+    _batched_stages_agree(p, pkind, seen)
+
+
+def _batched_stages_agree(p, pkind, seen):
+    """The batch's stage machine (``engine._stages``: parts under batch-level conds) equals
+    the twin on batches of ticks in mixed stages, stage changes included (stages exact,
+    numbers to round-off)."""
+    from pytest_flockai.sweeps.batched import engine
+    from pytest_flockai.sweeps.batched.rigid import RigidData
+    change = [k for k in range(1, len(seen)) if int(seen[k][0]["stage"]) != int(seen[k - 1][0]["stage"])]
+    rng = np.random.default_rng(3)
+    picks = sorted(set(change) | {k - 1 for k in change} | set(rng.integers(0, len(seen), 24)))
+    for part in (picks, [k for k in picks if int(seen[k][0]["stage"]) == 1], picks[:1]):
+        if not part:
+            continue
+        rows = [{**seen[k][0], "d": RigidData(jnp.asarray(seen[k][1]), jnp.asarray(seen[k][2]),
+                                            jnp.asarray(seen[k][3]), jnp.zeros(4), jnp.asarray(seen[k][4]))}
+                for k in part]
+        sb = jax.tree_util.tree_map(lambda *x: jnp.stack(x), *rows)
+        n = len(part)
+        pb = jax.tree_util.tree_map(lambda x, n=n: jnp.stack([jnp.asarray(x)] * n), p)
+        got, g_landed = jax.jit(lambda p1, s1: engine._stages(p1, s1, pkind))(pb, sb)
+        want, w_landed = jax.jit(jax.vmap(lambda p1, s1: C.stages(
+            p1, s1, s1["d"].time, s1["d"].qpos, s1["d"].qvel, s1["d"].contact, pkind)))(pb, sb)
+        assert np.array_equal(np.asarray(g_landed), np.asarray(w_landed))
+        for key in want:
+            if key != "d":
+                a, b = np.asarray(got[key]), np.asarray(want[key])
+                if a.dtype.kind in "biu":
+                    assert np.array_equal(a, b), key
+                else:                   # XLA fuses the parts apart: last-bit differences
+                    np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=key)
 
 
 @pytest.mark.parametrize("ctrl_dt", [0.004, 0.02])

@@ -24,14 +24,13 @@ from typing import cast
 
 import jax
 import jax.numpy as jnp
-import mujoco
 import numpy as np
 from mujoco import mjx
 
 from ...control.stages import DONE, TAKEOFF
 from ...errors import FlockAIError
 from .. import axes as _axes
-from . import compile_cache
+from . import compile_cache, setup
 from . import control as C
 from . import energy as E
 from . import params as P
@@ -40,14 +39,12 @@ from . import rows as _rows
 
 #: s of simulated time per compiled chunk (the host checks for the end between chunks)
 CHUNK_S = 2.0
-#: members of a batch whose derived free body is checked against a compiled model
-CHECKED = 8
 #: XLA options of the chunk (see README: compile time against run time)
 COMPILER_OPTIONS: dict = {}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
 #: wall (and CPU) seconds of the last ``fly`` in this process: the variants' numbers and
 #: models (``variants_s``) and the batches (``batch_s``: states, compile or load, chunks);
-#: ``compiled``: MuJoCo models compiled (the free body derives the others, ``_checked``)
+#: ``compiled``: MuJoCo models compiled (the free body derives the others, ``setup.checked``)
 LAST_TIMINGS: dict = {}
 
 
@@ -66,7 +63,7 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
                        "sim_time_s": math.nan}
             continue
         groups.setdefault(key, []).append((i, m, num, model))
-    groups, compiled = _checked(groups)
+    groups, compiled = setup.checked(groups)
     dev = jax.devices(device)[0] if device else jax.devices()[0]
     compile_cache.enable()
     LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0,
@@ -83,94 +80,6 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
     return cast(list[dict], rows)       # every variant has its row (flown, or its error)
 
 
-def _checked(groups: dict) -> tuple[dict, int]:
-    """The groups with every derived free body (``rigid_model.free_body``, key ending in
-    ``("free", n)``) checked: ``CHECKED`` members of each group, evenly spread from the
-    first to the last, are compiled and must hold the same numbers to 1e-12; where one
-    differs, every member of that group is compiled (never a wrong number). Also the
-    number of models compiled."""
-    out: dict = {}
-    compiled = 0
-    for key, members in groups.items():
-        if key[-1][0] != "free":
-            compiled += len(members)
-            out.setdefault(key, []).extend(members)
-            continue
-        picks = sorted(set(np.linspace(0, len(members) - 1, CHECKED).round().astype(int)))
-        compiled += len(picks)
-        same = [R.same_body(members[j][3], P.compiled_body(members[j][1])) for j in picks]
-        if all(same):
-            out.setdefault(key, []).extend(members)
-            continue
-        for i, m, _, _ in members:                      # the derivation is off: compile all
-            k, num, mdl = P.variant(m, None, "jax", derive=False)
-            compiled += 1
-            out.setdefault(k, []).append((i, m, num, mdl))
-    return out, compiled
-
-
-def _stack(items, to_jax: bool = True):
-    """The variants' pytrees (``VariantParams``, states) stacked leaf by leaf into one
-    pytree of batched arrays (numpy first: strongly typed, so the scan's output has the
-    input's types and the chunk compiles once)."""
-    treedef = jax.tree_util.tree_structure(items[0])
-    cols = zip(*[treedef.flatten_up_to(x) for x in items])
-    out = [np.asarray(c) if np.ndim(c[0]) == 0 else np.stack(c) for c in cols]
-    return treedef.unflatten([jnp.asarray(x) for x in out] if to_jax else out)
-
-
-def _models(models, dev):
-    """(shared leaves, batched leaves by index, treedef) of the MJX models."""
-    flat = [jax.tree_util.tree_flatten(mjx.put_model(m, device=dev)) for m in models]
-    treedef = flat[0][1]
-    if any(f[1] != treedef for f in flat[1:]):
-        raise FlockAIError("sweep: backend='mjx': the variants' MuJoCo models differ in "
-                           "structure; sweep the differing axis with backend='process'")
-    leaves = flat[0][0]
-    diff = {j: jnp.stack([f[0][j] for f in flat]) for j in range(len(leaves))
-            if any(not np.array_equal(np.asarray(f[0][j]), np.asarray(leaves[j])) for f in flat[1:])}
-    return leaves, diff, treedef
-
-
-def _data(members, dev, physics):
-    """The physics' initial states, batched: MJX data after ``mj_forward``, or the free
-    bodies at ``qpos0``."""
-    if physics != "mjx":
-        q0 = np.stack([mdl.qpos0 for *_, mdl in members])
-        n, nu = q0.shape[0], len(members[0][3].rigid.tau)
-        return R.RigidData(np.zeros(n), q0, np.zeros((n, 6)), np.zeros((n, nu)), np.zeros(n, bool))
-    datas = []
-    for *_, model in members:
-        data = mujoco.MjData(model)
-        mujoco.mj_forward(model, data)
-        datas.append(mjx.put_data(model, data, device=dev))
-    return _stack(datas)
-
-
-def _init_states(p, d, w_g, nu: int) -> dict:
-    """The variants' flight states, batched (numpy), from their stacked numbers ``p``
-    (numpy), initial physics states ``d`` and wind filter states ``w_g`` (n, 3)."""
-    n = len(w_g)
-    z, f = np.zeros(n), (lambda *shape: np.zeros((n, *shape)))
-    home = np.stack([z, z, np.asarray(d.qpos[:, 2], dtype=float)], axis=1)
-    e_period = np.asarray(p.mission.energy_period, dtype=float)
-    return {
-        "d": d, "home": home, "stage": np.full(n, TAKEOFF, np.int32),
-        "sp": np.concatenate([home, f(7)], axis=1), "t_stage": z, "leg_p0": home,
-        "leg_p1": np.stack([z, z, np.asarray(p.pilot.altitude, dtype=float)], axis=1),
-        "leg_speed": np.asarray(p.mission.climb_speed, dtype=float),
-        "pilot_t0": z, "pilot_start": f(3), "t_land": np.full(n, math.nan), "integ": f(3),
-        "airborne": np.ones(n, bool), "end": np.zeros(n, np.int32), "t_end_at": np.full(n, math.nan),
-        "w_g": w_g, "w_coef": f(4), "w_h": np.full(n, math.nan),
-        "w": np.asarray(p.wind.mean, dtype=float), "hb_next": z, "hb_pending": z, "hb_drained": z,
-        "e_next": e_period, "t_e": z, "energy_j": z, "e_leaf": f(p.energy.const_w.shape[1]),
-        "loss_j": z, "vi": np.asarray(p.motors.vi0, dtype=float), "vrel": f(3),
-        "b_soc": np.ones(n), "b_below": z, "b_cut": np.zeros(n, bool), "b_v": z,
-        "b_vmin": np.asarray(p.battery.v0, dtype=float), "b_next": z, "t_book": z, "acc": z,
-        "pv": f(3), "ticks": np.zeros((n, 6), np.int32), "dist": z, "vmax": z, "terr": z,
-        "ec_next": e_period, "speed": z, "landed": np.zeros(n, bool), "ctrl": f(nu)}
-
-
 def bucket(n: int) -> int:
     """The batch size ``n`` variants fly in: the next of 8, 16, 32, ... 1,024 and then
     multiples of 1,024 (1,000 and 1,024 variants share one compiled chunk; the padding
@@ -185,16 +94,16 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
     real = len(members)
     members = members + [members[-1]] * (bucket(real) - real)
     nums = [num for _, _, num, _ in members]
-    p_np = _stack(nums, to_jax=False)
+    p_np = setup.stack(nums, to_jax=False)
     p = jax.device_put(jax.tree_util.tree_map(jnp.asarray, p_np), dev)  # committed, like
     # the chunk's outputs: uncommitted inputs would compile the chunk a second time
     if physics == "mjx":
-        leaves, diff, treedef = _models([mdl for *_, mdl in members], dev)
+        leaves, diff, treedef = setup.models([mdl for *_, mdl in members], dev)
         idx, dvals = tuple(sorted(diff)), tuple(diff[j] for j in sorted(diff))
         nu = members[0][3].nu
     else:
         leaves, idx, treedef = (), None, None
-        dvals = _stack([mdl.rigid for *_, mdl in members])
+        dvals = setup.stack([mdl.rigid for *_, mdl in members])
         nu = len(members[0][3].rigid.tau)
     samplers = []
     w_g = np.zeros((len(members), 3))
@@ -205,7 +114,7 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
             w_g[b] = np.asarray(smp.g, dtype=float)
         samplers.append(smp)
     s = jax.device_put(jax.tree_util.tree_map(
-        jnp.asarray, _init_states(p_np, _data(members, dev, physics), w_g, nu)), dev)
+        jnp.asarray, setup.init_states(p_np, setup.data(members, dev, physics), w_g, nu)), dev)
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
     step = _chunk_fn(idx, treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt, kinds, pkind)
     dvals = jax.device_put(dvals, dev)
