@@ -70,19 +70,21 @@ def apply(base, values: dict):
     return resolved(base, values)[0]
 
 
-def resolved(base, values: dict, share: bool = False):
+def resolved(base, values: dict, share: bool = False, check_only: bool = False):
     """(mission, flight plan): ``apply``'s copy of ``base`` and its resolved plan.
 
-    ``share=True``: a copy for reading only (the batched backend reads the plan's numbers,
-    ``check_value`` only checks): the mission object is copied shallowly and its drone deep
-    only when an axis changes the drone (the pilot, wind, tasks ... are the base's own
-    objects, which such a caller never flies); several times cheaper than the deep copy.
+    ``share=True``: a copy for reading only (the batched backend reads the plan's numbers):
+    the mission object is copied shallowly and its drone deep only when an axis changes
+    the drone (the pilot, wind, tasks ... are the base's own objects, which such a caller
+    never flies); several times cheaper than the deep copy. ``check_only=True``
+    (``check_value``, which drops the copy): the drone and the sections an axis changes
+    copied shallowly too (nothing binds to that drone).
     """
-    drone_axes = any(name not in MISSION_AXES for name in values)
-    if share:
+    drone_axes = [name for name in values if name not in MISSION_AXES]
+    if share or check_only:
         m = copy.copy(base)
         if drone_axes:
-            m.drone = _copy(base.drone)
+            m.drone = _shallow(base.drone, drone_axes) if check_only else _copy(base.drone)
     else:
         m = _copy(base)
     m.subscribers = []                  # live subscribers stay with the base mission
@@ -113,6 +115,20 @@ def resolved(base, values: dict, share: bool = False):
     return m, resolve(m)
 
 
+def _shallow(drone, names):
+    """A shallow copy of ``drone`` with its own copy of each section an axis in ``names``
+    sets (the override's target); the other sections are the base's."""
+    d = copy.copy(drone)
+    for name in names:
+        try:
+            section = resolve_override(name)[0]
+        except ConfigError:
+            continue                    # an unknown name: ``resolved`` says what is wrong
+        if section is not None and getattr(d, section) is not None:
+            object.__setattr__(d, section, copy.copy(getattr(d, section)))
+    return d
+
+
 def _number(name, value) -> float:
     if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value):
         raise ConfigError(f"{name} = {value!r} is not allowed; expected a finite number")
@@ -136,6 +152,6 @@ def check_value(base, name: str, value) -> None:
     """Apply one value of one axis alone to the base: a ConfigError names the axis,
     the value and what the mission allows."""
     try:
-        resolved(base, {name: value}, share=True)
+        resolved(base, {name: value}, check_only=True)
     except ConfigError as exc:
         raise ConfigError(f"sweep: axis {name} = {value!r} is not allowed: {exc}") from None

@@ -18,6 +18,7 @@ time sum and the energy integral of a 30-minute flight drift visibly in float32.
 from __future__ import annotations
 
 import functools
+import gc
 import math
 import time
 from typing import cast
@@ -54,15 +55,14 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
     t0, c0 = time.perf_counter(), time.process_time()
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
-    for i, values in enumerate(plan):
-        try:
-            m, fp = _axes.resolved(base, values, share=True)     # read only: never flown
-            key, num, model = P.variant(m, fp, physics)
-        except FlockAIError as exc:
-            rows[i] = {**values, "end_reason": "error", "error": f"{type(exc).__name__}: {exc}",
-                       "sim_time_s": math.nan}
-            continue
-        groups.setdefault(key, []).append((i, m, num, model))
+    collect = gc.isenabled()
+    gc.disable()            # thousands of objects kept for the batch: no collector passes over
+    # them while they are built (garbage is collected after)
+    try:
+        _variants(base, plan, physics, rows, groups)
+    finally:
+        if collect:
+            gc.enable()
     groups, compiled = setup.checked(groups)
     dev = jax.devices(device)[0] if device else jax.devices()[0]
     compile_cache.enable()
@@ -130,7 +130,7 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
         t += chunk_ticks * ctrl_dt
         if bool(jnp.all(s["end"] != 0)) or t > t_end + 2 * CHUNK_S:
             break
-    s = jax.vmap(lambda p1, s1: _finish(p1, s1, kinds))(p, s)
+    s = _finish_fn(kinds)(p, s)
     return _rows.rows(jax.device_get(s), nums[:real], tops, book_dt)
 
 
@@ -178,6 +178,25 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
     def run(shared, dvals, p, s, noise):
         return jax.lax.scan(lambda st, n: (tick(shared, dvals, p, st, n), None), s, noise)[0]
     return jax.jit(run, compiler_options=COMPILER_OPTIONS)
+
+
+@functools.lru_cache(maxsize=16)
+def _finish_fn(kinds):
+    """``_finish`` on the batch, compiled (op by op it costs ~0.1 s of dispatch)."""
+    return jax.jit(jax.vmap(lambda p1, s1: _finish(p1, s1, kinds)))
+
+
+def _variants(base, plan, physics, rows, groups) -> None:
+    """Each variant's (key, numbers, model) into ``groups`` by key, or its error row."""
+    for i, values in enumerate(plan):
+        try:
+            m, fp = _axes.resolved(base, values, share=True)     # read only: never flown
+            key, num, model = P.variant(m, fp, physics)
+        except FlockAIError as exc:
+            rows[i] = {**values, "end_reason": "error", "error": f"{type(exc).__name__}: {exc}",
+                       "sim_time_s": math.nan}
+            continue
+        groups.setdefault(key, []).append((i, m, num, model))
 
 
 def _like(ref, new):
