@@ -273,6 +273,7 @@ def test_a_brushed_coreless_blueprint_gets_the_measured_coreless_efficiency(tmp_
     assert m.motor_efficiency == dsm.CORELESS_EFFICIENCY and m.esc_efficiency == 1.0
     assert m.motor_kv_rpm_v is None                    # no DC motor model: a constant efficiency
     assert coreless.datasheet["motor_efficiency"] == dsm.CORELESS_EFFICIENCY
+    assert coreless.datasheet["motor_kv_rpm_v"] is None and coreless.datasheet["motor_rm_ohm"] is None
     # the same airframe draws more in hover on coreless motors than on brushless ones
     hover = [fa.Mission(d, fa.pilots.Hover(altitude=3.0, duration=8.0), until=15.0, return_home=False).run()
              for d in (brushless, coreless)]

@@ -268,6 +268,8 @@ def derive(ds: Section, pack_v: float) -> dict:
                "reynolds_075": re_h, "blade_drag": blade_drag,
                "motor_efficiency": eta, "motor_kv_rpm_v": kv * 60.0 / (2.0 * math.pi),
                "motor_rm_ohm": rm, "motor_i0_a": i0}
+    if ds.motor_type == "brushed-coreless":       # the brushless laws' values do not apply
+        derived.update(motor_kv_rpm_v=None, motor_rm_ohm=None, motor_i0_a=None)
     h_top = n * _rotor_drag.h_force(blade_drag, D, kf, RHO_SEA_LEVEL, thrust / math.cos(
         math.radians(TOP_TILT_DEG)), ds.top_speed_m_s * math.cos(math.radians(TOP_TILT_DEG)))
     return {"airframe": _body(ds, mass, n, h_top), "rotor": rotor, "energy": energy, "derived": derived}
