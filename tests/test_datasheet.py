@@ -102,6 +102,7 @@ def test_a_given_kv_sets_the_top_rotor_speed(tmp_path):
     ("cells = 2 ", "cells = 0 ", "cells", "allowed: a whole number of cells"),
     ('chemistry = "li-ion"', 'chemistry = "nimh"', "chemistry", "allowed"),
     ("prop_diameter_in = 6.0 ", "prop_diameter_in = 152.4 ", "prop_diameter_in", "allowed: 0.8 to 63"),
+    ("prop_blades = 2 ", 'motor_type = "brushed"\nprop_blades = 2 ', "motor_type", "brushed-coreless"),
 ])
 def test_bad_datasheet_values_name_the_file_the_field_and_what_is_allowed(tmp_path, old, new, field, allowed):
     p = _mini(tmp_path, **{old: new})
@@ -259,3 +260,24 @@ def test_a_datasheet_blueprint_gets_its_class_avionics_unless_it_gives_its_own(t
     d2 = fa.drone(str(own))
     assert d2.energy.component("proc.fc").power_w == 4.0
     assert "video_link" not in d2.energy.component("proc.sensors")
+
+
+def test_a_brushed_coreless_blueprint_gets_the_measured_coreless_efficiency(tmp_path):
+    """Issue 30: toy drones on brushed coreless motors are outside the brushless size laws; their
+    motor and drive efficiency is the one measured on the Crazyflie 2.0's coreless propulsion
+    (Bitcraze's electrical power over Foerster's shaft power at hover: 3.06 / 6.50 W)."""
+    assert dsm.CORELESS_EFFICIENCY == pytest.approx(3.06 / 6.50, abs=0.005)
+    brushless = fa.drone("dji-mini-3-pro")
+    coreless = fa.drone(str(_mini(tmp_path, **{"prop_blades = 2 ": 'motor_type = "brushed-coreless"\nprop_blades = 2 '})))
+    m = coreless.energy.component("motors")
+    assert m.motor_efficiency == dsm.CORELESS_EFFICIENCY and m.esc_efficiency == 1.0
+    assert m.motor_kv_rpm_v is None                    # no DC motor model: a constant efficiency
+    assert coreless.datasheet["motor_efficiency"] == dsm.CORELESS_EFFICIENCY
+    assert coreless.datasheet["motor_kv_rpm_v"] is None and coreless.datasheet["motor_rm_ohm"] is None
+    # the same airframe draws more in hover on coreless motors than on brushless ones
+    hover = [fa.Mission(d, fa.pilots.Hover(altitude=3.0, duration=8.0), until=15.0, return_home=False).run()
+             for d in (brushless, coreless)]
+    p = [r.telemetry[r.telemetry.stage == "pilot"].power_w.iloc[-50:].mean() for r in hover]
+    assert p[1] > 1.1 * p[0]
+    tello = fa.drone("ryze-tello").energy.component("motors")
+    assert tello.motor_efficiency == dsm.CORELESS_EFFICIENCY

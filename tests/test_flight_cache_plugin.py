@@ -150,3 +150,38 @@ def test_two(shared):
     res = pytester.runpytest_inprocess()
     res.assert_outcomes(passed=2)
     res.stdout.fnmatch_lines(["flockai cache: 1 flown and stored"])
+
+
+SHARED = '''
+import pytest
+import pytest_flockai as fa
+
+
+@pytest.fixture(scope="module")
+def hover():
+    return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=2.0)).run()
+
+
+def test_one(hover):
+    assert hover.kpis["crashed"] == 0
+
+
+def test_two(hover):
+    assert hover.kpis["flight_time_s"] > 0
+'''
+
+
+def test_terminal_headline_and_dashboard_count_a_shared_flight_once(pytester):
+    pytester.makepyfile(test_shared=SHARED)
+    args = ("--flockai-json", "r.json", "--flockai-html", "d.html", "--flockai-md", "s.md")
+    pytester.runpytest_inprocess(*args).assert_outcomes(passed=2)
+    res = pytester.runpytest_inprocess(*args)
+    res.assert_outcomes(passed=2)
+    doc = json.loads((pytester.path / "r.json").read_text())
+    listed = [f for t in doc["tests"] for f in t["flights"]]
+    assert len(listed) == 2 and {f["cache"]["status"] for f in listed} == {"hit"}
+    res.stdout.fnmatch_lines(["flockai cache: 1 from the cache"])
+    md = (pytester.path / "s.md").read_text()
+    assert "2 test(s) (2 passed), 1 flight(s)" in md and "1 flight(s) from the cache" in md
+    html = (pytester.path / "d.html").read_text()
+    assert '<b>1</b>flights<small>1 from the cache; 2 listed by the tests</small>' in html

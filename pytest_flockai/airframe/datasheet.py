@@ -76,6 +76,15 @@ MOTOR_MASS_SHARE = 0.10
 #: 5 m/s ascent and 72 km/h at 35 deg tilt need 1.22; 2-3 is the usual design range)
 THRUST_TO_WEIGHT = 2.5
 ESC_EFFICIENCY = 0.95              # estimate: typical ESC efficiency at cruise load
+#: brushed coreless motors with their MOSFET drive (``motor_type = "brushed-coreless"``), at
+#: hover: the Crazyflie 2.0's 7x16 mm motors, the one small coreless propulsion with published
+#: measurements. Electrical power of motors and drive 6.50 W for 27 g of thrust (Bitcraze
+#: thrust-stand table, wiki.bitcraze.io misc:investigations:thrust: 2.00 A at 3.69 V
+#: interpolated at 27 g, less the 0.24 A drawn at zero PWM); shaft power 3.06 W (Foerster,
+#: "System identification of the Crazyflie 2.0 nano quadrocopter", ETH Zurich 2015: torque
+#: 0.005964552 T + 1.563383e-5 N m at 1862 rad/s, from his thrust and speed maps at 6.6 g per
+#: rotor): 3.06 / 6.50 = 0.47, motor and drive together (the ESC efficiency is then 1)
+CORELESS_EFFICIENCY = 0.47
 #: s, motor and propeller time constant: 30 ms at 0.221 m (bench tests of 8-10 in
 #: propellers on 2204-2306 motors, 20-50 ms), scaled with diameter
 TAU_REF_S, TAU_REF_D = 0.030, 0.221
@@ -119,6 +128,10 @@ class Datasheet(Section):
                               doc="winding resistance; default: the size law of motor_law.py"),
         "motor_i0_a": Field("optpos", None, unit="A", bounds=(0.001, 20.0, "no-load current"),
                             doc="no-load current at motor_i0_v; default: the size law of motor_law.py"),
+        "motor_type": Field("motor_type", "brushless",
+                            doc="brushless (the DC motor model and size laws) or brushed-coreless "
+                                "(toy drones: a constant CORELESS_EFFICIENCY from published "
+                                "measurements)"),
         "motor_i0_v": Field("pos", _law.I0_TEST_V, unit="V",
                             bounds=(0.5, 100.0, "the test voltage of a no-load current"),
                             doc="the voltage motor_i0_a is given at (default 10 V, the usual test "
@@ -246,10 +259,17 @@ def derive(ds: Section, pack_v: float) -> dict:
               "esc_efficiency": ESC_EFFICIENCY, "wake_interference": WAKE_INTERFERENCE,
               "motor_kv_rpm_v": kv * 30.0 / math.pi, "motor_rm_ohm": rm, "motor_i0_a": i0,
               "motor_i0_rad_s": om_h}
+    if ds.motor_type == "brushed-coreless":       # no DC motor model: a measured constant
+        for k in MOTOR_FIELDS:
+            del energy[k]
+        eta = energy["motor_efficiency"] = CORELESS_EFFICIENCY
+        energy["esc_efficiency"] = 1.0
     derived = {"ct": ct, "cp": cp, "figure_of_merit": fm, "hover_rad_s": om_h,
                "reynolds_075": re_h, "blade_drag": blade_drag,
                "motor_efficiency": eta, "motor_kv_rpm_v": kv * 60.0 / (2.0 * math.pi),
                "motor_rm_ohm": rm, "motor_i0_a": i0}
+    if ds.motor_type == "brushed-coreless":       # the brushless laws' values do not apply
+        derived.update(motor_kv_rpm_v=None, motor_rm_ohm=None, motor_i0_a=None)
     h_top = n * _rotor_drag.h_force(blade_drag, D, kf, RHO_SEA_LEVEL, thrust / math.cos(
         math.radians(TOP_TILT_DEG)), ds.top_speed_m_s * math.cos(math.radians(TOP_TILT_DEG)))
     return {"airframe": _body(ds, mass, n, h_top), "rotor": rotor, "energy": energy, "derived": derived}

@@ -93,6 +93,8 @@ class Field:
             return _check.choice(name, value, _cells.CHEMISTRIES, where=where)
         if k == "layout":
             return _check.choice(name, value, ("x",), where=where)
+        if k == "motor_type":
+            return _check.choice(name, value, ("brushless", "brushed-coreless"), where=where)
         if k == "str":
             if not isinstance(value, str) or not value:
                 raise ConfigError(f"{where}: {name} = {value!r} is not allowed; expected a non-empty string")

@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 
 from ..cache import MODES, VERIFY_FRACTION, Deferred, caching
+from ..reports import summary as _summary
 from .options import option
 from .session import SESSION
 
@@ -144,11 +145,10 @@ def summary_line(flights: list[dict], off_reason: str | None = None) -> str | No
     """One line: how many flights came from the cache, were flown and stored, bypassed."""
     if off_reason is not None:
         return f"flockai cache: off ({off_reason})" if flights else None
-    unique: dict[object, dict] = {}
-    for f in flights:   # a session fixture's flight is listed by every test that uses it
-        c = f.get("cache") or {}
-        unique[c.get("key") or id(f)] = f
-    flights = list(unique.values())
+    # a session fixture's flight is listed by every test that uses it: counted once, by the
+    # rule the headline and the dashboard use
+    flights = _summary.distinct_flights([{**f, "cache_key": (f.get("cache") or {}).get("key")}
+                                         for f in flights])
     statuses = Counter((f.get("cache") or {}).get("status") for f in flights)
     statuses.pop(None, None)
     if not statuses:

@@ -111,8 +111,10 @@ def _band(page: Page) -> str:
     s = doc.get("summary", {})
     groups, _ = _s.regression_groups(doc, page.base_scenarios)
     broken, expected = _s.broken_budgets(doc), _s.expected_broken(doc)
-    flights = _s.flights(doc)
-    hits = sum(r["cache"] == "hit" for r in flights)
+    listed = _s.flights(doc)
+    distinct = _s.distinct_flights(listed)
+    hits = sum(r["cache"] == "hit" for r in distinct)
+    shared = f"; {len(listed)} listed by the tests" if len(listed) != len(distinct) else ""
     failing = sum(s.get(k, 0) for k in _s.FAILING)
     cards = [_card("passed", s.get("passed", 0), "ok"),
              _card("failed", failing, "bad" if failing else ""),
@@ -121,7 +123,7 @@ def _band(page: Page) -> str:
              _card("budgets broken", len(broken), "bad" if broken else "",
                    f"+{len(expected)} expected" if expected else ""),
              _card("regressions", len(groups), "bad" if groups else "", "KPI families"),
-             _card("flights", len(flights), "", f"{hits} from the cache")]
+             _card("flights", len(distinct), "", f"{hits} from the cache{shared}")]
     slow = _s.slowest(doc)
     if slow:
         cards.append(_card("slowest flights", f"{slow[0]['wall_time_s']:.1f} s", "",

@@ -88,8 +88,25 @@ def flights(doc: dict) -> list[dict]:
     """One row per (test, flight): test, flight, outcome, cache status, KPIs."""
     return [{"test": t["nodeid"], "flight": f["name"], "outcome": t["outcome"],
              "cache": (f.get("cache") or {}).get("status"), "kpis": f.get("kpis") or {},
+             "cache_key": (f.get("cache") or {}).get("key"),
              "end_reason": f.get("end_reason"), "wall_time_s": f.get("wall_time_s")}
             for t in doc.get("tests", ()) for f in t.get("flights", ())]
+
+
+def distinct_flights(rows: list[dict]) -> list[dict]:
+    """The flights of ``rows`` counted once each: a session fixture's flight is listed by
+    every test that uses it, under one cache key (rows without a key are all distinct).
+    The terminal's cache line, the headline and the dashboard count with this one rule."""
+    unique: dict[object, dict] = {}
+    for i, r in enumerate(rows):
+        key = r.get("cache_key")
+        unique.setdefault(key if key else ("row", i), r)
+    return list(unique.values())
+
+
+def cache_hits(doc: dict) -> int:
+    """How many distinct flights of the run came from the flight cache."""
+    return sum(r["cache"] == "hit" for r in distinct_flights(flights(doc)))
 
 
 def kpi_columns(doc: dict, limit: int | None = None) -> list[str]:
@@ -128,11 +145,12 @@ OUTCOMES = ("passed", "failed", "error", "skipped", "xfailed", "xpassed", "crash
 
 
 def counts(doc: dict) -> str:
-    """pytest's counts: ``26 test(s) (24 passed, 2 xfailed), 30 flight(s)``."""
+    """pytest's counts: ``26 test(s) (24 passed, 2 xfailed), 30 flight(s)`` (a flight that
+    several tests list, a shared fixture's, counted once)."""
     s = doc.get("summary", {})
     parts = [f"{s.get(k)} {k}" for k in OUTCOMES if s.get(k)]
-    return f"{s.get('tests', 0)} test(s) ({', '.join(parts) or 'none run'}), " \
-           f"{s.get('flights', 0)} flight(s)"
+    n = len(distinct_flights(flights(doc))) if doc.get("tests") else s.get("flights", 0)
+    return f"{s.get('tests', 0)} test(s) ({', '.join(parts) or 'none run'}), {n} flight(s)"
 
 
 def _expected_why(expected: list[dict]) -> str:
@@ -147,7 +165,7 @@ def headline(doc: dict) -> str:
     """The one line of a run: pytest's counts, then the budgets and regressions."""
     broken, expected = broken_budgets(doc), expected_broken(doc)
     regs, _ = regression_groups(doc)
-    cached = sum(r["cache"] == "hit" for r in flights(doc))
+    cached = cache_hits(doc)
     why = _expected_why(expected)
     extra = [f"{len(broken)} budget(s) broken" if broken else "every budget holds"
              if not expected else f"{len(expected)} budget(s) broken where expected ({why})"]
