@@ -81,7 +81,7 @@ def data(members, dev, physics):
     for *_, model in members:
         data = mujoco.MjData(model)
         mujoco.mj_forward(model, data)
-        datas.append(mjx.putdata(model, data, device=dev))
+        datas.append(mjx.put_data(model, data, device=dev))
     return stack(datas)
 
 
