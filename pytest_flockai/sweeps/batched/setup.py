@@ -52,9 +52,9 @@ def stack(items, to_jax: bool = True):
     pytree of batched arrays (numpy first: strongly typed, so the scan's output has the
     input's types and the chunk compiles once)."""
     treedef = jax.tree_util.tree_structure(items[0])
-    cols = zip(*[treedef.flatten_up_to(x) for x in items])
+    cols = zip(*[jax.tree_util.tree_leaves(x) for x in items])
     out = [np.asarray(c) if np.ndim(c[0]) == 0 else np.stack(c) for c in cols]
-    return treedef.unflatten([jnp.asarray(x) for x in out] if to_jax else out)
+    return jax.tree_util.tree_unflatten(treedef, [jnp.asarray(x) for x in out] if to_jax else out)
 
 
 def models(models, dev):
