@@ -13,6 +13,10 @@ from __future__ import annotations
 import pytest_flockai as fa
 
 
+class SpeedNotReached(Exception):
+    """The leg never settles at the asked speed (above what the drone holds level)."""
+
+
 def steady_power(speed_mps: float, payload_kg: float = 0.0, steady_s: float = 30.0) -> float:
     d = fa.drone("dji-mavic-2-pro", payload_kg=payload_kg)
     if speed_mps <= 0:
@@ -23,7 +27,10 @@ def steady_power(speed_mps: float, payload_kg: float = 0.0, steady_s: float = 30
     tel = r.telemetry
     pil = tel[tel.stage == "pilot"]
     if speed_mps > 0:
+        top = float(pil.vx.max())
         pil = pil[(pil.vx - speed_mps).abs() < 0.05 * speed_mps + 0.1]
+        if len(pil) < 2:            # the drone never holds this speed: no steady power to give
+            raise SpeedNotReached(f"{speed_mps * 3.6:.0f} km/h not held (top {top * 3.6:.1f} km/h)")
     else:
         pil = pil[pil.index > pil.index[0] + 5.0]
     # the battery's drain: the load's power plus the pack's own I^2 R loss (energy_j counts both)
@@ -37,7 +44,11 @@ def main():
     rows = []
     for kmh in (0, 10, 20, 25, 30, 40, 50, 60, 72):
         v = kmh / 3.6
-        p, e = steady_power(v)
+        try:
+            p, e = steady_power(v)
+        except SpeedNotReached as exc:
+            print(f"{kmh:6.0f} {v:6.2f} {'-':>9s} {'-':>14s}   {exc}")
+            continue
         rows.append((kmh, p, e / p / 60))
         print(f"{kmh:6.0f} {v:6.2f} {p:9.1f} {e / p / 60:14.1f}")
     best = max(rows, key=lambda r: r[2])

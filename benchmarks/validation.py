@@ -10,8 +10,8 @@ component data or the literature, none fitted to an endurance).
 
 Split (issue 30): the model's constants were chosen looking at the TUNING drones only (the
 issue-15 set and its twins); the HELD-OUT drones were added as a test and nothing was changed
-for them. The Crazyflie (brushed coreless motors, a system-identified blueprint with a
-fitted motor efficiency) is outside the datasheet model and reported apart.
+for them. The Crazyflie (brushed coreless motors, a system-identified blueprint from measured
+torque, motor power and board draw) is outside the datasheet model and reported apart.
 
     python benchmarks/validation.py [--only NAME] [--markdown docs/explanation/validation.md]
 """

@@ -19,8 +19,9 @@ import scenarios  # noqa: E402
 
 REASONS = """\
 Why the figures differ:
-- Flight time: ours comes from simulated rotor physics with the efficiency
-  chain fitted to DJI's published 29 min hover / 31 min at 25 km/h. The
+- Flight time: ours comes from simulated rotor physics and component data,
+  nothing fitted (29.5 min hover against DJI's 29, 33.3 min at 25 km/h
+  against 31). The
   paper's released code integrated a constant 95.02 W hover power over the
   host's wall clock, so its flight times depended on how fast the host ran.
 - Cost of on-board ML: ours is the Raspberry Pi 4's measured power (2.7 W

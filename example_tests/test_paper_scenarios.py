@@ -10,31 +10,31 @@ prints our figures next to the paper's, with the reasons they differ.
 import pytest
 
 
-# measured (issue 30, short surveys): 1-A and 2 / 2-slow / 3-B 30.5 min, 1-B 30.4 min (29.9 and
-# 29.85 before the forward-flight wake geometry of issue 30): budgets 2.5-3.5 min below
-@pytest.mark.kpi(endurance_s=">= 28 min", energy_share_motors=">= 85%", energy_share_comm="< 3%",
+# measured (session 7, short surveys): 1-A and 2 / 2-slow / 3-B 31.6 min, 1-B 31.6 min (30.5 and
+# 30.4 while the Mavic's motor efficiency was fitted to DJI's hover time): budgets 2.5-3.5 min below
+@pytest.mark.kpi(endurance_s=">= 29 min", energy_share_motors=">= 85%", energy_share_comm="< 3%",
                  crashed="== 0", tracking_error_max_m="<= 1.5 m")
 def test_1a_no_ml(sc_1a):
     assert sc_1a.end_reason in ("landed", "battery_depleted")
 
 
-@pytest.mark.kpi(endurance_s=">= 27 min", inference_latency_p50_s="<= 1.5 s", frames_dropped="== 0",
+@pytest.mark.kpi(endurance_s=">= 28 min", inference_latency_p50_s="<= 1.5 s", frames_dropped="== 0",
                  energy_share_proc="< 25%", crashed="== 0")
 def test_1b_cnn_on_board(sc_1b):
     assert sc_1b.kpis["inference_count"] >= 10
 
 
-@pytest.mark.kpi(endurance_s=">= 27 min", inference_latency_p50_s="<= 1.5 s", crashed="== 0")
+@pytest.mark.kpi(endurance_s=">= 28 min", inference_latency_p50_s="<= 1.5 s", crashed="== 0")
 def test_2_cnn_remote_over_wifi(sc_2):
     assert sc_2.kpis["kbytes_out"] > 0
 
 
-@pytest.mark.kpi(endurance_s=">= 27 min", crashed="== 0")
+@pytest.mark.kpi(endurance_s=">= 28 min", crashed="== 0")
 def test_2_cnn_remote_over_a_slow_radio(sc_2slow):
     assert sc_2slow.kpis["inference_count"] >= 5
 
 
-@pytest.mark.kpi(endurance_s=">= 27 min", inference_latency_p50_s="<= 0.3 s", crashed="== 0")
+@pytest.mark.kpi(endurance_s=">= 28 min", inference_latency_p50_s="<= 0.3 s", crashed="== 0")
 def test_3b_cheaper_model_on_board(sc_3b):
     assert sc_3b.kpis["inference_count"] >= 10
 

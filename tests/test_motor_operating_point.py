@@ -99,7 +99,7 @@ def test_efficiency_changes_with_load_and_in_cruise():
 
 
 def test_blueprints_without_a_motor_keep_their_constant_efficiency():
-    d = fa.drone("dji-mavic-2-pro")
+    d = fa.drone("generic-hexa-680")
     m = d.energy.component("motors")
     assert m.motor_kv_rpm_v is None and "motor_kv_rpm_v" not in m.params()
     comp = _bound(d)

@@ -122,7 +122,7 @@ def test_datasheet_drag_areas_close_the_top_speed_balance_with_the_h_force():
 
 def test_the_energy_model_does_not_count_the_h_force_work_twice():
     """The profile power's mu^2 term less exactly H V_par: the tilt's T V_ax pays for H."""
-    d0, d1 = fa.drone("dji-mavic-2-pro", blade_drag=0.0), fa.drone("dji-mavic-2-pro")
+    d0, d1 = fa.drone("crazyflie-2-1", blade_drag=0.0), fa.drone("crazyflie-2-1")
     T, vpar = d1.hover_thrust_per_rotor_n, 10.0
     u = Usage(4)
     u.v_rel_body, u.thrust, u.airborne = (vpar, 0.0, 0.0), [T] * 4, True
