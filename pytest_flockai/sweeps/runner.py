@@ -127,18 +127,20 @@ def sweep(base_mission: Mission, *, samples: int | None = None, method: str = "g
     ran = choose_backend(base_mission, len(plan), device) if backend == "auto" else backend
     wall0 = time.perf_counter()
     interrupted = False
+    threads = None                  # the XLA CPU threads of a batch flown in this process
     if ran == "process" or executor is not None:
         outcomes, interrupted = fly(base_mission, plan, workers, executor=executor,
                                     backend=ran, device=device, batch_size=batch_size,
                                     progress=progress)
     else:                       # the batched path neither reads nor stores the flight cache
-        outcomes = [Outcome(r, None, None)
-                    for r in _fly_batched(base_mission, plan, device, ran)]
+        rows, threads = _fly_batched_here(base_mission, plan, device, ran)
+        outcomes = [Outcome(r, None, None) for r in rows]
     wall = time.perf_counter() - wall0
     df = frame([o.row for o in outcomes], list(axes), parsed)
     df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
                      "wall_s": wall, "backend": ran, "backend_asked": backend, "device": device,
+                     "jax_cpu_threads": threads,
                      "executor": _executors.describe_executor(executor),
                      "interrupted": interrupted,
                      "tracebacks": {i: o.trace for i, o in enumerate(outcomes) if o.trace},
@@ -184,14 +186,21 @@ def choose_backend(base, n_variants: int, device=None) -> str:
 
 
 def _fly_batched(base, plan, device, physics="mjx") -> list[dict]:
-    """The variants in one JAX batch (the backend's modules import JAX: loaded here);
-    ``physics``: the batched backend ("jax": the free-flight body, "mjx")."""
+    """The variants' rows from one JAX batch (what a worker runs)."""
+    return _fly_batched_here(base, plan, device, physics)[0]
+
+
+def _fly_batched_here(base, plan, device, physics="mjx") -> tuple[list[dict], str]:
+    """The variants in one JAX batch (the backend's modules import JAX: loaded here), and
+    the XLA CPU threads it ran on (``batched/cpu_threads.py``); ``physics``: the batched
+    backend ("jax": the free-flight body, "mjx")."""
     try:
         from .batched import engine
     except ImportError as exc:
         raise ConfigError(f"sweep: backend={physics!r} needs JAX and MJX ({exc}); install them "
                           f"with pip install 'pytest-flockai[mjx]', or use backend='process'") from None
-    return engine.fly(base, plan, device, physics)
+    rows = engine.fly(base, plan, device, physics)
+    return rows, engine.LAST_TIMINGS["jax_cpu_threads"]
 
 
 def _check_batch_size(batch_size) -> None:

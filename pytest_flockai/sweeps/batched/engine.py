@@ -31,7 +31,7 @@ from mujoco import mjx
 from ...control.stages import DONE, TAKEOFF
 from ...errors import FlockAIError
 from .. import axes as _axes
-from . import compile_cache, setup
+from . import compile_cache, cpu_threads, setup
 from . import control as C
 from . import energy as E
 from . import params as P
@@ -52,6 +52,7 @@ LAST_TIMINGS: dict = {}
 def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx") -> list[dict]:
     """One row dict per variant, in the plan's order (as ``runner._fly``); ``physics``:
     "mjx" (MJX's ``mjx.step``) or "jax" (``rigid.step``, the free-flight body)."""
+    threads = cpu_threads.start(device)     # first: before anything starts JAX's client
     t0, c0 = time.perf_counter(), time.process_time()
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
@@ -68,7 +69,7 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
     compile_cache.enable()
     LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0,
                         variants_cpu_s=time.process_time() - c0, batch_cpu_s=0.0,
-                        compiled=compiled)
+                        compiled=compiled, jax_cpu_threads=threads)
     with jax.enable_x64(True):
         for key, members in groups.items():
             t1, c1 = time.perf_counter(), time.process_time()
