@@ -19,7 +19,10 @@ m = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration
                wind=fa.Wind(mean=(1.0, 0.0, 0.0), gust_std=0.5))
 df = fa.sweep(m, backend="jax", device="cpu", payload_kg=[0.0, 0.004, 0.008], mission_seed=[0, 1])
 cols = [c for c in df.columns if c != "error"]
-print(json.dumps({"threads": df.attrs["jax_cpu_threads"], "rows": df[cols].to_dict("list")}))
+import os
+every_thread = {frozenset(os.sched_getaffinity(int(t))) for t in os.listdir("/proc/self/task")}
+print(json.dumps({"threads": df.attrs["jax_cpu_threads"], "rows": df[cols].to_dict("list"),
+                  "all_threads_on_every_cpu": every_thread == {frozenset(os.sched_getaffinity(0))}}))
 """
 
 
@@ -34,6 +37,7 @@ def _sweep_in_a_process(tmp_path, threads, first="") -> dict:
 
 @pytest.mark.jax
 @pytest.mark.slow
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task"), reason="Linux: thread affinity")
 def test_one_thread_or_all_the_same_rows_and_the_sweep_says_which(tmp_path):
     pytest.importorskip("jax")
     pytest.importorskip("mujoco.mjx")
@@ -43,6 +47,8 @@ def test_one_thread_or_all_the_same_rows_and_the_sweep_says_which(tmp_path):
     assert (one["threads"], every["threads"], before["threads"]) == (
         "1 thread", "all CPUs", "as started before")
     assert one["rows"] == every["rows"] == before["rows"]           # bit for bit
+    # the client's own threads are not left on the one CPU it was started with
+    assert one["all_threads_on_every_cpu"] and every["all_threads_on_every_cpu"]
     assert len(set(one["rows"]["energy_total_j"])) == 6             # the axes flew
 
 

@@ -10,8 +10,9 @@ core to the rest of the test run (an xdist worker, the flight cache).
 
 XLA sizes its pool from the CPU affinity at the moment the client is created, once
 per process. So when the batched backend is the first to start JAX, it starts it
-with the process's affinity narrowed to one CPU and restores the affinity at once;
-nothing else in the process is touched. ``$FLOCKAI_JAX_CPU_THREADS`` chooses: ``1``
+with the process's affinity narrowed to one CPU and restores the affinity of every
+thread at once (the client's own threads included, so batches in two processes use two
+cores); nothing else in the process is touched. ``$FLOCKAI_JAX_CPU_THREADS`` chooses: ``1``
 (the default) or ``all`` (XLA's own pool). When JAX was started before (a user's own
 JAX code, an earlier ``jax.devices()``), its client is left as it is and ``mode()``
 says so; results are the same either way (the batch has no reduction across
@@ -52,6 +53,22 @@ def _initialized() -> bool:
     return bool(query())
 
 
+def _restore(cpus: set[int]) -> None:
+    """Every thread of the process back on ``cpus``: the threads the client started while
+    the affinity was narrowed inherited it (they would all share the first CPU, and two
+    processes' batches would share one core), the pool's size stays one."""
+    try:
+        threads = [int(t) for t in os.listdir("/proc/self/task")]
+    except OSError:                         # no /proc: only this thread is known
+        threads = [0]
+    for tid in threads:
+        try:
+            os.sched_setaffinity(tid, cpus)
+        except OSError:                     # a thread that ended meanwhile
+            pass
+    os.sched_setaffinity(0, cpus)
+
+
 def start(device: str | None) -> str:
     """Start JAX's backends (once per process) with the thread count asked for, for a
     batch on ``device``; returns what runs: "1 thread", "all CPUs" or
@@ -70,7 +87,7 @@ def start(device: str | None) -> str:
             os.sched_setaffinity(0, {min(cpus)})
             jax.devices()
         finally:
-            os.sched_setaffinity(0, cpus)
+            _restore(cpus)
         mode = "1 thread"
     _STATE["mode"] = mode
     return mode
