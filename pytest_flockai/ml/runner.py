@@ -13,20 +13,17 @@ now (the prediction is real) and schedules its simulated timeline:
   annotated with the count and position and JPEG-encoded with OpenCV (real size), when the
   predicted count reaches ``crowd_threshold`` (``alert="frame"``); otherwise a ``result_bytes``
   result message (count, position, time). ``alert="result"`` always sends the small message.
-- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame (``cv2.imencode``, quality
-  ``jpeg_quality``: real byte size), sends it up the link at the current distance to
-  ``ground_station``, the ground decodes it and runs the model on the *decoded* frame (so JPEG
+- ``remote`` (the paper's scenario 2): the drone JPEG-encodes the frame (``cv2.imencode``,
+  ``jpeg_quality``: real byte size), sends it up the link at the current distance to the
+  ``ground_station``, the ground decodes it and runs the model on the *decoded* frame (JPEG
   artefacts reach the model) for the modeled latency on ``ground_device``, then sends
-  ``result_bytes`` back down. Latency = capture to result back on the drone. One request is in
-  flight at a time (a synchronous client, like the paper's): while it is, the task is busy. In a
-  fleet (``share``) the uplink waits for the shared channel and the inference for the shared ground
-  device. In flight the model always runs, never a memoised answer (the flight is cached whole;
-  ``latency="measured"`` times the model).
+  ``result_bytes`` back. Latency = capture to result back on the drone. One request in flight at a
+  time (a synchronous client, as the paper's). In a fleet (``share``) the uplink waits for the
+  shared channel, the inference for the shared ground device. The model always runs in flight.
 
 SoC busy time charged to the drone: the inference (onboard), JPEG encoding of frames and alerts
-(``JPEG_MACS_PER_PIXEL`` per pixel), and ``update_macs`` of models learning in flight. A model
-raising (or a link out of range) gives a failed inference (``ok=False``, the text in ``error``,
-``inference_failures``); the flight goes on."""
+(``JPEG_MACS_PER_PIXEL`` per pixel), ``update_macs`` of models learning in flight. A model
+raising (or a link out of range) fails that inference (``ok=False``, ``inference_failures``)."""
 
 from __future__ import annotations
 
@@ -48,7 +45,7 @@ from ..compute.latency import (
 from ..errors import ConfigError
 from .events import DeviceClock, InferenceEvent
 from .jpeg import JPEG_MACS_PER_PIXEL, annotate, decode_jpeg, encode_jpeg, is_image
-from .metrics import invalid_prediction, percentile
+from .metrics import SortedValues, invalid_prediction
 from .scoring import Scorer
 from .task import Task
 from .templates import Template
@@ -102,6 +99,7 @@ class TaskRunner:
         self.frames_dropped = 0
         self.inference_failures = 0
         self.events: list[InferenceEvent] = []
+        self.latencies = SortedValues()         # the ok inferences', sorted as they finish
         self.scorer = Scorer(t)
         self._wall: list[float] = []            # measured mode: host seconds per inference
         self.tx_bytes_total = self.rx_bytes_total = 0
@@ -183,6 +181,8 @@ class TaskRunner:
             out.append(ev)
             self.events.append(ev)
             self.inference_failures += not ev.ok
+            if ev.ok:
+                self.latencies.add(ev.latency_s)
             self.scorer.finished(ev)
         self._next_done = pend[0][0] if pend else math.inf
         return out
@@ -363,12 +363,12 @@ class TaskRunner:
     def kpis(self) -> dict:
         """The task's KPIs (unprefixed names; the mission prefixes per task)."""
         self._need_bind()
-        lat = [e.latency_s for e in self.events if e.ok]
+        lat = self.latencies
         out = {
             "inference_count": float(len(lat)),
-            "inference_latency_p50_s": percentile(lat, 50),
-            "inference_latency_p95_s": percentile(lat, 95),
-            "inference_latency_max_s": max(lat) if lat else math.nan,
+            "inference_latency_p50_s": lat.percentile(50),
+            "inference_latency_p95_s": lat.percentile(95),
+            "inference_latency_max_s": lat.max(),
             "frames_dropped": float(self.frames_dropped),
             "inference_failures": float(self.inference_failures),
             "cpu_time_s": self.cpu_time_s(),
