@@ -13,6 +13,7 @@ little flight time; the rule's cost is people missed.
 
 import numpy as np
 import pytest
+from pycocotools import mask as cocomask
 
 import pytest_flockai as fa
 
@@ -21,18 +22,21 @@ PEOPLE = [(x, y) for x in range(-50, 51, 20) for y in range(-30, 31, 20)]
 
 
 def people_found(records) -> dict:
-    """Distinct people (by world id) that some frame's (N, 6) boxes covered (IoU >= 0.5)."""
+    """Distinct people (by world id) whose box some frame's (N, 6) detections covered at
+    IoU >= 0.5 (pycocotools' box IoU, as the COCO metrics)."""
     found = set()
     for r in records:
-        d = np.asarray(r.prediction if r.prediction is not None else np.zeros((0, 6)))
-        for oid, b in zip(r.truth.ids, r.truth.boxes):
-            ix = np.clip(np.minimum(d[:, 2], b[2]) - np.maximum(d[:, 0], b[0]), 0, None)
-            iy = np.clip(np.minimum(d[:, 3], b[3]) - np.maximum(d[:, 1], b[1]), 0, None)
-            inter = ix * iy
-            union = (d[:, 2] - d[:, 0]) * (d[:, 3] - d[:, 1]) + (b[2] - b[0]) * (b[3] - b[1]) - inter
-            if np.any(inter >= 0.5 * union):
-                found.add(int(oid))
+        d = np.asarray(r.prediction if r.prediction is not None else np.zeros((0, 6)), dtype=float)
+        gt = np.asarray(r.truth.boxes, dtype=float).reshape(-1, 4)
+        if len(d) and len(gt):
+            iou = cocomask.iou(_xywh(d[:, :4]), _xywh(gt), [0] * len(gt))
+            found.update(int(i) for i, hit in zip(r.truth.ids, (iou >= 0.5).any(axis=0)) if hit)
     return {"people_found": float(len(found))}
+
+
+def _xywh(boxes):
+    """(x1, y1, x2, y2) rows as COCO's (x, y, w, h)."""
+    return np.column_stack([boxes[:, :2], boxes[:, 2:4] - boxes[:, :2]])
 
 
 def survey(policies=()):

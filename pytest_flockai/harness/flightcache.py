@@ -147,8 +147,7 @@ def summary_line(flights: list[dict], off_reason: str | None = None) -> str | No
         return f"flockai cache: off ({off_reason})" if flights else None
     # a session fixture's flight is listed by every test that uses it: counted once, by the
     # rule the headline and the dashboard use
-    flights = _summary.distinct_flights([{**f, "cache_key": (f.get("cache") or {}).get("key")}
-                                         for f in flights])
+    flights = _summary.distinct_flights(flights, key=lambda f: (f.get("cache") or {}).get("key"))
     statuses = Counter((f.get("cache") or {}).get("status") for f in flights)
     statuses.pop(None, None)
     if not statuses:

@@ -93,14 +93,15 @@ def flights(doc: dict) -> list[dict]:
             for t in doc.get("tests", ()) for f in t.get("flights", ())]
 
 
-def distinct_flights(rows: list[dict]) -> list[dict]:
+def distinct_flights(rows: list[dict], key=lambda r: r.get("cache_key")) -> list[dict]:
     """The flights of ``rows`` counted once each: a session fixture's flight is listed by
-    every test that uses it, under one cache key (rows without a key are all distinct).
-    The terminal's cache line, the headline and the dashboard count with this one rule."""
+    every test that uses it, under one cache key (``key(row)``; rows without one are all
+    distinct). The terminal's cache line, the headline and the dashboard count with this
+    one rule."""
     unique: dict[object, dict] = {}
     for i, r in enumerate(rows):
-        key = r.get("cache_key")
-        unique.setdefault(key if key else ("row", i), r)
+        k = key(r)
+        unique.setdefault(k if k else ("row", i), r)
     return list(unique.values())
 
 
