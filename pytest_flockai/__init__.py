@@ -1,7 +1,9 @@
 """pytest-flockai: test ML-driven drone applications with pytest.
 
-The public API (see README.md): ``blueprints``, ``drone``, ``pilots``,
-``Mission``, ``FlightResult``, ``World``, ``Wind``, ``devices`` and the errors.
+The public API is ``__all__`` here plus the ``__all__`` of each subpackage named in
+it (``fa.pilots``, ``fa.ml``, ``fa.sensors``, ``fa.fleet``...); the API reference
+(docs/reference/api.md) lists exactly those. Anything else is internal and may
+change; a name that moved warns once at its old home (``_deprecation.py``).
 
 Importing the package is cheap: the pytest plugin is loaded in every pytest run
 of a project that installs it, also in runs that fly nothing. Only the errors,
@@ -23,10 +25,29 @@ from .recording import recording
 __version__ = "0.1.0"
 
 if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type checkers and docs
-    from . import comm, fleet, ml, policy, probes, sensors
+    from . import (
+        cli,
+        comm,
+        compute,
+        energy,
+        fleet,
+        ml,
+        plots,
+        policy,
+        probes,
+        reports,
+        sensors,
+        strategies,
+        sweeps,
+        world,
+    )
 
     # from .airframe.drone: airframe/ has submodules named drone and blueprints too
     from .airframe.drone import Drone, blueprints, drone
+    from .budgets import BudgetError
+    from .budgets import check as check_budgets
+    from .budgets import evaluate as evaluate_budgets
+    from .cache import FlightCache, cacheable, caching
     from .compute import devices
     from .control import pilots
     from .energy import EnergyModel
@@ -51,6 +72,9 @@ _LAZY = {
     "FlightResult": (".result", "FlightResult"), "Task": (".ml", "Task"),
     "sweep": (".sweeps", "sweep"), "GL_IMPORT_ERROR": ("._mujoco", "GL_IMPORT_ERROR"),
     "Policy": (".policy", "Policy"), "actors": (".world.actors", None),
+    "check_budgets": (".budgets", "check"), "evaluate_budgets": (".budgets", "evaluate"),
+    "BudgetError": (".budgets", "BudgetError"), "FlightCache": (".cache", "FlightCache"),
+    "caching": (".cache", "caching"), "cacheable": (".cache", "cacheable"),
 }
 
 __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet",
@@ -58,7 +82,11 @@ __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "Energ
            "actors", "policy",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
            "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "sweep",
-           "__version__"]
+           "__version__",
+           # budgets and the flight cache, whose modules are internal
+           "BudgetError", "FlightCache", "cacheable", "caching", "check_budgets", "evaluate_budgets",
+           # documented subpackages: their own __all__ is public too
+           "cli", "compute", "energy", "plots", "reports", "strategies", "sweeps", "world"]
 
 
 def __getattr__(name: str):

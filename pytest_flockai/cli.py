@@ -28,6 +28,8 @@ from .airframe import blueprints
 from .errors import ConfigError, FlockAIError
 from .reports import commands as _commands
 
+__all__ = ["main"]
+
 OK, REGRESSION, USAGE, INTERNAL = 0, 1, 2, 3
 #: where pytest keeps the flight cache, from the project's root (``harness/flightcache.py``)
 DEFAULT_CACHE = Path(".pytest_cache") / "d" / "flockai-flights"

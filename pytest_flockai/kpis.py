@@ -11,6 +11,9 @@ from dataclasses import dataclass
 
 from .errors import ConfigError
 
+__all__ = ["ABS_TOL", "BUILTIN", "FAMILIES", "KPI", "REGISTRY", "UNIT_ABS_TOL", "abs_tolerance", "get",
+           "names", "register"]
+
 
 @dataclass(frozen=True)
 class KPI:

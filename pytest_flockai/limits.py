@@ -19,6 +19,12 @@ from __future__ import annotations
 
 from .errors import ConfigError
 
+__all__ = ["MAX_TIME_S", "MAX_TELEMETRY_ROWS", "MAX_PROBE_SAMPLES", "MAX_WORLD_SIDE_M",
+           "MAX_PEOPLE", "MAX_VEHICLES", "MAX_WAYPOINTS", "MAX_EXTENT_M", "MAX_VARIANTS",
+           "MAX_WIND_MPS", "MAX_CACHE_ENTRY_BYTES", "MAX_CACHE_UNPACKED_BYTES",
+           "MAX_CACHE_BYTES", "MIN_ENERGY_HZ", "MIN_VERTICAL_SPEED_MPS", "MAX_SPEED_MPS",
+           "MIN_TASK_PERIOD_S", "MAX_JSON_DEPTH"]
+
 #: s: the largest ``Mission(max_time_s=...)``, the cap on simulated time of one flight
 #: (``max_time_s`` defaults to 4 h; a numeric ``until`` must not exceed ``max_time_s``)
 MAX_TIME_S = 24 * 3600.0

@@ -21,6 +21,8 @@ import numpy as np
 
 from ._io import atomic_write
 
+__all__ = ["available", "energy_figure", "path_figure", "save_envelope"]
+
 
 def available() -> bool:
     try:

@@ -44,6 +44,10 @@ from .result import FlightResult
 from .sensors.conditions import Conditions
 from .world.wind import Wind
 
+__all__ = ["FLIGHT_PHASES", "batteries", "conditions", "flight_settings", "hovers", "link_quality",
+           "missions", "payloads", "pilot_areas", "seeds", "st", "target_margin", "wind_from", "winds",
+           "zigzags"]
+
 #: the phases that fit flights: no ``explain`` (it re-flies the failing example many times)
 FLIGHT_PHASES = (Phase.explicit, Phase.reuse, Phase.generate, Phase.target, Phase.shrink)
 

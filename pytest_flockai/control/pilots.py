@@ -24,6 +24,8 @@ from .. import _check, limits
 from ..errors import ConfigError, close_matches
 from .trajectory import Leg, Path, waypoint_path
 
+__all__ = ["Pilot", "Hover", "Waypoints", "ZigZag", "Orbit"]
+
 
 class Pilot:
     """Base class. ``altitude`` is the height the mission takes off to."""

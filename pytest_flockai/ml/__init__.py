@@ -6,7 +6,8 @@
   templates to subclass (the paper's Listing 3);
 - ``Task`` and ``TaskRunner``: what runs where, executed on the simulated clock;
 - ``Detections``, ``parse_detections``: detector outputs (boxes, YOLO heads) read
-  into one shape; ``evaluation``: COCO detection metrics and classification;
+  into one shape; ``detection_kpis``: COCO detection metrics of ``FrameRecord`` s;
+- ``detection_envelope``: a KPI over altitude x speed, ``altitude_band`` where it holds;
 - ``count_macs``: MACs and parameters of an ONNX graph;
 - ``Oracle``: the frame's truth boxes as detections (optionally degraded), no pixels;
   ``MarkerDetector``: ArUco markers through OpenCV;
@@ -21,7 +22,9 @@ from .analysis import analyse, write_coco_pair
 from .compare import compare_models
 from .dataset_eval import DatasetEvaluation, evaluate_dataset
 from .detections import Detections, parse_detections
-from .evaluation import FrameRecord
+from .envelope import altitude_band
+from .envelope import envelope as detection_envelope
+from .evaluation import FrameRecord, detection_kpis
 from .fiducial import MarkerDetector
 from .jpeg import decode_jpeg, encode_jpeg
 from .macs import MacReport, count_macs
@@ -39,4 +42,5 @@ __all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detection
            "FrameRecord", "InferenceEvent", "MacReport", "MarkerDetector", "Model", "OnnxModel",
            "OpenCVModel", "Oracle", "OracleFrame",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
-           "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]
+           "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections",
+           "altitude_band", "detection_envelope", "detection_kpis"]

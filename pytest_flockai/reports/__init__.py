@@ -14,3 +14,29 @@
 Everything here reads the plain data of the JSON report (``report.py``); none
 of it needs pytest.
 """
+
+from importlib import import_module as _import_module
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:      # what _PUBLIC imports on first use, spelled out for type checkers and docs
+    from .compare import Comparison, classify
+    from .compare import compare as compare_reports
+    from .scenario import diff as scenario_diff
+    from .scenario import summary as scenario_summary
+
+#: public name -> (module, attribute): the reports' Python face, imported on first use
+#: (the plugin loads this package in every run; the modules stay internal)
+_PUBLIC = {"Comparison": (".compare", "Comparison"), "classify": (".compare", "classify"),
+           "compare_reports": (".compare", "compare"), "scenario_diff": (".scenario", "diff"),
+           "scenario_summary": (".scenario", "summary")}
+
+__all__ = ["Comparison", "classify", "compare_reports", "scenario_diff", "scenario_summary"]
+
+
+def __getattr__(name: str):
+    if name not in _PUBLIC:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module, attr = _PUBLIC[name]
+    value = getattr(_import_module(module, __name__), attr)
+    globals()[name] = value
+    return value

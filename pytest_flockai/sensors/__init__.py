@@ -4,7 +4,7 @@ dataset export. See ``base.py`` for the interface the mission loop calls.
 
 OpenGL is needed only when a rendered ``Camera`` produces its first frame."""
 
-from ..world.truth import CameraModel, Truth, gimbal_pose, visible_people
+from .._deprecation import moved as _moved
 from .base import FunctionSensor, Sensor, SensorSuite
 from .camera import Camera
 from .conditions import Conditions
@@ -14,7 +14,10 @@ from .nav import GPS, IMU, Barometer, BatterySensor, Compass, Rangefinder
 from .replay import ReplayCamera
 from .views import ViewSet, render_views
 
-__all__ = ["Conditions", "ViewSet", "GPS", "IMU", "Barometer", "BatterySensor", "Camera", "CameraModel", "Compass",
+__all__ = ["Conditions", "ViewSet", "GPS", "IMU", "Barometer", "BatterySensor", "Camera", "Compass",
            "CsvSensor", "FunctionSensor", "Rangefinder", "ReplayCamera", "Sensor", "SensorSuite",
-           "TemperatureSensor", "Truth", "export_dataset", "gimbal_pose", "render_views",
-           "visible_people"]
+           "TemperatureSensor", "export_dataset", "render_views"]
+
+#: the world's truth (what the camera could see) has one home, ``fa.world``
+__getattr__ = _moved(__name__, {n: f"pytest_flockai.world.{n}"
+                               for n in ("CameraModel", "Truth", "gimbal_pose", "visible_people")})
