@@ -1,7 +1,8 @@
 """Tables of the docs site generated from the code, so they cannot drift: the
 plugin's options and ini keys, its markers, the KPI registry, the CLI's help,
 the import layers (from tests/test_architecture.py), the blueprints, the
-computers and the resource limits.
+computers, the resource limits and the subpackages of the API reference (their
+``__all__``).
 
 Used by the mkdocs hook (docs/hooks.py): a page line ``<!-- gen:NAME -->`` is
 replaced by ``TABLES[NAME]()``. Also runnable: ``python docs/gen.py kpis``."""
@@ -121,7 +122,7 @@ def blueprints() -> str:
 
 def devices() -> str:
     """The computers tasks can run on."""
-    from pytest_flockai.compute.devices import DEVICES
+    from pytest_flockai.compute import DEVICES
 
     rows = [[f"`{d.name}`", f"{d.idle_w:g}", f"{d.active_w:g}", f"{d.macs_per_s / 1e9:g}",
              f"{d.overhead_s * 1e3:g}", d.source] for d in DEVICES.values()]
@@ -137,8 +138,40 @@ def limits() -> str:
     return _md(["limit", "value"], rows)
 
 
+def public_modules() -> dict:
+    """The documented subpackages: each module of the package named in ``fa.__all__``,
+    and in their ``__all__`` (once, under its first public name; ``fa.strategies.st``,
+    hypothesis' own, is not ours)."""
+    import types
+
+    import pytest_flockai as fa
+
+    found: dict = {}
+    todo = [(n, getattr(fa, n)) for n in sorted(fa.__all__)]
+    while todo:
+        name, obj = todo.pop(0)
+        if isinstance(obj, types.ModuleType) and obj.__name__.startswith("pytest_flockai") \
+                and all(obj is not m for m in found.values()):
+            found[name] = obj
+            todo += [(f"{name}.{m}", getattr(obj, m)) for m in obj.__all__]
+    return found
+
+
+def api() -> str:
+    """One section per documented subpackage, listing exactly its ``__all__`` (the names
+    that are modules have their own section), rendered by mkdocstrings."""
+    import types
+
+    out = []
+    for name, mod in public_modules().items():
+        members = [m for m in mod.__all__ if not isinstance(getattr(mod, m), types.ModuleType)]
+        out += [f"::: {mod.__name__}", "    options:", f'      heading: "fa.{name}"',
+                "      show_root_full_path: false", f"      members: [{', '.join(members)}]", ""]
+    return "\n".join(out)
+
+
 TABLES = {"options": options, "markers": markers, "kpis": kpis, "cli": cli, "layers": layers,
-          "blueprints": blueprints, "devices": devices, "limits": limits}
+          "blueprints": blueprints, "devices": devices, "limits": limits, "api": api}
 
 if __name__ == "__main__":
     for name in sys.argv[1:] or list(TABLES):

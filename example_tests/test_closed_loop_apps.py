@@ -24,9 +24,8 @@ from hypothesis import strategies as st
 from pycocotools import mask as cocomask
 
 import pytest_flockai as fa
+from pytest_flockai import cacheable, check_budgets
 from pytest_flockai import strategies as fst
-from pytest_flockai.budgets import check
-from pytest_flockai.cache import cacheable
 
 MODELS = Path(__file__).resolve().parent.parent / "fixtures" / "models"
 CLIMB_S = 12.0
@@ -154,7 +153,7 @@ def test_the_search_finds_where_following_breaks():
         res = follow_mission(fa.ml.Oracle(classes=["person"]), speed=speed, turn_deg=turn,
                              wind=wind or None).run()
         fst.target_margin(res, track_error_p95_m="<= 4 m")
-        check(res, track_error_p95_m="<= 4 m", track_lost_count="== 0")
+        check_budgets(res, track_error_p95_m="<= 4 m", track_lost_count="== 0")
     with pytest.raises(AssertionError, match="track_"):
         following_holds()
 

@@ -10,18 +10,17 @@ import scenarios
 from hypothesis import Phase, given, settings
 
 import pytest_flockai as fa
-from pytest_flockai import plots, report
+from pytest_flockai import check_budgets, plots, reports
 from pytest_flockai import strategies as fst
-from pytest_flockai.budgets import check
-from pytest_flockai.ml.envelope import altitude_band, envelope
-from pytest_flockai.ml.evaluation import FrameRecord, detection_kpis
+from pytest_flockai.ml import FrameRecord, altitude_band, detection_envelope, detection_kpis
 
 
 @pytest.fixture(scope="session")
 def recall_map(det_model, det_city, tmp_path_factory):
-    df = envelope(det_model, det_city, altitudes_m=(15.0, 25.0, 35.0, 50.0),
-                  speeds_mps=(0.0, 8.0, 16.0), conditions=fa.Conditions(exposure_s=1 / 30),
-                  views=12, area=90.0, camera={"fov_deg": 51.0})
+    df = detection_envelope(det_model, det_city, altitudes_m=(15.0, 25.0, 35.0, 50.0),
+                            speeds_mps=(0.0, 8.0, 16.0),
+                            conditions=fa.Conditions(exposure_s=1 / 30),
+                            views=12, area=90.0, camera={"fov_deg": 51.0})
     out = os.environ.get("FLOCKAI_ENVELOPE_DIR") or tmp_path_factory.mktemp("envelope")
     written = plots.save_envelope(df, os.path.join(out, "detector-recall"))
     df.attrs["pictures"] = [str(p) for p in written if str(p).endswith(".png")]
@@ -68,7 +67,7 @@ def test_a_tight_recall_budget_breaks_in_haze(fixed_views, det_model):
                 for i, (f, t) in enumerate(frames)]
         k = detection_kpis(recs, ("person", "vehicle"), score_threshold=0.4, min_visible=0.25)
         fst.target_margin(k, recall=">= 0.6")
-        check(k, recall=">= 0.6")
+        check_budgets(k, recall=">= 0.6")
     with pytest.raises(AssertionError, match="recall") as exc:
         recall_holds()
     assert "visibility_m" in str(exc.value) or "visibility_m" in "".join(
@@ -96,11 +95,12 @@ def test_the_haze_augmented_detector_holds_in_haze_and_the_gate_shows_its_cost(
     the 5 % a baseline gate allows, so the gate catches the trade-off."""
     hazy = fixed_views.under(fa.Conditions(visibility_m=300.0), seed=1)
     with pytest.raises(AssertionError, match="recall"):
-        check(_kpis(det_model, hazy), recall=">= 0.5")
-    check(_kpis(haze_model, hazy), recall=">= 0.5")
+        check_budgets(_kpis(det_model, hazy), recall=">= 0.5")
+    check_budgets(_kpis(haze_model, hazy), recall=">= 0.5")
     clear = {"flight": _kpis(haze_model, fixed_views.ideal())}
     shipped = {"flight": _kpis(det_model, fixed_views.ideal())}
-    regressed = {r["kpi"] for r in report.regressions(clear, shipped, 5.0)}
+    gate = reports.compare_reports({"t": shipped}, {"t": clear}, 5.0)
+    regressed = {d.kpi for d in gate.regressions}
     assert "recall" in regressed
 
 

@@ -8,9 +8,8 @@ import scenarios
 from hypothesis import given, settings
 
 import pytest_flockai as fa
+from pytest_flockai import cacheable, check_budgets
 from pytest_flockai import strategies as fst
-from pytest_flockai.budgets import check
-from pytest_flockai.cache import cacheable
 
 SHORT = dict(until=90.0)          # a 90 s slice of the survey is enough to project endurance
 
@@ -55,7 +54,7 @@ def test_fuzz_wind_and_battery_against_a_flight_time_budget(wind, mah):
     d = fa.drone("dji-mavic-2-pro", battery_mah=mah)
     r = fa.Mission(d, fa.pilots.Hover(altitude=20.0, duration=20.0), wind=wind, seed=0).run()
     fst.target_margin(r, endurance_s=">= 24 min")
-    check(r, endurance_s=">= 24 min", crashed="== 0")
+    check_budgets(r, endurance_s=">= 24 min", crashed="== 0")
 
 
 @cacheable     # collect() only reads the view: its flights may come from the flight cache

@@ -47,7 +47,8 @@ if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type c
     from .budgets import BudgetError
     from .budgets import check as check_budgets
     from .budgets import evaluate as evaluate_budgets
-    from .cache import FlightCache, cacheable, caching
+    from .cache import FlightCache, caching
+    from .cache.key import cacheable
     from .compute import devices
     from .control import pilots
     from .energy import EnergyModel

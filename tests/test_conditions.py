@@ -79,7 +79,7 @@ def test_kernels_and_vectors():
     assert sub.shape == (3, 3) and sub.sum() == pytest.approx(1.0) and sub.max() < 0.9
     k = motion_kernel(6.0, 0.0)
     assert k.sum() == pytest.approx(1.0) and k.shape[1] >= 7
-    pos, mat = fa.sensors.gimbal_pose((0, 0, 20), 0.0, -90.0)
+    pos, mat = fa.world.gimbal_pose((0, 0, 20), 0.0, -90.0)
     du, dv = blur_vector(pos, mat, (0, 0, 0), 0.0, 0.01, 200.0, 20.0)
     assert abs(du) < 1e-12 and abs(dv) < 1e-12
     with pytest.raises(fa.ConfigError, match="exposure_s = 2 is not allowed"):
