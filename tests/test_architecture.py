@@ -15,7 +15,7 @@ PKG = Path(__file__).resolve().parent.parent / "pytest_flockai"
 #: bottom to top; a name is a top-level module or subpackage of pytest_flockai
 LAYERS = [
     {"errors", "physics", "phases", "clock", "_check", "_io", "kpis", "recording", "result",
-     "limits", "memo", "_mujoco", "notebook", "_xp"},
+     "limits", "memo", "_mujoco", "notebook", "_xp", "_deprecation"},
     {"compute", "world"},
     {"energy", "sensors"},
     {"comm", "airframe"},
@@ -58,7 +58,8 @@ SAME_LAYER = {
     ("ml", "control"),
     ("fleet", "cache"), ("fleet", "mission"), ("fleet", "policy"), ("mission", "cache"),
     ("mission", "policy"),
-    ("__init__", "sweeps"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
+    ("__init__", "sweeps"), ("__init__", "budgets"), ("__init__", "cli"), ("__init__", "plots"),
+    ("__init__", "reports"), ("__init__", "strategies"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
     ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
     ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),
     ("report", "plots"), ("reports", "report"), ("strategies", "budgets"), ("sweeps", "budgets"),
