@@ -6,7 +6,7 @@ samples (seconds, one per timed run after warm-up), and the busy / idle power wh
 watt meter or the Jetson's rails gave them. A model is identified by the SHA-256 of
 its ONNX file (and of its external data files, ``model_sha256``), so a renamed copy
 still matches and an edited one does not. ``sample_latency(model, rng)`` draws one
-inference's latency from the measured samples with the caller's seeded generator:
+inference's latency from the measured distribution with the caller's seeded generator:
 the same seed gives the same draws, and p95 differs from p50 as it did on the
 computer. A file that is not such a profile is a ``ConfigError`` naming the field.
 """
@@ -21,6 +21,7 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
+import onnx
 
 from ..errors import ConfigError
 
@@ -45,7 +46,6 @@ def model_sha256(path) -> str:
 
 @functools.lru_cache(maxsize=256)
 def _sha256(p: str, size: int, mtime_ns: int) -> str:
-    import onnx
     h = hashlib.sha256()
     with open(p, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -78,6 +78,20 @@ class MeasuredModel:
 
     def percentile(self, q: float) -> float:
         return float(np.percentile(np.asarray(self.latency_s), q))
+
+    @functools.cached_property
+    def _sorted(self) -> np.ndarray:
+        return np.sort(np.asarray(self.latency_s, dtype=float))
+
+    def draw(self, rng: np.random.Generator, size=None):
+        """Latencies at uniform random quantiles of the measured ones (numpy's linear
+        percentile): the draws' p50 and p95 tend to the measured p50 and p95."""
+        s = self._sorted
+        pos = rng.random(size) * (len(s) - 1)
+        lo = np.floor(pos).astype(int)
+        hi = np.minimum(lo + 1, len(s) - 1)
+        out = s[lo] + (pos - lo) * (s[hi] - s[lo])
+        return float(out) if size is None else out
 
 
 @dataclass(frozen=True)
@@ -122,12 +136,13 @@ class MeasuredDevice:
         """The measured latencies of ``model`` in seconds, in measurement order."""
         return np.asarray(self.model(model).latency_s, dtype=float)
 
-    def sample_latency(self, model, rng) -> float:
-        """One inference's latency (s) drawn from the measured samples with ``rng`` (a
-        ``numpy.random.Generator``, or an int seed)."""
-        s = self.model(model).latency_s
+    def sample_latency(self, model, rng, size=None):
+        """One inference's latency (s) drawn from the measured distribution with ``rng`` (a
+        ``numpy.random.Generator``, or an int seed): the measured latency at a uniform
+        random quantile, interpolated between neighbouring samples as numpy's percentile
+        is. ``size``: an array of that many draws instead of one float."""
         g = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-        return float(s[int(g.integers(len(s)))])
+        return self.model(model).draw(g, size)
 
     def energy_j(self, model) -> float | None:
         """Energy per inference above idle (J): median latency x (busy - idle power);

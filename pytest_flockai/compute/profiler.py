@@ -28,12 +28,17 @@ import os
 import platform
 import threading
 import time
+import warnings
 from pathlib import Path
 
+import cv2
 import numpy as np
+import onnx
+import onnxruntime as ort
 
 from .._io import atomic_write
 from ..errors import ConfigError
+from .graph import analyze
 from .profile import RUNTIMES, SCHEMA, from_dict, model_sha256
 
 MEASURABLE = ("onnxruntime", "opencv-dnn")
@@ -158,7 +163,6 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
 
 def _runner(path, runtime, target, threads, shape, seed):
     """(a no-argument call running one inference, the input shape, runtime version)."""
-    import onnx
     proto = onnx.load(os.fspath(path), load_external_data=False)
     inits = {i.name for i in proto.graph.initializer}
     inp = next(i for i in proto.graph.input if i.name not in inits)
@@ -181,7 +185,6 @@ def _runner(path, runtime, target, threads, shape, seed):
     x = (rng.integers(0, 128, dims).astype(dtype) if dtype in (np.uint8, np.int8)
          else rng.random(dims).astype(dtype))
     if runtime == "opencv-dnn":
-        import cv2
         net = cv2.dnn.readNetFromONNX(os.fspath(path))
         if threads is not None:
             cv2.setNumThreads(threads)
@@ -190,7 +193,6 @@ def _runner(path, runtime, target, threads, shape, seed):
             net.setInput(x)
             net.forward()
         return run_cv, tuple(dims), cv2.__version__
-    import onnxruntime as ort
     opts = ort.SessionOptions()
     if threads is not None:
         opts.intra_op_num_threads = threads
@@ -206,9 +208,6 @@ def _runner(path, runtime, target, threads, shape, seed):
 
 
 def _macs(path, shape):
-    import warnings
-
-    from .graph import analyze
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -218,7 +217,6 @@ def _macs(path, shape):
 
 
 def _precision(path) -> str:
-    import onnx
     proto = onnx.load(os.fspath(path), load_external_data=False)
     if any(n.op_type.startswith("QLinear") or n.op_type in ("ConvInteger", "MatMulInteger",
                                                              "DequantizeLinear")
