@@ -82,7 +82,7 @@ def test_seeded_draws_repeat_and_reproduce_p50_p95(measured):
     s2 = dev.sample_latency(a, rng2, size=2000)            # the same stream, vectorised
     np.testing.assert_allclose(s1, s2, rtol=1e-12)
     measured_s = dev.latency_samples(a)
-    assert measured_s.min() <= s1.min() and s1.max() <= measured_s.max()
+    assert set(s1.tolist()) <= set(measured_s.tolist())       # each draw one of the samples
     many = dev.sample_latency(a, 12, size=200_000)
     for q in (50, 95):
         assert np.percentile(many, q) == pytest.approx(np.percentile(measured_s, q), rel=0.05)

@@ -6,7 +6,7 @@ samples (seconds, one per timed run after warm-up), and the busy / idle power wh
 watt meter or the Jetson's rails gave them. A model is identified by the SHA-256 of
 its ONNX file (and of its external data files, ``model_sha256``), so a renamed copy
 still matches and an edited one does not. ``sample_latency(model, rng)`` draws one
-inference's latency from the measured distribution with the caller's seeded generator:
+inference's latency from the measured samples with the caller's seeded generator:
 the same seed gives the same draws, and p95 differs from p50 as it did on the
 computer. A file that is not such a profile is a ``ConfigError`` naming the field.
 """
@@ -79,19 +79,11 @@ class MeasuredModel:
     def percentile(self, q: float) -> float:
         return float(np.percentile(np.asarray(self.latency_s), q))
 
-    @functools.cached_property
-    def _sorted(self) -> np.ndarray:
-        return np.sort(np.asarray(self.latency_s, dtype=float))
-
     def draw(self, rng: np.random.Generator, size=None):
-        """Latencies at uniform random quantiles of the measured ones (numpy's linear
-        percentile): the draws' p50 and p95 tend to the measured p50 and p95."""
-        s = self._sorted
-        pos = rng.random(size) * (len(s) - 1)
-        lo = np.floor(pos).astype(int)
-        hi = np.minimum(lo + 1, len(s) - 1)
-        out = s[lo] + (pos - lo) * (s[hi] - s[lo])
-        return float(out) if size is None else out
+        """Measured latencies drawn uniformly with ``rng`` (each one of the samples)."""
+        idx = rng.integers(len(self.latency_s), size=size)
+        return float(self.latency_s[int(idx)]) if size is None else \
+            np.asarray(self.latency_s, dtype=float)[idx]
 
 
 @dataclass(frozen=True)
@@ -137,10 +129,9 @@ class MeasuredDevice:
         return np.asarray(self.model(model).latency_s, dtype=float)
 
     def sample_latency(self, model, rng, size=None):
-        """One inference's latency (s) drawn from the measured distribution with ``rng`` (a
-        ``numpy.random.Generator``, or an int seed): the measured latency at a uniform
-        random quantile, interpolated between neighbouring samples as numpy's percentile
-        is. ``size``: an array of that many draws instead of one float."""
+        """One inference's latency (s): one of the measured samples, drawn uniformly with
+        ``rng`` (a ``numpy.random.Generator``, or an int seed); ``size``: an array of
+        that many draws instead of one float."""
         g = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
         return self.model(model).draw(g, size)
 
