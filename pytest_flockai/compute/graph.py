@@ -265,8 +265,12 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
     g = fixed.graph
     nodes: list[NodeCost] = []
     uncounted: list[str] = []
-    for node in g.node:
-        label = node.name or node.output[0]
+    seen: set[str] = set()
+    for i, node in enumerate(g.node):
+        label = node.name or node.output[0] or f"#{i}"
+        if label in seen:                # node names are not required to be unique
+            label = f"{label}#{i}"
+        seen.add(label)
         is_const = is_folded(node, consts, shapes)
         if is_const:
             consts.update(o for o in node.output if o)
