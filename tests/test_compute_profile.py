@@ -56,6 +56,7 @@ def test_profile_device_writes_a_profile_that_loads(measured, tmp_path):
     assert dev.runtime_version == ort.__version__ and dev.threads == 1
     assert dev.target == "cpu" and dev.precision == "fp32"
     assert dev.host["cpu_count"] >= 1 and dev.host["machine"]
+    assert json.loads(out.read_text())["runtime"]["libraries"]["onnx"] == onnx.__version__
     assert model_sha256(a) == hashlib.sha256(a.read_bytes()).hexdigest()
     assert set(dev.models) == {model_sha256(a), model_sha256(b)}
     small, wide = dev.latency_samples(a), dev.latency_samples(str(b))
@@ -83,10 +84,21 @@ def test_seeded_draws_repeat_and_reproduce_p50_p95(measured):
     np.testing.assert_allclose(s1, s2, rtol=1e-12)
     measured_s = dev.latency_samples(a)
     assert set(s1.tolist()) <= set(measured_s.tolist())       # each draw one of the samples
+    # the draws' quantiles sit within one percentile point of the measured ones (on this
+    # shared machine the samples can have gaps, so not always within 5 % of the value)
     many = dev.sample_latency(a, 12, size=200_000)
     for q in (50, 95):
-        assert np.percentile(many, q) == pytest.approx(np.percentile(measured_s, q), rel=0.05)
-    assert np.percentile(many, 95) > np.percentile(many, 50)
+        lo, hi = np.percentile(measured_s, [q - 1, q + 1])
+        assert lo <= np.percentile(many, q) <= hi
+    # on a profile of 1,000 known samples, the draws' p50 and p95 are within 5 %
+    doc = json.loads(out.read_text())
+    known = np.random.default_rng(5).lognormal(np.log(0.05), 0.3, 1000)
+    doc["models"][0]["latency_s"] = known.tolist()
+    dev2 = from_dict(doc)
+    d = dev2.sample_latency(doc["models"][0]["sha256"], np.random.default_rng(1), size=20_000)
+    for q in (50, 95):
+        assert np.percentile(d, q) == pytest.approx(np.percentile(known, q), rel=0.05)
+    assert np.percentile(d, 95) > 1.4 * np.percentile(d, 50)
 
 
 def _doc(out):

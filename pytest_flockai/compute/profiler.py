@@ -157,7 +157,9 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
     return {"schema": SCHEMA, "name": name or host.get("board") or host["machine"],
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "runtime": {"name": runtime, "version": version, "target": target,
-                        "precision": _precision(models[0]), "threads": threads},
+                        "precision": _precision(models[0]), "threads": threads,
+                        "libraries": {"onnxruntime": ort.__version__, "opencv": cv2.__version__,
+                                      "onnx": onnx.__version__, "numpy": np.__version__}},
             "host": host, "power": power, "models": out_models}
 
 
