@@ -3,7 +3,9 @@ compute.profile(): the measured samples, seeded draws, power, and bad profile fi
 
 import hashlib
 import json
+import time
 
+import cv2
 import numpy as np
 import onnx
 import onnxruntime as ort
@@ -13,6 +15,7 @@ from onnx import TensorProto, helper, numpy_helper
 import pytest_flockai as fa
 from pytest_flockai.cli import main
 from pytest_flockai.compute.profile import from_dict, model_sha256
+from pytest_flockai.compute.profiler import measure, write
 from pytest_flockai.errors import ConfigError
 
 
@@ -27,7 +30,7 @@ def _net(tmp_path, name="net.onnx", width=16):
              helper.make_node("GlobalAveragePool", ["c2"], ["y"])]
     g = helper.make_graph(nodes, "net", [helper.make_tensor_value_info(
         "x", TensorProto.FLOAT, ["n", 3, 64, 64])],
-        [helper.make_tensor_value_info("y", TensorProto.FLOAT, None)], [w1, w2])
+        [helper.make_tensor_value_info("y", TensorProto.FLOAT, ["n", width, 1, 1])], [w1, w2])
     m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
     m.ir_version = 8
     p = tmp_path / name
@@ -142,3 +145,29 @@ def test_not_a_profile_and_bad_cli_input(tmp_path, capsys, measured):
         assert main(["profile-device", str(net), "--out", str(out), *args]) == 2
         assert text in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_power_from_a_timed_meter_log_and_opencv_dnn(tmp_path):
+    net = _net(tmp_path, "m.onnx", 8)
+    now = time.time()
+    times = np.arange(now - 30.0, now + 120.0, 0.01)
+    meter = tmp_path / "meter.csv"
+    meter.write_text("time_s,power_w\n" + "".join(
+        f"{t:.3f},{2.0 if t < now else 7.0}\n" for t in times))
+    doc = measure([net], runtime="opencv-dnn", runs=5, warmup=1, input_shape="1x3x64x64",
+                  power_csv=meter, name="meter-test")
+    write(doc, tmp_path / "p.json")
+    dev = fa.compute.profile(tmp_path / "p.json")
+    assert dev.runtime == "opencv-dnn" and dev.runtime_version == cv2.__version__
+    assert dev.idle_w == pytest.approx(2.0, abs=0.1)           # samples before the start
+    assert dev.busy_w == 7.0 and "meter.csv" in dev.power_source   # samples in the runs
+    assert dev.latency_samples(net).shape == (5,)
+    assert dev.model(net).input_shape == (1, 3, 64, 64)
+    late = tmp_path / "late.csv"
+    late.write_text("time_s,power_w\n1.0,3.0\n")
+    with pytest.raises(ConfigError, match="no sample falls in the timed runs"):
+        measure([net], runs=2, warmup=0, power_csv=late)
+    bad = tmp_path / "bad.onnx"
+    bad.write_bytes(net.read_bytes()[:-40])                # a truncated model file
+    with pytest.raises(ConfigError, match="bad.onnx"):
+        measure([bad], runs=1, warmup=0)

@@ -11,7 +11,8 @@ host's facts (CPU, cores, board model, memory, OS) and, when given, the busy pow
 
 - ``--power-csv``: a watt meter's log, a CSV with a power column (``power_w``, ``watts``
   or ``power``) and optionally ``time_s`` (Unix seconds). With times, busy power is the
-  mean over the timed runs and idle power the mean before the first warm-up; without,
+  mean over the timed runs (widened by one meter period when no sample falls inside)
+  and idle power the mean before the first warm-up; without,
   every row is busy and ``--idle-w`` gives idle.
 - ``--jetson-rails``: the board's own INA3221 input rail (``VDD_IN`` on Orin,
   ``POM_5V_IN`` on Nano), sampled every 50 ms: 2 s idle first, then during the runs.
@@ -187,7 +188,11 @@ def _runner(path, runtime, target, threads, shape, seed):
     x = (rng.integers(0, 128, dims).astype(dtype) if dtype in (np.uint8, np.int8)
          else rng.random(dims).astype(dtype))
     if runtime == "opencv-dnn":
-        net = cv2.dnn.readNetFromONNX(os.fspath(path))
+        try:
+            net = cv2.dnn.readNetFromONNX(os.fspath(path))
+        except cv2.error as e:
+            raise ConfigError(f"model {str(path)!r}: --runtime opencv-dnn ({cv2.__version__}) "
+                              f"cannot load it: {str(e).strip()[-200:]}") from None
         if threads is not None:
             cv2.setNumThreads(threads)
 
@@ -204,7 +209,11 @@ def _runner(path, runtime, target, threads, shape, seed):
             raise ConfigError(f"--target = 'gpu' is not allowed here: onnxruntime "
                               f"{ort.__version__} has providers {ort.get_available_providers()}")
         providers.insert(0, "CUDAExecutionProvider")
-    sess = ort.InferenceSession(os.fspath(path), opts, providers=providers)
+    try:
+        sess = ort.InferenceSession(os.fspath(path), opts, providers=providers)
+    except Exception as e:  # noqa: BLE001 (onnxruntime's own exception types)
+        raise ConfigError(f"model {str(path)!r}: --runtime onnxruntime ({ort.__version__}) "
+                          f"cannot load it: {str(e).strip()[:200]}") from None
     feeds = {inp.name: x}
     return (lambda: sess.run(None, feeds)), tuple(dims), ort.__version__
 
@@ -276,9 +285,14 @@ def _power_from_csv(path, t_start, windows, idle_w) -> dict:
         raise ConfigError(f"{where}: power values must be watts >= 0")
     busy, idle = watts, None
     if times is not None:
+        # a run shorter than the meter's period: widen each window by one period
+        period = float(np.median(np.diff(np.sort(times)))) if len(times) > 1 else 0.0
         in_run = np.zeros(len(times), bool)
-        for t0, t1 in windows:
-            in_run |= (times >= t0) & (times <= t1)
+        for pad in (0.0, period):
+            for t0, t1 in windows:
+                in_run |= (times >= t0 - pad) & (times <= t1 + pad)
+            if in_run.any():
+                break
         busy, before = watts[in_run], watts[times < t_start]
         idle = float(before.mean()) if before.size else None
         if not busy.size:
