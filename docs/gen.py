@@ -137,6 +137,10 @@ def limits() -> str:
     return _md(["limit", "value"], rows)
 
 
+TABLES = {"options": options, "markers": markers, "kpis": kpis, "cli": cli, "layers": layers,
+          "blueprints": blueprints, "devices": devices, "limits": limits}
+
+
 def public_modules() -> dict:
     """The documented subpackages: each module of the package named in ``fa.__all__``,
     and in their ``__all__`` (once, under its first public name; ``fa.strategies.st``,
@@ -169,10 +173,9 @@ def api() -> str:
     return "\n".join(out)
 
 
-TABLES = {"options": options, "markers": markers, "kpis": kpis, "cli": cli, "layers": layers,
-          "blueprints": blueprints, "devices": devices, "limits": limits}
 #: the API reference's subpackage sections (their ``__all__``)
 TABLES["api"] = api
+
 
 if __name__ == "__main__":
     for name in sys.argv[1:] or list(TABLES):
