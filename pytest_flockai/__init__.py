@@ -87,7 +87,7 @@ __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "Energ
            # budgets and the flight cache, whose modules are internal
            "BudgetError", "FlightCache", "cacheable", "caching", "check_budgets", "evaluate_budgets",
            # documented subpackages: their own __all__ is public too
-           "cli", "compute", "energy", "plots", "reports", "strategies", "sweeps", "world"]
+           "cli", "compute", "energy", "errors", "plots", "reports", "strategies", "sweeps", "world"]
 
 
 def __getattr__(name: str):

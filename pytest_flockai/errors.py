@@ -11,6 +11,8 @@ import difflib
 from collections.abc import Iterable
 from typing import Any
 
+__all__ = ["ConfigError", "FlockAIError", "SimulationError", "WriteError"]
+
 
 class FlockAIError(Exception):
     """Base class of every error pytest-flockai raises on purpose."""
