@@ -14,6 +14,7 @@ copy (``Run.policies``), as for every policy.
 from __future__ import annotations
 
 import math
+import queue
 import time
 
 from ..control.stages import DONE, LAND, PILOT, RETURN, TAKEOFF
@@ -126,6 +127,8 @@ class Autopilot(Policy, Commands):
             self.lag_max = max(self.lag_max, -ahead)
             self.lag_sum -= ahead
         self.n_steps += 1
+        if self.stages.grounded:
+            self._preflight(t)
         if now >= self.deadline:
             self.run.event(t, "app_timeout")
             self.run.stop("app_timeout")
@@ -146,6 +149,33 @@ class Autopilot(Policy, Commands):
                 r = self.rates[n]
                 self._due[n] = t + 1.0 / r if r > 0 else math.inf
                 self.link.stream(n, snap)
+
+    def _preflight(self, t: float) -> None:
+        """On the pad before the take-off the simulated clock stands still (lockstep with
+        the app): commands are answered and telemetry sent on the wall clock until one of
+        them ends the pre-flight (take-off, mission, offboard), the app exits or the
+        deadline passes. So the flight does not depend on how long the app took to
+        start, connect and arm (the same KPIs at every speed)."""
+        inbox, next_tel = self.link.inbox, 0.0
+        while self.stages.grounded:
+            now = time.monotonic()
+            if now >= self.deadline or self._app_gone:
+                return
+            if now >= self._next_poll:
+                self._next_poll = now + 0.25
+                self._check_app(t)
+            if now >= next_tel:
+                snap = self.snapshot(t)
+                for n, r in self.rates.items():
+                    if r > 0:
+                        self.link.stream(n, snap)
+                next_tel = now + 0.1
+            try:
+                msg = inbox.get(timeout=0.02)
+            except queue.Empty:
+                continue
+            self.handle(t, msg)
+        self._w0 = time.monotonic() - t / self.speed     # paced again from here
 
     def _modes(self, t: float, now: float) -> None:
         """What the stages did on their own: climb done, landed, returning."""
