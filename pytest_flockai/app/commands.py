@@ -203,7 +203,7 @@ class Commands:
         here = self.geo.to_global(q[0], q[1], q[2])
         lat = p[4] if _ok(p[4]) else here[0]
         lon = p[5] if _ok(p[5]) else here[1]
-        rel = here[3] if not _ok(p[6]) else p[6] if frame in RELATIVE_FRAMES else p[6] - self.geo.amsl0
+        rel = here[3] if not _ok(p[6]) else p[6] - self.geo.amsl0     # MSL, whatever the frame
         c = self.geo.to_world(lat, lon, rel)
         radius = abs(p[0]) if _ok(p[0]) and p[0] != 0 else 10.0
         speed = abs(p[1]) if _ok(p[1]) and p[1] != 0 else 3.0

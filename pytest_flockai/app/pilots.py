@@ -56,8 +56,11 @@ class Setpoint(Pilot):
         dt = max(0.0, t - self._t)
         self._t = t
         p, v = self._p, self._v
-        if self.pos is not None:
-            w = [GAIN * (self.pos[i] - p[i]) for i in range(3)]
+        if self.pos is not None:      # toward it, slow enough to brake at half the limit
+            d = [self.pos[i] - p[i] for i in range(3)]
+            dist = math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2)
+            s = min(GAIN * dist, math.sqrt(self._accel * dist))
+            w = [c * s / dist for c in d] if dist > 1e-9 else [0.0, 0.0, 0.0]
         elif self.vel is not None:
             w = list(self.vel)
         else:

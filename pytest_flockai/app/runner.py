@@ -199,6 +199,33 @@ def _fly(cmd, mission, timeout_s, app_env, cwd, port, speed) -> AppResult:
     return AppResult(int(code), res, output, time.perf_counter() - wall0, port)
 
 
+def marker_flight(request, mission, mark) -> FlightResult:
+    """The ``flight`` fixture under ``@pytest.mark.flockai_app(cmd=[...], ...)``: the
+    fixtures' drone, world, tasks, wind and seed flown by the app; its output goes into
+    the test's report; a failing exit code fails the test."""
+    if mark.args:
+        raise ConfigError(f"flockai_app: positional arguments {mark.args!r} are not allowed; "
+                          f"use cmd=[...], timeout_s=, speed=, env=, port=")
+    kw = dict(mark.kwargs)
+    allowed = ("cmd", "timeout_s", "speed", "env", "port")
+    for k in kw:
+        if k not in allowed:
+            raise ConfigError(f"flockai_app: unknown argument {k!r}; allowed: {', '.join(allowed)}")
+    if "cmd" not in kw:
+        raise ConfigError("flockai_app: cmd is required, e.g. cmd=[sys.executable, 'app.py']")
+    try:
+        r = run(kw.pop("cmd"), mission.drone, world=mission.world, tasks=mission.tasks,
+                seed=mission.seed, wind=mission.wind, name=mission.name,
+                cwd=str(request.config.rootpath), **kw)
+    except AppError as exc:
+        request.node.add_report_section("call", "flockai app output", exc.output)
+        raise
+    request.node.add_report_section("call", "flockai app output", r.output)
+    if r.exit_code != 0:
+        raise AppError(f"the app exited with code {r.exit_code}:\n{r.output[-2000:]}")
+    return r.result
+
+
 def _kill(proc) -> None:
     """End the app's whole process group: SIGTERM, then SIGKILL after 2 s."""
     for sig, wait in ((signal.SIGTERM, 2.0), (signal.SIGKILL, 2.0)):

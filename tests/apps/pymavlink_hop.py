@@ -1,4 +1,4 @@
-"""A pymavlink program (written for the tests): arm, climb to 4 m, fly 10 m north with
+"""A pymavlink program (written for the tests): arm, climb to 4 m, fly $HOP_NORTH_M (10) m north with
 DO_REPOSITION, land; exits 0 once the autopilot reports it is on the ground."""
 
 import math
@@ -41,13 +41,15 @@ command(M.MAV_CMD_NAV_TAKEOFF, expect=M.MAV_RESULT_DENIED)      # not armed yet
 command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1)
 command(M.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, math.nan)
 wait(lambda x: x.get_type() == "GLOBAL_POSITION_INT" and x.relative_alt > 3800, "4 m")
-lat = home.latitude * 1e-7 + 10.0 / 111195.0
+north = float(os.environ.get("HOP_NORTH_M", "10"))
+lat = home.latitude * 1e-7 + north / 111195.0
 m.mav.command_int_send(m.target_system, 1, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
                        M.MAV_CMD_DO_REPOSITION, 0, 0, -1, 0, 0, 0,
                        int(lat * 1e7), home.longitude, 4.0)
 ack = wait(lambda x: x.get_type() == "COMMAND_ACK", "reposition ack")
 assert ack.result == M.MAV_RESULT_ACCEPTED, ack
-wait(lambda x: x.get_type() == "LOCAL_POSITION_NED" and x.x > 9.5 and abs(x.vx) < 0.3, "10 m north")
+wait(lambda x: x.get_type() == "LOCAL_POSITION_NED" and abs(x.x - north) < 0.5
+     and abs(x.vx) < 0.3, f"{north} m north")
 command(M.MAV_CMD_DO_SET_HOME, 1, expect=M.MAV_RESULT_UNSUPPORTED)
 command(M.MAV_CMD_NAV_LAND)
 wait(lambda x: x.get_type() == "EXTENDED_SYS_STATE"
