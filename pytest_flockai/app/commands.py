@@ -139,6 +139,8 @@ class Commands:
             return DENIED if not self.in_air else A
         self.mission_active = False
         self.stages.descent_speed = self.link.params["MPC_LAND_SPEED"]
+        q, sp = self.st.qc, self.st.sp
+        sp[0], sp[1] = q[0], q[1]           # land where the drone is, as PX4 does
         self.stages.land_here(t)
         self.mode = "LAND"
         return A
