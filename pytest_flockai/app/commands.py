@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
+from typing import Any
 
 from ..control.pilots import Waypoints
 from ..control.stages import DONE, LAND, TAKEOFF
@@ -28,6 +30,39 @@ def _ok(v) -> bool:
 
 class Commands:
     """Mixin of ``Autopilot`` (which provides the flight state and ``link``)."""
+
+    # provided by Autopilot (the flight's state, the link, the flying helpers)
+    st: Any
+    stages: Any
+    link: Any
+    run: Any
+    geo: Any
+    armed: bool
+    mode: str
+    cruise: float
+    setpoint: Any
+    sp_pilot: Any
+    mission_active: bool
+    mi: int
+    leg: Any
+    t_last: float
+    commands: int
+    denied: int
+    unsupported: int
+    rates: dict
+    _due: dict
+    _hold_s: float
+    _reset_asked: bool
+    hold: Callable[[float], None]
+    fly: Callable[[float, Any], None]
+    goto: Callable[..., int]
+    snapshot: Callable[[float], dict]
+    _yaw: Callable[[], float]
+    _in_reach: Callable[[Any], None]
+
+    @property
+    def in_air(self) -> bool:               # pragma: no cover - Autopilot's
+        raise NotImplementedError
 
     #: commands that ask for messages or information (answered, never counted as the app's
     #: commands; what is not served is named in a hang's diagnosis)

@@ -161,7 +161,7 @@ class Link:
                 self._request_next()
             try:
                 data = self.sock.recv(65535)
-            except (TimeoutError, socket.timeout):
+            except TimeoutError:
                 continue
             except OSError:
                 return

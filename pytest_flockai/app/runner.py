@@ -157,7 +157,7 @@ def _fly(cmd, mission, timeout_s, app_env, cwd, port, speed) -> AppResult:
         out.close()
         raise ConfigError(f"app.run: cmd = {cmd!r} could not start: {exc}") from None
     ap.proc = proc
-    err: BaseException | None = None
+    err: SimulationError | None = None
     try:
         try:
             loop.fly(flight)
