@@ -1,7 +1,7 @@
 """CPU cost of the MAVLink front-end (pytest_flockai.app) against the same flight flown
 by a Policy: the mission program of tests/apps (3 waypoints, return to launch) flown by
 the app at ``--speed``, and the same waypoints flown by ``Mission(Waypoints, policies=
-[a Policy doing nothing every 20 ms])`` on the drone's estimate. CPU seconds of this
+[a Policy doing nothing at the autopilot's period])`` on the drone's estimate. CPU seconds of this
 process (the app's own process is not counted) per simulated second, best of ``--runs``.
 
     PYTHONPATH=$PWD python benchmarks/app_overhead.py --speed 20 --runs 3
@@ -15,6 +15,7 @@ import sys
 import time
 
 import pytest_flockai as fa
+from pytest_flockai.app.autopilot import PERIOD_S
 from pytest_flockai.control.pilots import Waypoints
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -29,7 +30,7 @@ class Idle(fa.Policy):
 def policy_flight(drone):
     pts = [(0.0, 20.0, 10.0), (15.0, 20.0, 10.0), (15.0, 0.0, 8.0)]
     m = fa.Mission(drone, Waypoints(pts, 5.0), fly_on="estimate",
-                   policies=[Idle(period_s=0.02)])
+                   policies=[Idle(period_s=PERIOD_S)])
     c0 = time.process_time()
     res = m.run()
     return time.process_time() - c0, res.scenario["sim_time_s"]

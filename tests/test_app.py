@@ -61,7 +61,6 @@ def test_pymavlink_program_flies_its_commands_and_lands():
 
 
 @needs_mavsdk
-@pytest.mark.slow
 @pytest.mark.flockai_app(cmd=app("mavsdk_takeoff_land.py"), timeout_s=90)
 @pytest.mark.kpi(flight_time_s="<= 20 s", **{"app.commands_denied": "== 0"})
 def test_mavsdk_take_off_and_land_within_a_flight_time_budget(flight):
@@ -72,7 +71,6 @@ def test_mavsdk_take_off_and_land_within_a_flight_time_budget(flight):
 
 
 @needs_mavsdk
-@pytest.mark.slow
 def test_mavsdk_offboard_position_setpoints_fly_a_square_with_headings():
     r = fa.app.run(app("mavsdk_offboard.py"), fa.drone(DRONE), speed=2.0, timeout_s=120)
     assert r.exit_code == 0, r.output
@@ -87,7 +85,6 @@ def test_mavsdk_offboard_position_setpoints_fly_a_square_with_headings():
 
 
 @needs_mavsdk
-@pytest.mark.slow
 def test_mavsdk_mission_gives_the_same_kpis_at_speed_1_and_20():
     runs = {}
     for speed in (20.0, 1.0):
@@ -108,7 +105,6 @@ def test_mavsdk_mission_gives_the_same_kpis_at_speed_1_and_20():
 
 
 @needs_mavsdk
-@pytest.mark.slow
 def test_mavsdk_orbit_circles_the_point_and_returns():
     r = fa.app.run(app("mavsdk_orbit.py"), fa.drone(DRONE), speed=2.0, timeout_s=120)
     assert r.exit_code == 0, r.output
@@ -121,7 +117,6 @@ def test_mavsdk_orbit_circles_the_point_and_returns():
     assert ("DO_ORBIT", "ACCEPTED") in [(e["command"], e["result"]) for e in events(res, "app_command")]
 
 
-@pytest.mark.slow
 def test_two_apps_at_once_each_fly_only_their_own_drone():
     out: dict = {}
 
@@ -143,7 +138,6 @@ def test_two_apps_at_once_each_fly_only_their_own_drone():
 
 
 @pytest.mark.parametrize("north", [6.0, -6.0])
-@pytest.mark.slow
 def test_app_tests_in_parallel_workers_never_cross(north):
     """Run with ``-n 2``: both fly at once, each must end where its own app sent it."""
     r = fa.app.run(app("pymavlink_hop.py"), fa.drone(DRONE), speed=4.0, timeout_s=90,
@@ -161,7 +155,6 @@ def _alive(pid: int) -> bool:
         return f.read().split(")")[-1].split()[0] != "Z"
 
 
-@pytest.mark.slow
 def test_a_hanging_app_fails_in_time_naming_what_it_waited_for_and_leaves_nothing():
     t0 = time.monotonic()
     with pytest.raises(fa.app.AppError) as info:

@@ -3,7 +3,7 @@ the app commands a take-off, turns the app's MAVLink commands into the stage mac
 and the pilots' actions, streams telemetry from what the drone estimates, and paces
 the simulated clock at ``speed`` times the wall clock.
 
-Every 20 ms of simulated time (50 Hz, PX4's usual command rate) it waits for the wall
+Every 40 ms of simulated time (25 Hz) it waits for the wall
 clock (``speed``: simulated seconds per wall second; falling behind is measured as
 ``lag``), acts on the commands the link received and acknowledges each (COMMAND_ACK:
 ACCEPTED, DENIED where PX4 refuses, UNSUPPORTED where nothing is emulated), steps the
@@ -26,6 +26,10 @@ from .link import Link
 from .link import mavlink as M
 from .pilots import Setpoint
 
+#: s of simulated time between the autopilot's steps (25 Hz: commands, setpoints, telemetry)
+PERIOD_S = 0.04
+#: s of wall time the simulation may run ahead of the paced clock before it sleeps
+SLEEP_MIN_S = 0.005
 #: telemetry rates (Hz of simulated time) before the app asks for others
 RATES = {"ATTITUDE": 10.0, "GLOBAL_POSITION_INT": 10.0, "LOCAL_POSITION_NED": 10.0,
          "SYS_STATUS": 2.0, "EXTENDED_SYS_STATE": 2.0, "BATTERY_STATUS": 1.0,
@@ -41,7 +45,7 @@ class Autopilot(Policy, Commands):
     after which the flight stops ("app_timeout")."""
 
     def __init__(self, port: int, speed: float = 1.0, deadline: float = math.inf):
-        super().__init__("app", period_s=0.02)
+        super().__init__("app", period_s=PERIOD_S)
         self.port, self.speed, self.deadline = int(port), float(speed), float(deadline)
         self.proc = None                    # the app's Popen, set by the runner
 
@@ -63,6 +67,7 @@ class Autopilot(Policy, Commands):
         self._app_gone = False
         self.rates = dict(RATES)
         self._due = dict.fromkeys(RATES, 0.0)
+        self._next_tel = 0.0
         self.cruise = 5.0
         self.setpoint: tuple | None = None   # (pos, vel, yaw, wall time) from the app
         self.sp_pilot: Setpoint | None = None
@@ -121,8 +126,9 @@ class Autopilot(Policy, Commands):
             self._w0 = now - t / self.speed
         ahead = self._w0 + t / self.speed - now
         if ahead > 0.0:
-            time.sleep(ahead)
-            now += ahead
+            if ahead > SLEEP_MIN_S:           # fewer, longer sleeps: each costs a wake-up
+                time.sleep(ahead)
+                now += ahead
         else:
             self.lag_max = max(self.lag_max, -ahead)
             self.lag_sum -= ahead
@@ -142,13 +148,16 @@ class Autopilot(Policy, Commands):
         self._modes(t, now)
         if self.mission_active:
             self.mission_step(t)
+        if t < self._next_tel:
+            return
         due = [n for n, at in self._due.items() if t >= at]
         if due:
             snap = self.snapshot(t)
             for n in due:
                 r = self.rates[n]
                 self._due[n] = t + 1.0 / r if r > 0 else math.inf
-                self.link.stream(n, snap)
+            self.link.send_all([self.link.message(n, snap) for n in due])
+        self._next_tel = min(self._due.values())
 
     def _preflight(self, t: float) -> None:
         """On the pad before the take-off the simulated clock stands still (lockstep with
@@ -166,12 +175,11 @@ class Autopilot(Policy, Commands):
                 self._check_app(t)
             if now >= next_tel:
                 snap = self.snapshot(t)
-                for n, r in self.rates.items():
-                    if r > 0:
-                        self.link.stream(n, snap)
+                self.link.send_all([self.link.message(n, snap)
+                                    for n, r in self.rates.items() if r > 0])
                 next_tel = now + 0.1
             try:
-                msg = inbox.get(timeout=0.02)
+                msg = inbox.get(timeout=0.05)
             except queue.Empty:
                 continue
             self.handle(t, msg)

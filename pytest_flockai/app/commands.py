@@ -51,6 +51,7 @@ class Commands:
     unsupported: int
     rates: dict
     _due: dict
+    _next_tel: float
     _hold_s: float
     _reset_asked: bool
     hold: Callable[[float], None]
@@ -140,8 +141,8 @@ class Commands:
             else:
                 us = msg.param2
                 from .autopilot import RATES
-                self.rates[name] = 0.0 if us < 0 else RATES[name] if us == 0 else min(50.0, 1e6 / us)
-                self._due[name] = self.t_last
+                self.rates[name] = 0.0 if us < 0 else RATES[name] if us == 0 else min(25.0, 1e6 / us)
+                self._due[name] = self._next_tel = self.t_last
             return A
         link.asked_missing.add(f"command {name_of(c)}")
         return UNSUP

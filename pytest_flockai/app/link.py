@@ -92,8 +92,24 @@ class Link:
         self.send(M.MAVLink_heartbeat_message(M.MAV_TYPE_QUADROTOR, M.MAV_AUTOPILOT_PX4, base,
                                               ap.custom_mode, status, 3))
 
+    def send_all(self, msgs) -> None:
+        """Send ``msgs`` in one datagram (MAVLink parsers read a datagram as a byte stream:
+        one kernel call instead of one per message)."""
+        with self._lock:
+            buf = b"".join(m.pack(self.mav) for m in msgs)
+        try:
+            self.sock.sendto(buf, ("127.0.0.1", self.port))
+        except OSError:
+            pass
+
     def stream(self, name: str, s: dict) -> None:
         """Send telemetry message ``name`` from the state ``s`` (``Autopilot.snapshot``)."""
+        m = self.message(name, s)
+        if m is not None:
+            self.send(m)
+
+    def message(self, name: str, s: dict):
+        """Telemetry message ``name`` from the state ``s`` (None: not one streamed)."""
         ms = s["ms"]
         if name == "GLOBAL_POSITION_INT":
             m = M.MAVLink_global_position_int_message(
@@ -123,8 +139,8 @@ class Link:
         elif name == "MISSION_CURRENT":
             m = M.MAVLink_mission_current_message(s["mission_seq"], len(self.mission))
         else:
-            return
-        self.send(m)
+            return None
+        return m
 
     def autopilot_version(self) -> None:
         caps = (M.MAV_PROTOCOL_CAPABILITY_MISSION_INT | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
@@ -152,10 +168,9 @@ class Link:
                 self.heartbeat()
                 next_hb = now + 1.0
             if not self.sim_running and self.snap is not None and now >= next_tel:
-                for name in ("GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "ATTITUDE",
-                             "SYS_STATUS", "EXTENDED_SYS_STATE", "BATTERY_STATUS",
-                             "GPS_RAW_INT", "HOME_POSITION"):
-                    self.stream(name, self.snap)
+                self.send_all([self.message(n, self.snap) for n in (
+                    "GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "ATTITUDE", "SYS_STATUS",
+                    "EXTENDED_SYS_STATE", "BATTERY_STATUS", "GPS_RAW_INT", "HOME_POSITION")])
                 next_tel = now + 0.25
             if self._up is not None and now >= self._up["resend"]:
                 self._request_next()
