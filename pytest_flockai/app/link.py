@@ -172,8 +172,14 @@ class Link:
                     "GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "ATTITUDE", "SYS_STATUS",
                     "EXTENDED_SYS_STATE", "BATTERY_STATUS", "GPS_RAW_INT", "HOME_POSITION")])
                 next_tel = now + 0.25
-            if self._up is not None and now >= self._up["resend"]:
-                self._request_next()
+            wake = next_hb
+            if self._up is not None:
+                if now >= self._up["resend"]:
+                    self._request_next()
+                wake = min(wake, self._up["resend"])
+            if not self.sim_running and self.snap is not None:
+                wake = min(wake, next_tel)
+            self.sock.settimeout(min(0.25, max(0.005, wake - now)))   # no idle wake-ups
             try:
                 data = self.sock.recv(65535)
             except TimeoutError:
