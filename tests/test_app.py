@@ -171,6 +171,19 @@ def test_a_hanging_app_fails_in_time_naming_what_it_waited_for_and_leaves_nothin
     assert err.result.end_reason == "app_timeout"
 
 
+def test_an_app_dying_in_the_air_leaves_the_drone_to_return_and_land():
+    r = fa.app.run(app("pymavlink_hop.py"), fa.drone(DRONE), speed=4.0, timeout_s=60,
+                   env={"HOP_CRASH": "1"})
+    assert r.exit_code == 3 and r.result.kpis["app.exit_code"] == 3.0
+    assert "crashing in the air" in r.output
+    res = r.result
+    (ev,) = events(res, "app_exited")
+    assert ev["exit_code"] == 3
+    assert res.end_reason == "landed"                          # PX4's link-loss failsafe
+    tel = res.telemetry
+    assert np.hypot(tel["x"].iloc[-1], tel["y"].iloc[-1]) < 1.0
+
+
 def test_a_mission_item_the_drone_cannot_fly_is_refused_by_name():
     r = fa.app.run(app("pymavlink_bad_mission.py"), fa.drone(DRONE), timeout_s=30)
     assert r.exit_code == 0, r.output

@@ -1,5 +1,6 @@
 """A pymavlink program (written for the tests): arm, climb to 4 m, fly $HOP_NORTH_M (10) m north with
-DO_REPOSITION, land; exits 0 once the autopilot reports it is on the ground."""
+DO_REPOSITION, land; exits 0 once the autopilot reports it is on the ground
+(with $HOP_CRASH set it exits 3 at 4 m instead, as a crashing app)."""
 
 import math
 import os
@@ -41,6 +42,9 @@ command(M.MAV_CMD_NAV_TAKEOFF, expect=M.MAV_RESULT_DENIED)      # not armed yet
 command(M.MAV_CMD_COMPONENT_ARM_DISARM, 1)
 command(M.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, math.nan)
 wait(lambda x: x.get_type() == "GLOBAL_POSITION_INT" and x.relative_alt > 3800, "4 m")
+if os.environ.get("HOP_CRASH"):
+    print("crashing in the air", flush=True)
+    os._exit(3)
 north = float(os.environ.get("HOP_NORTH_M", "10"))
 lat = home.latitude * 1e-7 + north / 111195.0
 m.mav.command_int_send(m.target_system, 1, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
