@@ -17,12 +17,14 @@ import math
 import queue
 import time
 
+from .. import limits
+from ..control.follow import yaw_of
 from ..control.stages import DONE, LAND, PILOT, RETURN, TAKEOFF
 from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames
 from .commands import Commands
-from .link import Link
+from .link import RATES, Link
 from .link import mavlink as M
 from .pilots import Setpoint
 
@@ -30,10 +32,6 @@ from .pilots import Setpoint
 PERIOD_S = 0.04
 #: s of wall time the simulation may run ahead of the paced clock before it sleeps
 SLEEP_MIN_S = 0.005
-#: telemetry rates (Hz of simulated time) before the app asks for others
-RATES = {"ATTITUDE": 10.0, "GLOBAL_POSITION_INT": 10.0, "LOCAL_POSITION_NED": 10.0,
-         "SYS_STATUS": 2.0, "EXTENDED_SYS_STATE": 2.0, "BATTERY_STATUS": 1.0,
-         "GPS_RAW_INT": 2.0, "HOME_POSITION": 1.0, "MISSION_CURRENT": 1.0}
 #: s of wall time without a setpoint after which OFFBOARD falls back to HOLD (PX4's
 #: COM_OF_LOSS_T default is 1 s)
 OFFBOARD_LOSS_S = 1.0
@@ -233,7 +231,6 @@ class Autopilot(Policy, Commands):
         self.fly(t, sp)
 
     def _yaw(self) -> float:
-        from ..control.follow import yaw_of
         return yaw_of(self.st.qc[3:7])
 
     def goto(self, t: float, pos, yaw: float | None, speed: float | None = None) -> int:
@@ -249,7 +246,6 @@ class Autopilot(Policy, Commands):
         return M.MAV_RESULT_ACCEPTED
 
     def _in_reach(self, pos) -> None:
-        from .. import limits
         far = max(abs(pos[0] - self.st.home[0]), abs(pos[1] - self.st.home[1]))
         if far > limits.MAX_EXTENT_M or pos[2] - self.st.home[2] < 0.5:
             raise ConfigError(f"app: position {tuple(round(c, 1) for c in pos)} is out of "

@@ -12,11 +12,11 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..control.pilots import Waypoints
+from ..control.pilots import Orbit, Waypoints
 from ..control.stages import DONE, LAND, TAKEOFF
 from . import frames
+from .link import RATES, name_of
 from .link import mavlink as M
-from .link import name_of
 from .pilots import Leg, Setpoint
 
 A, DENIED, UNSUP = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED
@@ -140,7 +140,6 @@ class Commands:
                 link.stream(name, self.snapshot(self.t_last))
             else:
                 us = msg.param2
-                from .autopilot import RATES
                 self.rates[name] = 0.0 if us < 0 else RATES[name] if us == 0 else min(25.0, 1e6 / us)
                 self._due[name] = self._next_tel = self.t_last
             return A
@@ -234,7 +233,6 @@ class Commands:
         return A
 
     def c_orbit(self, t, p, frame) -> int:
-        from ..control.pilots import Orbit
         if not self.in_air or self.st.stage == LAND:
             return DENIED
         q = self.st.qc

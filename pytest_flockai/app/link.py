@@ -36,9 +36,15 @@ MISSION_SKIPPED = {M.MAV_CMD_DO_MOUNT_CONTROL, M.MAV_CMD_DO_GIMBAL_MANAGER_PITCH
                    M.MAV_CMD_DO_SET_CAM_TRIGG_DIST, M.MAV_CMD_DO_SET_ROI_NONE}
 MISSION_FRAMES = {M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_RELATIVE_ALT, M.MAV_FRAME_GLOBAL_INT,
                   M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, M.MAV_FRAME_MISSION}
-#: PX4 parameters served (defaults of PX4's parameter reference): name -> value
-PARAMS = {"MIS_TAKEOFF_ALT": 2.5, "MPC_XY_CRUISE": 5.0, "MPC_XY_VEL_MAX": 12.0,
-          "NAV_ACC_RAD": 2.0, "MPC_LAND_SPEED": 0.7, "MPC_TKO_SPEED": 1.5}
+#: PX4 parameters served and applied (defaults of PX4's parameter reference; the climb and
+#: descent speeds are replaced by the mission's): name -> value
+PARAMS = {"MIS_TAKEOFF_ALT": 2.5, "MPC_XY_CRUISE": 5.0, "MPC_LAND_SPEED": 0.7,
+          "MPC_TKO_SPEED": 1.5}
+
+#: telemetry rates (Hz of simulated time) before the app asks for others
+RATES = {"ATTITUDE": 10.0, "GLOBAL_POSITION_INT": 10.0, "LOCAL_POSITION_NED": 10.0,
+         "SYS_STATUS": 2.0, "EXTENDED_SYS_STATE": 2.0, "BATTERY_STATUS": 1.0,
+         "GPS_RAW_INT": 2.0, "HOME_POSITION": 1.0, "MISSION_CURRENT": 1.0}
 
 
 def name_of(cmd: int) -> str:
@@ -243,6 +249,8 @@ class Link:
         elif kind == "PARAM_SET":
             if pid in self.params:
                 self.params[pid] = float(msg.param_value)
+                if pid == "MPC_XY_CRUISE" and msg.param_value > 0:
+                    self.ap.cruise = float(msg.param_value)
                 self._param_value(pid)
             else:
                 self.asked_missing.add(f"parameter {pid}")

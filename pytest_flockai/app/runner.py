@@ -33,6 +33,10 @@ from .. import kpis as _kpis
 from ..airframe.drone import Drone
 from ..control.pilots import Hover
 from ..errors import ConfigError, FlockAIError, SimulationError
+from ..mission import collect, loop
+from ..mission.assemble import Flight
+from ..mission.mission import Mission
+from ..mission.plan import resolve
 from ..recording import publish
 from ..result import FlightResult
 from .autopilot import Autopilot
@@ -122,7 +126,6 @@ def run(cmd, drone: Drone, *, world=None, tasks=(), speed: float = 1.0,
         port = int(_check.positive("port", port, where="app.run"))
         check_port_free(port)
         redirect = False
-    from ..mission.mission import Mission
     ap = Autopilot(port, speed)
     mission = Mission(drone, Hover(altitude=2.5), world, tasks, seed=seed, wind=wind,
                       fly_on="estimate", policies=[ap], name=name,
@@ -139,9 +142,6 @@ def run(cmd, drone: Drone, *, world=None, tasks=(), speed: float = 1.0,
 
 
 def _fly(cmd, mission, timeout_s, app_env, cwd, port, speed) -> AppResult:
-    from ..mission import collect, loop
-    from ..mission.assemble import Flight
-    from ..mission.plan import resolve
     wall0 = time.perf_counter()
     flight = Flight([resolve(mission)], [mission])
     run_ = flight.runs[0]
