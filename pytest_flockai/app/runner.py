@@ -113,6 +113,9 @@ def run(cmd, drone: Drone, *, world=None, tasks=(), speed: float = 1.0,
     """Fly ``drone`` with the MAVLink app ``cmd`` (module docstring). Raises
     ``AppError`` when the app is still running at ``timeout_s`` (wall seconds; it is
     killed first) with what it last sent and waited for."""
+    if os.name != "posix":
+        raise ConfigError(f"app.run: os.name = {os.name!r} is not supported; the app runs in a "
+                          f"POSIX process group (Linux, macOS)")
     cmd = _check_cmd(cmd)
     speed = _check.positive("speed", speed, where="app.run")
     timeout_s = _check.positive("timeout_s", timeout_s, where="app.run")
