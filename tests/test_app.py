@@ -219,3 +219,25 @@ def test_the_default_flight_still_takes_off_at_once():
     assert not [e for e in res.events if e["kind"] == "preflight"]
     assert res.events[0] == {"t": 0.0, "kind": "stage", "stage": "takeoff"}
     assert res.end_reason == "landed"
+
+
+def test_a_flight_can_wait_on_its_pad_until_a_take_off():
+    class Later(fa.Policy):
+        def start(self, run):
+            self.stages = run.stages
+            run.stages.wait_on_ground(0.0)
+
+        def decide(self, t, drone):
+            if t >= 2.0 and self.stages.grounded:
+                self.stages.take_off(t, self.stages.st.home[2] + 3.0)
+
+    res = fa.Mission(fa.drone(DRONE), fa.pilots.Hover(altitude=10.0, duration=1.0),
+                     policies=[Later(period_s=0.1)]).run()
+    stages = [(e["t"], e["stage"]) for e in events(res, "stage")]
+    assert events(res, "preflight")[0]["t"] == 0.0 and stages[0] == (2.0, "takeoff")
+    assert res.end_reason == "landed"
+    tel = res.telemetry
+    before = tel[tel.index < 1.95]
+    assert len(before) and (before["thrust_0"] == 0.0).all()     # motors off on the pad
+    assert (before["z"] - tel["z"].iloc[0]).abs().max() < 0.01
+    assert tel["z"].max() - tel["z"].iloc[0] == pytest.approx(3.0, abs=0.3)   # set at run time

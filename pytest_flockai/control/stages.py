@@ -95,6 +95,9 @@ class StageMachine(Clocked):
         """Pre-flight: stay on the pad with the motors off until ``take_off``."""
         self.grounded = True
         self.st.airborne = False
+        first = {"t": 0.0, "kind": "stage", "stage": "takeoff"}
+        if t == 0.0 and first in self.events.items:     # the take-off comes when commanded
+            self.events.items.remove(first)
         self.events.add(t, "preflight")
 
     def take_off(self, t: float, altitude: float) -> None:
