@@ -98,6 +98,9 @@ def pytest_configure(config):
         "markers", "flockai_sweep(**axes, samples=None, method='grid', seed=0, workers=None, "
         "executor=None, batch_size=None, progress=None): "
         "fly a sweep of the mission fixture; kpi budgets are checked on every variant")
+    config.addinivalue_line(
+        "markers", "flockai_app(cmd=[...], timeout_s=120, speed=1.0, env=None, port=None): "
+        "the flight fixture is the drone flown by this MAVLink app (pytest_flockai.app)")
     session = FlockSession(config)   # raises UsageError before anything flies
     _sweeps.configure(config)
     config.stash[SESSION] = session

@@ -42,6 +42,14 @@ SLOW_FILES = {"test_sweep_mjx.py", "test_sweep_batched.py", "test_interrupted_ru
               "test_sweep_cluster.py", "test_sweep_failures.py"}
 #: single slow tests, by function name (all their parametrizations)
 SLOW_TESTS = {
+    # real MAVLink apps flying at 1-4x real time (tests/test_app.py)
+    "test_mavsdk_take_off_and_land_within_a_flight_time_budget",
+    "test_mavsdk_offboard_position_setpoints_fly_a_square_with_headings",
+    "test_mavsdk_mission_gives_the_same_kpis_at_speed_1_and_20",
+    "test_mavsdk_orbit_circles_the_point_and_returns",
+    "test_two_apps_at_once_each_fly_only_their_own_drone",
+    "test_app_tests_in_parallel_workers_never_cross",
+    "test_a_hanging_app_fails_in_time_naming_what_it_waited_for_and_leaves_nothing",
     "test_hypothesis_finds_wind_breaking_a_flight_time_budget",
     "test_hypothesis_finds_and_shrinks_a_failing_condition",
     "test_the_robustness_search_finds_the_haze",

@@ -21,6 +21,7 @@ LAYERS = [
     {"comm", "airframe"},
     {"control", "ml", "probes"},
     {"mission", "cache", "fleet", "policy"},
+    {"app"},
     {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
      "plugin", "__init__", "sweeps"},
 ]
@@ -41,6 +42,8 @@ LAZY_LOADS = {
     ("harness/fixtures.py", "..airframe", "drone"): "the drone fixture: the core",
     ("harness/fixtures.py", "..control.pilots", "Hover"): "the pilot fixture: the core",
     ("harness/fixtures.py", "..mission", "Mission"): "the mission fixture: the core",
+    ("harness/fixtures.py", "..app.runner", "marker_flight"): "the flockai_app marker: the "
+                                                             "MAVLink front-end (pymavlink)",
     ("harness/sweeps.py", "..sweeps", "runner"): "the flockai_sweep fixture: the core",
     ("harness/sweeps.py", "..sweeps", "executors"): "--flockai-sweep-executor given: the core",
     ("harness/sweeps.py", "..sweeps", "envelope"): "after a sweep flew (loaded then)",

@@ -99,6 +99,17 @@ def test_a_plan_action_outside_the_pilot_stage_is_refused():
     assert events(res) == []
 
 
+def test_two_alternating_refused_actions_are_logged_once_each():
+    class Nag(fa.Policy):
+        def decide(self, t, drone):
+            drone.goto(10.0, 10.0)
+            drone.hold()
+
+    res = mission([Nag(period_s=0.05)], until=3.0).run()
+    refused = [(e["action"], e["stage"]) for e in events(res, "policy_refused")]
+    assert refused == [("goto", "takeoff"), ("hold", "takeoff")]
+
+
 def test_modes_are_timed():
     rule = fa.policy.Rule("time_s >= 25", [fa.policy.Hold()], name="late", period_s=0.5)
     res = mission([rule]).run()

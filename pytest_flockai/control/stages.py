@@ -41,9 +41,13 @@ def top_speed(drone, rho: float, g: float = 9.81) -> float:
 
 
 class StageMachine(Clocked):
-    """Stages of one vehicle. ``accel``: the trajectories' acceleration limit."""
+    """Stages of one vehicle. ``accel``: the trajectories' acceleration limit.
+    ``wait_on_ground`` (an app's autopilot, ``pytest_flockai.app``) keeps the drone on
+    its pad, motors off, until ``take_off``; the default flight takes off at t = 0."""
 
     every_tick = True
+    #: True while the drone waits on its pad for ``take_off`` (pre-flight)
+    grounded = False
 
     def __init__(self, state, pilot, events, data, *, accel: float, climb_speed: float,
                  descent_speed: float, return_home: bool, top_speed: float | None = None):
@@ -68,6 +72,8 @@ class StageMachine(Clocked):
     def step(self, t: float) -> None:
         s = self.st
         stage = s.stage
+        if self.grounded:
+            return
         if stage == PILOT:
             qc, vc = s.qc, s.vc
             if self._pupdate(t, (qc[0], qc[1], qc[2], vc[0], vc[1], vc[2]), s.sp):
@@ -85,6 +91,28 @@ class StageMachine(Clocked):
             s.end_reason = "landed"          # the flight ends after this tick
             self.events.add(t, "stage", stage="landed")
 
+    def wait_on_ground(self, t: float) -> None:
+        """Pre-flight: stay on the pad with the motors off until ``take_off``."""
+        self.grounded = True
+        self.st.airborne = False
+        first = {"t": 0.0, "kind": "stage", "stage": "takeoff"}
+        if t == 0.0 and first in self.events.items:     # the take-off comes when commanded
+            self.events.items.remove(first)
+        self.events.add(t, "preflight")
+
+    def take_off(self, t: float, altitude: float) -> None:
+        """End the pre-flight: climb from the pad to ``altitude`` (m, world z), then fly
+        the pilot (its ``altitude`` becomes this one)."""
+        s, home = self.st, self.st.home
+        self.grounded = False
+        s.airborne = True
+        self.pilot.altitude = float(altitude)
+        s.stage, self.t_stage = TAKEOFF, t
+        self._t_climb_end = None
+        self.path = Path([Leg(home, (home[0], home[1], float(altitude)), self.climb_speed,
+                              self.accel)])
+        self.events.add(t, "stage", stage="takeoff")
+
     def go_home(self, t: float) -> None:
         """Leave the pilot's plan now: return home (if away) and land."""
         self._after_pilot(t, force_home=True)
@@ -93,7 +121,7 @@ class StageMachine(Clocked):
         """Fly ``pilot`` from now on, from where the drone is (a policy's new plan; during
         the pilot stage, or on the way home: then the pilot stage starts again)."""
         qc = self.st.qc
-        if self.st.stage == RETURN:
+        if self.st.stage in (RETURN, TAKEOFF) and not self.grounded:
             self.st.stage = PILOT
             self.events.add(t, "stage", stage="pilot")
         self.pilot, self._pupdate = pilot, pilot.update

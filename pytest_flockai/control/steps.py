@@ -36,7 +36,7 @@ class Control(Clocked):
 
     def step(self, t: float) -> None:
         s = self.st
-        if s.stage == DONE:
+        if s.stage == DONE or not s.airborne:       # landed, or waiting on the pad
             self.ctrl[:] = 0.0
             s.airborne = False
             return

@@ -98,6 +98,12 @@ def mission(request: pytest.FixtureRequest, drone: Drone, pilot: Pilot, world: W
 
 
 @pytest.fixture
-def flight(mission: Mission) -> FlightResult:
-    """The mission flown: a ``FlightResult`` (recorded for the kpi marker and reports)."""
-    return mission.run()
+def flight(request: pytest.FixtureRequest, mission: Mission) -> FlightResult:
+    """The mission flown: a ``FlightResult`` (recorded for the kpi marker and reports);
+    with ``@pytest.mark.flockai_app(cmd=[...], ...)`` the drone flown by that MAVLink
+    app instead (``pytest_flockai.app.run``; its output goes into the test's report)."""
+    mark = request.node.get_closest_marker("flockai_app")
+    if mark is None:
+        return mission.run()
+    from ..app.runner import marker_flight
+    return marker_flight(request, mission, mark)

@@ -82,7 +82,7 @@ class Cockpit:
         self._runners = {r.task.name: r for r in run.scheduler.runners}
         self._seen = dict.fromkeys(self._runners, 0)
         self._survey: tuple | None = None      # (the mission's plan, t left, setpoint then)
-        self._refused_key: tuple | None = None
+        self._refused: set = set()            # (action, stage) already refused
         cams = [s for s in run.suite.sensors if hasattr(s, "lens")] if hasattr(run.suite, "sensors") else []
         self.camera = cams[0] if cams else None
         self.t = 0.0
@@ -312,8 +312,8 @@ class Cockpit:
 
     def _refuse(self, action: str) -> bool:
         key = (action, self._st.stage)
-        if key != self._refused_key:          # once per action and stage, not every period
-            self._refused_key = key
+        if key not in self._refused:          # once per action and stage, also when two alternate
+            self._refused.add(key)
             self._run.event(self.t, "policy_refused", policy=self._policy.name, action=action,
                             stage=self.stage)
         return False
