@@ -26,6 +26,7 @@ __version__ = "0.1.0"
 
 if TYPE_CHECKING:      # what _LAZY imports on first use, spelled out for type checkers and docs
     from . import (
+        app,
         cli,
         comm,
         compute,
@@ -87,7 +88,8 @@ __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "Energ
            # budgets and the flight cache, whose modules are internal
            "BudgetError", "FlightCache", "cacheable", "caching", "check_budgets", "evaluate_budgets",
            # documented subpackages: their own __all__ is public too
-           "cli", "compute", "energy", "errors", "plots", "reports", "strategies", "sweeps", "world"]
+           "app", "cli", "compute", "energy", "errors", "plots", "reports", "strategies", "sweeps",
+           "world"]
 
 
 def __getattr__(name: str):
