@@ -6,7 +6,8 @@
 with the same schema; a test present in several inputs keeps its last entry.
 ``flockai blueprints`` lists the built-in drones. ``flockai compare`` and
 ``flockai history`` compare runs across commits (``reports/commands.py``);
-``flockai cache info|prune`` shows and trims the flight cache.
+``flockai cache info|clear|prune`` shows, empties and trims the flight cache (only
+files carrying the cache's own header are ever removed).
 
 Exit statuses, the same for every subcommand (docs/how-to/ci-cache.md):
 0 done, 1 a regression (``compare`` only), 2 a usage or input error (a bad
@@ -73,9 +74,10 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("inputs", type=Path, nargs="+")
     sub.add_parser("blueprints", help="list the built-in drone blueprints")
     _commands.add_parsers(sub)
-    c = sub.add_parser("cache", help="the flight cache: info, or prune it")
+    c = sub.add_parser("cache", help="the flight cache: info, clear or prune it")
     csub = c.add_subparsers(dest="cache_cmd", required=True)
     for name, help_ in (("info", "entries, size, limit and key source of the flight cache"),
+                        ("clear", "remove every entry (files with the cache's header only)"),
                         ("prune", "remove the least recently used entries")):
         sp = csub.add_parser(name, help=help_)
         sp.add_argument("directory", type=Path, nargs="?", default=DEFAULT_CACHE,
@@ -115,6 +117,11 @@ def _cache_cmd(a) -> int:
             f"flight cache {i['directory']}: {i['flights']} flight(s), {i['memo']} memoised "
             f"value(s), {i['bytes'] / 2**20:.1f} MiB of {i['limit_bytes'] / 2**20:.0f} MiB "
             f"(limits.MAX_CACHE_BYTES); key from {i['key_source']}"))
+        return OK
+    if a.cache_cmd == "clear":
+        removed = cache.clear()
+        print(_report.printable(f"flockai cache clear: removed {removed} entr"
+                                f"{'y' if removed == 1 else 'ies'} from {d}"))
         return OK
     if a.older_than is not None and not a.older_than >= 0:
         raise ConfigError(f"--older-than = {a.older_than!r} is not allowed; expected days >= 0")
