@@ -17,14 +17,13 @@ import pytest_flockai as fa
 from pytest_flockai import cli
 from pytest_flockai.cache import CacheWarning, FlightCache, caching, flight_key
 from pytest_flockai.cache.entry import MAGIC
-
-MEMO_MAGIC = b"pytest-flockai-memo/1\n"
 from pytest_flockai.ml import OnnxModel
 
 sys.path.insert(0, str(Path(__file__).parent))
 from labelled_sets import make_set  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
+MEMO_MAGIC = b"pytest-flockai-memo/1\n"
 DETECTOR = ROOT / "fixtures" / "models" / "detector.onnx"
 CF = fa.drone("crazyflie-2-1")
 

@@ -97,10 +97,8 @@ def unsafe_parent(root: Path, path: Path) -> str | None:
         cur = cur / part
         try:
             st = os.lstat(cur)
-        except FileNotFoundError:
+        except OSError:          # missing, or the root unreachable: the write reports it
             return None
-        except OSError as exc:
-            return f"{cur}: {exc.strerror or exc}"
         if stat.S_ISLNK(st.st_mode):
             return f"{cur} is a symlink (never written or read through)"
         if not stat.S_ISDIR(st.st_mode):
