@@ -63,7 +63,7 @@ def regular(path, where) -> bool:
     there; ConfigError naming it when something else is (a folder, a FIFO, a device)."""
     try:
         st = os.stat(path)
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):
         return False
     except OSError as exc:
         raise ConfigError(f"{where}: label file {os.fspath(path)!r} cannot be read: "
