@@ -44,11 +44,7 @@ def merge_reports(paths) -> dict:
         if not isinstance(doc, dict) or doc.get("schema") != _report.SCHEMA:
             raise _report.ReportError(f"{str(p)!r} is not a {_report.SCHEMA} report "
                                       f"(schema = {doc.get('schema') if isinstance(doc, dict) else None!r})")
-        entries = doc.get("tests", [])
-        if not isinstance(entries, list) or not all(
-                isinstance(t, dict) and isinstance(t.get("nodeid"), str) for t in entries):
-            raise _report.ReportError(f"report {str(p)!r}: 'tests' must be a list of test "
-                                      f"entries, each with a string 'nodeid'")
+        _report.check_entries(doc.get("tests", []), p, "report")
         docs.append(doc)
     tests: dict[str, dict] = {}
     for doc in docs:

@@ -44,16 +44,13 @@ from . import auth as _auth
 from . import disk as _disk
 from . import key as _key
 from . import memo_store as _memo_store
+from .auth import CacheWarning
 from .entry import MAGIC, CorruptEntry, NotAFile, NotAuthentic, read_entry, seal, unseal
 
 
 class CacheMismatch(FlockAIError):
     """``verify`` flew a cached flight again and got another result: the entry is not
     to be trusted (forged with the key, or the key misses something that shapes it)."""
-
-
-class CacheWarning(UserWarning):
-    """The flight cache could not be written (the run goes on without it)."""
 
 
 @dataclass
