@@ -114,6 +114,7 @@ class FlightCache:
         self.write_error: str | None = None        # set once a write failed (warned once)
         self._lock = threading.Lock()               # guards write_error only, never a flight
         self._memo: _memo_store.MemoStore | None = None
+        self._warned: set[str] = set()              # entries warned about (one warning each)
 
     @property
     def reads(self) -> bool:
@@ -167,7 +168,8 @@ class FlightCache:
                 res = self.get(key, result_type)
             except CorruptEntry as exc:
                 if isinstance(exc, NotAFile):
-                    self.warn(f"{exc}: treated as a corrupt entry, the flight is flown again")
+                    self.warn(f"{exc}: treated as a corrupt entry, the flight is flown again",
+                              key)
                 return Lookup("replaced", key, str(exc), cache=self)
             if res is not None and self.verifies(key):
                 return Lookup("verify", key, cache=self, cached=res)
@@ -214,7 +216,7 @@ class FlightCache:
             if unsafe is None and not _disk.clear_for_write(p):
                 unsafe = f"{p} is a folder that is not empty (left as it is)"
             if unsafe is not None:
-                self.warn(f"{unsafe}: this entry is not stored")
+                self.warn(f"{unsafe}: this entry is not stored", p.stem)
                 return False
             atomic_write(p, lambda fh: fh.write(blob), text=False)
         except OSError as exc:
@@ -222,8 +224,12 @@ class FlightCache:
             return False
         return True
 
-    def warn(self, what: str) -> None:
-        """One CacheWarning about one entry (the run goes on)."""
+    def warn(self, what: str, key: str) -> None:
+        """One CacheWarning about one entry (the run goes on): once per entry and cache."""
+        with self._lock:
+            if key in self._warned:
+                return
+            self._warned.add(key)
         warnings.warn(f"pytest-flockai: flight cache: {what}", CacheWarning, stacklevel=4)
 
     def wrote(self, nbytes: int) -> None:
