@@ -322,8 +322,8 @@ def _external_locations(path: str, *stamp: int) -> tuple[str, ...]:
     """The ``location`` of every external-data tensor of an ONNX file (initializers of
     the graph and its subgraphs, sparse ones and node attributes), read without the data."""
     try:
-        import onnx
-        model = onnx.load(path, load_external_data=False)
+        from onnx import load
+        model = load(path, load_external_data=False)
     except Exception:  # noqa: BLE001 (not an ONNX file: its own bytes key it)
         return ()
     found: set[str] = set()
@@ -343,7 +343,7 @@ def _external_locations(path: str, *stamp: int) -> tuple[str, ...]:
                     yield from tensors(g)
 
     for t in tensors(model.graph):
-        if t.data_location == onnx.TensorProto.EXTERNAL:
+        if t.data_location == t.EXTERNAL:
             found.update(e.value for e in t.external_data if e.key == "location")
     return tuple(sorted(found))
 
