@@ -9,8 +9,8 @@ label folders, the keyed cache, reports and the CLI, hangs. Beside the first cor
 - ``HARMLESS``: accepted on purpose, with a documented outcome the check asserts
   (a warning and nothing written through a link, user files left alone).
 
-Counts at the time of writing: 58 clear (55 + 3), 4 harmless, 0 other (unclear,
-silent, a crash or a hang). On main before issue 36, 26 of these 62 held; 36 did not
+Counts at the time of writing: 59 clear (56 + 3), 4 harmless, 0 other (unclear,
+silent, a crash or a hang). On main before issue 36, 26 of these 63 held; 37 did not
 (raw errors, silent mis-scoring, a hang, user files deleted).
 """
 
@@ -154,6 +154,7 @@ CASES = [
     ("lbl-yolo-folder", lambda c: RC(c.yolo(_replace("f01.txt", os.mkdir))), ("f01.txt", "not a regular file (a folder)")),
     ("lbl-yolo-fifo", lambda c: RC(c.yolo(_replace("f01.txt", os.mkfifo))), ("f01.txt", "not a regular file")),
     ("lbl-yolo-dev-zero", lambda c: RC(c.yolo(_replace("f01.txt", lambda p: os.symlink("/dev/zero", p)))), ("f01.txt", "not a regular file")),
+    ("lbl-yolo-dangling-link", lambda c: RC(c.yolo(_replace("f01.txt", lambda p: os.symlink("/nonexistent/x.txt", p)))), ("f01.txt", "link to nothing")),
     ("lbl-yolo-not-utf8", lambda c: RC(c.yolo(_bytes("f01.txt", b"0 0.5 0.5 0.1 0.1\xff\n"))), ("f01.txt", "not UTF-8")),
     ("lbl-classes-not-utf8", lambda c: RC(c.yolo(_bytes("classes.txt", b"caf\xe9\n"))), ("classes.txt", "not UTF-8")),
     ("lbl-classes-folder", lambda c: RC(c.yolo(_replace("classes.txt", os.mkdir))), ("classes.txt", "not a regular file")),

@@ -64,6 +64,9 @@ def regular(path, where) -> bool:
     try:
         st = os.stat(path)
     except (FileNotFoundError, NotADirectoryError):
+        if os.path.islink(path):
+            raise ConfigError(f"{where}: label file {os.fspath(path)!r} is a link to nothing "
+                              f"({os.readlink(path)!r} does not exist)") from None
         return False
     except OSError as exc:
         raise ConfigError(f"{where}: label file {os.fspath(path)!r} cannot be read: "
