@@ -224,7 +224,7 @@ def check_entries(tests, path, what: str = "report", *, outcome: bool = True) ->
     where = f"{what} {str(path)!r}: malformed report"
     if not isinstance(tests, list):
         raise ReportError(f"{where}: 'tests' = {_short(tests)} is not allowed; expected a "
-                          f"list of test entries")
+                          f"list of test entries, each with a string 'nodeid'")
     for i, t in enumerate(tests):
         if not isinstance(t, dict) or not isinstance(t.get("nodeid"), str):
             raise ReportError(f"{where}: tests[{i}] = {_short(t)} is not allowed; expected a "
