@@ -24,7 +24,6 @@ from ..control.pilots import Pilot
 from ..errors import ConfigError
 from ..ml import Task
 from ..policy import Policy, register_kpis
-from ..policy.base import _check_decide
 from ..probes.builtin import BUILTIN
 from ..sensors import Sensor
 from ..world.atmosphere import Atmosphere
@@ -188,7 +187,7 @@ def check_policies(policies, mission) -> tuple:
         if not isinstance(p, Policy):
             raise ConfigError(f"Mission: policies[{i}] = {p!r} is not a Policy; use fa.policy.Rule, "
                               f"Follow, SearchThenOrbit or subclass fa.Policy")
-        _check_decide(p)                    # a subclass that never called Policy.__init__
+        _check.overrides(p, Policy, "decide", "(t, drone)")    # one that skipped Policy.__init__
         if p.name in names:
             raise ConfigError(f"Mission: two policies are named {p.name!r}; give them name=... "
                               f"(policy names prefix their KPIs)")

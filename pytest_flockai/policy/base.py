@@ -319,14 +319,6 @@ class Cockpit:
         return False
 
 
-def _check_decide(policy) -> None:
-    """ConfigError when ``policy``'s class does not implement ``decide(t, drone)``."""
-    decide = getattr(type(policy), "decide", None)
-    if decide is None or decide is Policy.decide or not callable(decide):
-        raise ConfigError(f"{type(policy).__name__}: a Policy needs a decide(t, drone) method; "
-                          f"define it in the subclass (or use fa.policy.Rule(...))")
-
-
 class Policy(Clocked):
     """Base class: subclass and implement ``decide(t, drone)`` (module docstring).
     ``check(mission)`` validates against the mission before anything flies."""
@@ -335,7 +327,7 @@ class Policy(Clocked):
     modes: tuple = ()
 
     def __init__(self, name: str | None = None, period_s: float = 0.1) -> None:
-        _check_decide(self)
+        _check.overrides(self, Policy, "decide", "(t, drone)")
         nm = name if name is not None else type(self).__name__.lower()
         if not isinstance(nm, str) or not nm or "." in nm:
             raise ConfigError(f"{type(self).__name__}: name = {nm!r} is not allowed; expected a "
