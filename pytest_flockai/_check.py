@@ -100,3 +100,11 @@ def area(value: Any, *, where: str) -> tuple[float, float, float, float]:
         raise ConfigError(f"{_where(where)}area = {value!r} is degenerate; both sides must be "
                           f"longer than 0")
     return x0, y0, x1, y1
+
+
+def overrides(obj: object, base: type, method: str, hint: str = "") -> None:
+    """ConfigError when ``obj``'s class does not define ``base``'s abstract ``method``
+    (an interface method left as ``base`` has it), e.g. a Policy without ``decide``."""
+    if getattr(type(obj), method, None) is getattr(base, method):
+        raise ConfigError(f"{type(obj).__name__}: a {base.__name__} needs a {method}{hint} "
+                          f"method; define it in the subclass")

@@ -137,12 +137,14 @@ def sha256_of(path: str | os.PathLike) -> str:
 
 
 @functools.lru_cache(maxsize=256)
-def _sha256_memo(path: str, mtime_ns: int, size: int) -> str:
+def _sha256_memo(path: str, ino: int, mtime_ns: int, ctime_ns: int, size: int) -> str:
     return sha256_of(path)
 
 
 def file_digest(path: str | os.PathLike) -> str:
-    """SHA-256 of a file's bytes, memoised on its path, mtime and size (model files, blueprints:
-    read once per process unless they change)."""
+    """SHA-256 of a file's bytes, memoised on its path, inode, mtime, ctime and size (model
+    files, blueprints: read once per process unless they change). The ctime counts: a file
+    rewritten with the same size and its old mtime put back (``cp -p``, ``os.utime``) has
+    a new ctime, which no user call can set."""
     st = os.stat(path)
-    return _sha256_memo(os.fspath(path), st.st_mtime_ns, st.st_size)
+    return _sha256_memo(os.fspath(path), st.st_ino, st.st_mtime_ns, st.st_ctime_ns, st.st_size)

@@ -6,8 +6,9 @@
 with the same schema; a test present in several inputs keeps its last entry.
 ``flockai blueprints`` lists the built-in drones. ``flockai compare`` and
 ``flockai history`` compare runs across commits (``reports/commands.py``);
-``flockai cache info|prune`` shows and trims the flight cache. ``flockai
-profile-device`` times ONNX models on this computer (``compute/profiler.py``).
+``flockai cache info|clear|prune`` shows, empties and trims the flight cache (only
+files carrying the cache's own header are ever removed). ``flockai profile-device``
+times ONNX models on this computer (``compute/profiler.py``).
 
 Exit statuses, the same for every subcommand (docs/how-to/ci-cache.md):
 0 done, 1 a regression (``compare`` only), 2 a usage or input error (a bad
@@ -47,11 +48,7 @@ def merge_reports(paths) -> dict:
         if not isinstance(doc, dict) or doc.get("schema") != _report.SCHEMA:
             raise _report.ReportError(f"{str(p)!r} is not a {_report.SCHEMA} report "
                                       f"(schema = {doc.get('schema') if isinstance(doc, dict) else None!r})")
-        entries = doc.get("tests", [])
-        if not isinstance(entries, list) or not all(
-                isinstance(t, dict) and isinstance(t.get("nodeid"), str) for t in entries):
-            raise _report.ReportError(f"report {str(p)!r}: 'tests' must be a list of test "
-                                      f"entries, each with a string 'nodeid'")
+        _report.check_entries(doc.get("tests", []), p, "report")
         docs.append(doc)
     tests: dict[str, dict] = {}
     for doc in docs:
@@ -78,9 +75,10 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("blueprints", help="list the built-in drone blueprints")
     _commands.add_parsers(sub)
     _profiler.add_parser(sub)
-    c = sub.add_parser("cache", help="the flight cache: info, or prune it")
+    c = sub.add_parser("cache", help="the flight cache: info, clear or prune it")
     csub = c.add_subparsers(dest="cache_cmd", required=True)
     for name, help_ in (("info", "entries, size, limit and key source of the flight cache"),
+                        ("clear", "remove every entry (files with the cache's header only)"),
                         ("prune", "remove the least recently used entries")):
         sp = csub.add_parser(name, help=help_)
         sp.add_argument("directory", type=Path, nargs="?", default=DEFAULT_CACHE,
@@ -120,6 +118,11 @@ def _cache_cmd(a) -> int:
             f"flight cache {i['directory']}: {i['flights']} flight(s), {i['memo']} memoised "
             f"value(s), {i['bytes'] / 2**20:.1f} MiB of {i['limit_bytes'] / 2**20:.0f} MiB "
             f"(limits.MAX_CACHE_BYTES); key from {i['key_source']}"))
+        return OK
+    if a.cache_cmd == "clear":
+        removed = cache.clear()
+        print(_report.printable(f"flockai cache clear: removed {removed} entr"
+                                f"{'y' if removed == 1 else 'ies'} from {d}"))
         return OK
     if a.older_than is not None and not a.older_than >= 0:
         raise ConfigError(f"--older-than = {a.older_than!r} is not allowed; expected days >= 0")

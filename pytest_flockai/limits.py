@@ -40,6 +40,16 @@ MAX_WORLD_SIDE_M = 2_000.0
 #: bounding-volume hierarchy of every face: at 10,000 people and 2,000 cars a flight
 #: peaked at 1.8 GiB (benchmarks/limits.py), at 3,000 and 1,000 at 0.74 GiB
 MAX_PEOPLE = 3_000
+#: moving actors of one mission (``fa.actors``: people, cars and markers; ``walkers(n)``,
+#: ``traffic(n)`` are checked before a path is drawn). Each adds mesh geoms to the flight's
+#: MuJoCo model as a world's person does (MAX_PEOPLE), and each frame's object truth tests
+#: every actor in view: at 3,000 walkers all in one 90-degree view, 0.74 s and a 154 MiB
+#: peak per frame (tests/test_reliability_round3.py, the grid-culled occlusion test)
+MAX_ACTORS = 3_000
+#: mean spurious boxes per frame of an ``Oracle(false_positives=...)``: drawn per frame,
+#: each a detection row. Detectors cap their output well below it (COCO's evaluation
+#: keeps maxDets = 100 per image; Ultralytics YOLO's predict default max_det = 300)
+MAX_ORACLE_FALSE_POSITIVES = 1_000.0
 #: vehicles in a world (~ 0.07 MiB of compiled model each, articulated cars)
 MAX_VEHICLES = 1_000
 #: points of one ``Waypoints`` pilot (a ZigZag's legs included)

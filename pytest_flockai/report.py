@@ -190,14 +190,9 @@ def load_baseline(path: Path) -> dict:
                           f"--flockai-save PATH)")
     data = read_json(path, "baseline file")
     if isinstance(data, dict) and data.get("schema") == SCHEMA:       # a JSON report
-        tests = data.get("tests")
-        if not isinstance(tests, list):
-            raise ReportError(f"baseline file {str(path)!r}: 'tests' must be a list")
-        try:
-            data = {_nodeid(t): {f["name"]: f["kpis"] for f in t.get("flights", ())}
-                    for t in tests}
-        except (KeyError, TypeError, AttributeError) as exc:
-            raise ReportError(f"baseline file {str(path)!r}: malformed report ({exc})") from None
+        tests = check_entries(data.get("tests"), path, "baseline file", outcome=False)
+        data = {_nodeid(t): {f["name"]: f["kpis"] for f in t.get("flights", ())}
+                for t in tests}
     elif isinstance(data, dict) and "schema" in data:
         if data["schema"] != BASELINE_SCHEMA:
             raise ReportError(f"baseline file {str(path)!r}: schema {data['schema']!r} is not "
@@ -220,6 +215,39 @@ def load_baseline(path: Path) -> dict:
                         f"= {v!r} is not allowed; expected a finite number (or null for a KPI "
                         f"that is not compared)")
     return data
+
+
+def check_entries(tests, path, what: str = "report", *, outcome: bool = True) -> list:
+    """The test entries of a ``pytest-flockai/1`` report, each checked (a dict with a
+    string ``nodeid`` and, with ``outcome``, a string ``outcome``; ``flights`` a list of {"name": str, "kpis": dict});
+    one ReportError line naming the file, the entry and what is wrong otherwise."""
+    where = f"{what} {str(path)!r}: malformed report"
+    if not isinstance(tests, list):
+        raise ReportError(f"{where}: 'tests' = {_short(tests)} is not allowed; expected a "
+                          f"list of test entries, each with a string 'nodeid'")
+    for i, t in enumerate(tests):
+        if not isinstance(t, dict) or not isinstance(t.get("nodeid"), str):
+            raise ReportError(f"{where}: tests[{i}] = {_short(t)} is not allowed; expected a "
+                              f"test entry with a string 'nodeid'")
+        at = f"{where}: tests[{i}] ({t['nodeid']!r})"
+        if (outcome or "outcome" in t) and not isinstance(t.get("outcome"), str):
+            raise ReportError(f"{at}: outcome = {_short(t.get('outcome'))} is not allowed; "
+                              f"expected a string such as 'passed'")
+        flights = t.get("flights", [])
+        if not isinstance(flights, list):
+            raise ReportError(f"{at}: flights = {_short(flights)} is not allowed; expected a "
+                              f"list of flights")
+        for j, f in enumerate(flights):
+            if not isinstance(f, dict) or not isinstance(f.get("name"), str) \
+                    or not isinstance(f.get("kpis"), dict):
+                raise ReportError(f"{at}: flights[{j}] = {_short(f)} is not allowed; expected "
+                                  f"{{'name': str, 'kpis': {{kpi: number}}, ...}}")
+    return tests
+
+
+def _short(v) -> str:
+    r = repr(v)
+    return r if len(r) <= 60 else r[:57] + "..."
 
 
 def _nodeid(test) -> str:
@@ -349,6 +377,6 @@ def table(headers: list[str], rows: list[list[str]], indent: str = "  ") -> str:
 
 
 __all__ = ["BASELINE_SCHEMA", "SCHEMA", "ReportError", "baseline_from_tests", "build_report",
-           "check_writable", "environment", "format_kpi", "jsonable", "load_baseline",
+           "check_entries", "check_writable", "environment", "format_kpi", "jsonable", "load_baseline",
            "printable", "read_json", "regressions", "safe_name", "table", "write_artifacts",
            "write_json_atomic"]

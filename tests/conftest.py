@@ -77,6 +77,8 @@ SLOW_TESTS = {
     "test_the_wheel_carries_the_shipped_models",
     "test_a_slow_radio_degrades_the_loop",
     "test_lands_on_the_marker",
+    "test_a_decide_that_sleeps_for_ever_is_stopped_in_the_main_thread",
+    "test_a_verify_fraction_without_the_verify_mode_is_a_usage_error",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",

@@ -50,6 +50,7 @@ LAZY_LOADS = {
     ("harness/recorder.py", "..sweeps", "envelope"): "after a sweep flew (loaded then)",
     ("report.py", ".", "plots"): "pictures of --flockai-artifacts: NumPy, matplotlib",
     ("harness/ci_reports.py", "..", "plots"): "pictures of the HTML report: NumPy, matplotlib",
+    ("cache/key.py", "onnx", "load"): "an ONNX model's external-data files, keyed (0.2 s import)",
 }
 #: imports between two different names of one layer (importer, imported): each is a
 #: decision, so a new one fails until it is added here

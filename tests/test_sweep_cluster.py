@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from sweep_faults import MarkAndWait, RaiseOn
+from sweep_faults import ExitOn, MarkAndWait, RaiseOn
 
 import pytest_flockai as fa
 from pytest_flockai.cache import FlightCache, caching
@@ -184,3 +184,19 @@ def test_the_pytest_option_points_marked_sweeps_at_the_scheduler(cluster, pytest
     result = pytester.runpytest("-p", "no:cacheprovider",
                                 f"--flockai-sweep-executor={cluster.address}")
     result.assert_outcomes(passed=1)
+
+
+def test_a_variant_that_kills_its_worker_costs_no_innocent_row(cluster):
+    """Issue 36: the innocent variants beside a variant that kills its worker are
+    flown (or their rows say ``worker died``), never ``not flown: CancelledError``."""
+    cluster.ensure_workers(2)
+    axes = dict(payload_kg=[0.0, 0.001, 0.002, 0.003, 0.004])
+    df = fa.sweep(_base(components=[ExitOn(0.002)]), executor=cluster.address, **axes)
+    assert len(df) == 5
+    errors = df["error"].fillna("")
+    assert not errors.str.contains("CancelledError").any(), errors.tolist()
+    guilty = df["payload_kg"] == 0.002
+    assert errors[guilty].str.startswith("worker died").all(), errors.tolist()
+    innocent = errors[~guilty]
+    assert ((innocent == "") | innocent.str.startswith("worker died")).all(), innocent.tolist()
+    assert (innocent == "").sum() >= 3, innocent.tolist()

@@ -25,6 +25,7 @@ import hmac
 import os
 import secrets
 import stat
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,6 +34,12 @@ from ..errors import ConfigError
 ENV_KEY = "FLOCKAI_CACHE_KEY"
 ENV_KEY_FILE = "FLOCKAI_CACHE_KEY_FILE"
 _PROCESS_KEY = secrets.token_bytes(32)
+_WARNED: set = set()
+
+
+class CacheWarning(UserWarning):
+    """The flight cache could not be written, or works with less than asked (the run
+    goes on): a key of this process only, an entry not stored."""
 
 
 @dataclass(frozen=True)
@@ -88,7 +95,27 @@ def default_key() -> CacheKey:
     secret = _read_or_create(path)
     if secret is not None:
         return CacheKey(secret, str(path))
-    return CacheKey(_PROCESS_KEY, f"this process only ({path} cannot be read or created)")
+    why = _unusable(path)
+    if str(path) not in _WARNED:
+        _WARNED.add(str(path))
+        warnings.warn(f"pytest-flockai: the flight cache key file {path} {why}; entries are "
+                      f"sealed with a key of this process only, so no entry is reused by the "
+                      f"next run. Make it a private regular file, or set {ENV_KEY}",
+                      CacheWarning, stacklevel=2)
+    return CacheKey(_PROCESS_KEY, f"this process only ({path} {why})")
+
+
+def _unusable(path: Path) -> str:
+    """Why the key file cannot be used, in a few words."""
+    try:
+        st = os.lstat(path)
+    except OSError as exc:
+        return f"cannot be read or created ({exc.strerror or exc})"
+    if stat.S_ISLNK(st.st_mode):
+        return "is a symlink (never followed: whoever controls its target would hold the key)"
+    if not stat.S_ISREG(st.st_mode):
+        return "is not a regular file"
+    return "cannot be read, or is empty"
 
 
 def _read_or_create(path: Path) -> bytes | None:
@@ -122,4 +149,4 @@ def _read(path: Path) -> bytes | None:
     return data or None
 
 
-__all__ = ["ENV_KEY", "ENV_KEY_FILE", "CacheKey", "default_key", "from_secret", "key_file"]
+__all__ = ["ENV_KEY", "ENV_KEY_FILE", "CacheKey", "CacheWarning", "default_key", "from_secret", "key_file"]

@@ -29,11 +29,18 @@ from .. import limits
 from .auth import CacheKey
 
 MAGIC = b"pytest-flockai-flight-cache/3\n"
+#: the first line of a memoised value's entry (``memo_store.py``)
+MEMO_MAGIC = b"pytest-flockai-memo/1\n"
 _MAX_MEMBERS = 100_000
 
 
 class CorruptEntry(Exception):
     """A cache entry that must not be trusted (the message says why)."""
+
+
+class NotAFile(CorruptEntry):
+    """Something else than a regular file at an entry's path (a folder, a FIFO, a
+    device, a symlink): a corrupt entry, flown again; the run warns once."""
 
 
 class NotAuthentic(CorruptEntry):
@@ -48,12 +55,15 @@ def read_entry(p: Path) -> bytes | None:
     except (FileNotFoundError, NotADirectoryError):
         return None
     except OSError as exc:
-        why = "a symlink" if exc.errno == errno.ELOOP else (exc.strerror or str(exc))
-        raise CorruptEntry(f"cannot read {p}: {why}") from None
+        if exc.errno == errno.ELOOP:
+            raise NotAFile(f"cannot read {p}: a symlink") from None
+        raise CorruptEntry(f"cannot read {p}: {exc.strerror or exc}") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):
+        os.close(fd)                       # a folder's fd cannot even be wrapped (fdopen)
+        what = "a folder" if stat.S_ISDIR(st.st_mode) else "a FIFO, a device or a socket"
+        raise NotAFile(f"{p} is not a regular file ({what})")
     with os.fdopen(fd, "rb") as fh:
-        st = os.fstat(fh.fileno())
-        if not stat.S_ISREG(st.st_mode):
-            raise CorruptEntry(f"{p} is not a regular file (a FIFO, a device or a socket)")
         if st.st_size > limits.MAX_CACHE_ENTRY_BYTES:
             raise CorruptEntry(f"{p} is {st.st_size} bytes, above "
                                f"pytest_flockai.limits.MAX_CACHE_ENTRY_BYTES = "
@@ -156,4 +166,4 @@ def _array(raw: bytes, name: str) -> np.ndarray:
     return arr.reshape(shape[::-1]).T.copy() if fortran else arr.reshape(shape).copy()
 
 
-__all__ = ["MAGIC", "CorruptEntry", "NotAuthentic", "load_npz", "read_entry", "seal", "unseal"]
+__all__ = ["MAGIC", "MEMO_MAGIC", "CorruptEntry", "NotAFile", "NotAuthentic", "load_npz", "read_entry", "seal", "unseal"]

@@ -3,8 +3,11 @@
 The key walks the Mission itself, not its ``scenario()`` summary: every
 attribute of the drone (blueprint values and the blueprint file's bytes), the
 pilot, the world (its arrays too), the tasks (the model file's bytes for ONNX
-models), sensors, probes, wind, conditions, seed, ``until`` and every rate and
-limit of the mission, plus the environment that flies it: the package version
+models, and the bytes of every external-data file its initializers name by
+``location``, e.g. ``weights.bin``), sensors (a replayed folder's images and labels by
+their bytes: every string or path naming a file is keyed by the file's SHA-256), any
+``side_files`` an object lists (paths of files it reads besides its own), probes,
+wind, conditions, seed, ``until`` and every rate and limit of the mission, plus the environment that flies it: the package version
 and a hash of the package's own source files, and the versions of Python,
 NumPy, MuJoCo, ONNX Runtime, OpenCV and pycocotools (the detection KPIs).
 
@@ -211,11 +214,12 @@ class _Walker:
 
     @staticmethod
     def _string(s: str):
-        """A string; one naming an existing file (a model, a blueprint) brings its bytes."""
+        """A string; one naming an existing file (a model, a blueprint) brings its bytes
+        (an ONNX model's external-data files too)."""
         if len(s) < 4096 and ("/" in s or "." in s) and "\0" not in s:
             try:
                 if os.path.isfile(s):
-                    return {"str": s, "sha": file_digest(s)}
+                    return {"str": s, "sha": file_digest(s), **_side(s)}
             except (OSError, ValueError):
                 pass
         return s
@@ -225,6 +229,7 @@ class _Walker:
         out = {"path": str(p)}
         if os.path.isfile(p):
             out["sha"] = file_digest(p)
+            out.update(_side(os.fspath(p)))
         return out
 
     def _compound(self, obj, where: str):
@@ -289,10 +294,58 @@ class _Walker:
             raise Uncacheable(f"{where}: {mod}.{cls.__qualname__} object {_short(obj)} cannot be "
                               f"keyed")
         out = self._class(cls, where)
+        side = getattr(obj, "side_files", None)
+        if side is not None and not callable(side):
+            out["side_files"] = [self._path(Path(os.fspath(f))) for f in side]
         skip = _DERIVED | _bound_attributes(cls)
         out["state"] = {k: self.walk(v, f"{where}.{k}") for k, v in sorted(state.items())
                         if k not in skip}
         return out
+
+
+def _side(path: str) -> dict:
+    """``{"external": {location: sha}}`` for an ONNX model whose initializers keep their
+    data in other files (``location``, relative to the model's folder); {} otherwise."""
+    if not path.lower().endswith(".onnx"):
+        return {}
+    st = os.stat(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    out = {}
+    for loc in _external_locations(path, st.st_ino, st.st_mtime_ns, st.st_ctime_ns, st.st_size):
+        f = os.path.join(folder, loc)
+        out[loc] = file_digest(f) if os.path.isfile(f) else None
+    return {"external": out} if out else {}
+
+
+@functools.lru_cache(maxsize=64)
+def _external_locations(path: str, *stamp: int) -> tuple[str, ...]:
+    """The ``location`` of every external-data tensor of an ONNX file (initializers of
+    the graph and its subgraphs, sparse ones and node attributes), read without the data."""
+    try:
+        from onnx import load
+        model = load(path, load_external_data=False)
+    except Exception:  # noqa: BLE001 (not an ONNX file: its own bytes key it)
+        return ()
+    found: set[str] = set()
+
+    def tensors(graph):
+        yield from graph.initializer
+        for sp in graph.sparse_initializer:
+            yield sp.values
+            yield sp.indices
+        for node in graph.node:
+            for attr in node.attribute:
+                if attr.HasField("t"):
+                    yield attr.t
+                yield from attr.tensors
+                subs = ([attr.g] if attr.HasField("g") else []) + list(attr.graphs)
+                for g in subs:
+                    yield from tensors(g)
+
+    for t in tensors(model.graph):
+        if t.data_location == t.EXTERNAL:
+            found.update(e.value for e in t.external_data if e.key == "location")
+    return tuple(sorted(found))
 
 
 @functools.lru_cache(maxsize=512)

@@ -16,15 +16,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._io import atomic_write
 from . import disk as _disk
 from . import key as _key
-from .entry import read_entry, seal, unseal
+from .entry import MEMO_MAGIC, read_entry, seal, unseal
 
 if TYPE_CHECKING:
     from .store import FlightCache
 
-MAGIC = b"pytest-flockai-memo/1\n"
+MAGIC = MEMO_MAGIC
 
 
 class MemoStore:
@@ -51,7 +50,7 @@ class MemoStore:
             self.counts["bypass"] += 1
             return compute()
         status = "stored"
-        if cache.reads:
+        if cache.reads and _disk.unsafe_parent(cache.directory, self.path(key)) is None:
             try:
                 data = read_entry(self.path(key))
                 if data is not None:
@@ -72,13 +71,7 @@ class MemoStore:
             blob = seal(key, arrays, _header(pack(value), arrays), self.cache.key, MAGIC)
         except (TypeError, ValueError):        # not plain data: computed, not stored
             return False
-        p = self.path(key)
-        try:
-            p.parent.mkdir(parents=True, exist_ok=True)
-            _disk.clear_for_write(p)
-            atomic_write(p, lambda fh: fh.write(blob), text=False)
-        except OSError as exc:
-            self.cache.write_failed(exc)
+        if not self.cache.write_entry(self.path(key), blob):
             return False
         self.cache.wrote(len(blob))
         return True

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 import threading
 import warnings
 from dataclasses import dataclass, field
@@ -45,16 +44,13 @@ from . import auth as _auth
 from . import disk as _disk
 from . import key as _key
 from . import memo_store as _memo_store
-from .entry import MAGIC, CorruptEntry, NotAuthentic, read_entry, seal, unseal
+from .auth import CacheWarning
+from .entry import MAGIC, CorruptEntry, NotAFile, NotAuthentic, read_entry, seal, unseal
 
 
 class CacheMismatch(FlockAIError):
     """``verify`` flew a cached flight again and got another result: the entry is not
     to be trusted (forged with the key, or the key misses something that shapes it)."""
-
-
-class CacheWarning(UserWarning):
-    """The flight cache could not be written (the run goes on without it)."""
 
 
 @dataclass
@@ -118,6 +114,7 @@ class FlightCache:
         self.write_error: str | None = None        # set once a write failed (warned once)
         self._lock = threading.Lock()               # guards write_error only, never a flight
         self._memo: _memo_store.MemoStore | None = None
+        self._warned: set[str] = set()              # entries warned about (one warning each)
 
     @property
     def reads(self) -> bool:
@@ -149,9 +146,12 @@ class FlightCache:
         """The file of the entry ``key``."""
         return self.directory / key[:2] / f"{key}.flight"
 
-    def clear(self) -> None:
-        """Remove every entry."""
-        shutil.rmtree(self.directory, ignore_errors=True)
+    def clear(self) -> int:
+        """Remove every entry (files carrying the cache's header only: anything else in
+        the folder stays); returns how many."""
+        with self._lock:
+            self._usage = None
+            return _disk.clear(self.directory)
 
     # -- lookups --------------------------------------------------------------------------
     def lookup(self, mission: object, result_type: type[FlightResult] = FlightResult) -> Lookup:
@@ -167,6 +167,9 @@ class FlightCache:
             try:
                 res = self.get(key, result_type)
             except CorruptEntry as exc:
+                if isinstance(exc, NotAFile):
+                    self.warn(f"{exc}: treated as a corrupt entry, the flight is flown again",
+                              key)
                 return Lookup("replaced", key, str(exc), cache=self)
             if res is not None and self.verifies(key):
                 return Lookup("verify", key, cache=self, cached=res)
@@ -180,6 +183,9 @@ class FlightCache:
         """The entry of ``key``, None when there is none; CorruptEntry when it is unusable
         (``NotAuthentic`` when it was not sealed with this cache's key)."""
         p = self.path(key)
+        unsafe = _disk.unsafe_parent(self.directory, p)
+        if unsafe:
+            raise NotAFile(unsafe)
         data = read_entry(p)
         if data is None:
             return None
@@ -191,17 +197,40 @@ class FlightCache:
         """Store ``result``; returns the Lookup status ("stored", "replaced" or "flown")."""
         if not self.writes:
             return "replaced" if replaced else "flown"
-        try:
-            blob = encode(key, result, self.key)
-            p = self.path(key)
-            p.parent.mkdir(parents=True, exist_ok=True)
-            _disk.clear_for_write(p)
-            atomic_write(p, lambda fh: fh.write(blob), text=False)
-        except OSError as exc:
-            self.write_failed(exc)
+        blob = encode(key, result, self.key)
+        if not self.write_entry(self.path(key), blob):
             return "replaced" if replaced else "flown"
         self.wrote(len(blob))
         return "replaced" if replaced else "stored"
+
+    def write_entry(self, p: Path, blob: bytes) -> bool:
+        """Write an entry's file atomically; False when it was not written: a folder on
+        its way is a symlink or not a folder, or something that is not ours sits at its
+        path (a warning, this entry only), or the folder cannot be written (a warning,
+        no more writes this run)."""
+        try:
+            unsafe = _disk.unsafe_parent(self.directory, p)
+            if unsafe is None:
+                p.parent.mkdir(parents=True, exist_ok=True)
+                unsafe = _disk.unsafe_parent(self.directory, p)
+            if unsafe is None and not _disk.clear_for_write(p):
+                unsafe = f"{p} is a folder that is not empty (left as it is)"
+            if unsafe is not None:
+                self.warn(f"{unsafe}: this entry is not stored", p.stem)
+                return False
+            atomic_write(p, lambda fh: fh.write(blob), text=False)
+        except OSError as exc:
+            self.write_failed(exc)
+            return False
+        return True
+
+    def warn(self, what: str, key: str) -> None:
+        """One CacheWarning about one entry (the run goes on): once per entry and cache."""
+        with self._lock:
+            if key in self._warned:
+                return
+            self._warned.add(key)
+        warnings.warn(f"pytest-flockai: flight cache: {what}", CacheWarning, stacklevel=4)
 
     def wrote(self, nbytes: int) -> None:
         """Count a written entry; past the limit, evict the least recently used."""

@@ -64,7 +64,12 @@ class CachePlugin:
             raise pytest.UsageError(f"flockai_cache = {mode!r} is not allowed; allowed: "
                                     f"{', '.join(MODES)}")
         self.mode = mode or "readwrite"
-        self.verify_fraction = _fraction(config.getoption("flockai_cache_verify", None))
+        raw_fraction = config.getoption("flockai_cache_verify", None)
+        if raw_fraction is not None and self.mode != "verify":
+            raise pytest.UsageError(f"--flockai-cache-verify = {raw_fraction!r} needs "
+                                    f"--flockai-cache=verify (the mode is {self.mode!r}: "
+                                    f"nothing would be verified)")
+        self.verify_fraction = _fraction(raw_fraction)
         self.off_reason = None
         if not config.pluginmanager.has_plugin("cacheprovider"):
             self.off_reason = "pytest's cacheprovider is disabled (-p no:cacheprovider)"
@@ -74,7 +79,7 @@ class CachePlugin:
                                            f"({', '.join(MODES)}; pytest-flockai)")
         if config.getoption("flockai_cache_clear", False) and not self.worker \
                 and self.directory is not None:
-            Deferred(self.directory).open().clear()
+            Deferred(self.directory).open().clear()      # the cache's own entries only
 
     def mode_for(self, item) -> tuple[str, str | None]:
         """(mode, error) for one test: its flockai_cache marker, else off for a

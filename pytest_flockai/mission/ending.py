@@ -54,13 +54,14 @@ class WallClockGuard(Clocked):
     """Stops a flight that runs longer than ``max_wall_s`` seconds on the host
     (``Mission(max_wall_s=...)``): raises a ``SimulationError`` whose
     ``end_reason`` is ``"wall_time"``; ``Mission.run`` attaches the partial
-    result. Looks at the host clock every 16th control tick."""
+    result. Looks at the host clock every 16th control tick; a call that never
+    returns is interrupted at ``deadline`` by the loop's watchdog (``watchdog.py``)."""
 
     EVERY = 16
 
     def __init__(self, max_wall_s: float):
         self.max_wall_s = max_wall_s
-        self._deadline = time.perf_counter() + max_wall_s     # the flight is being built now
+        self.deadline = time.perf_counter() + max_wall_s     # the flight is being built now
         self._k = 0
 
     def bind(self, run) -> None:
@@ -71,7 +72,7 @@ class WallClockGuard(Clocked):
         self._k += 1
         if self._k % self.EVERY:
             return
-        if time.perf_counter() > self._deadline:
+        if time.perf_counter() > self.deadline:
             exc = SimulationError(f"Mission: max_wall_s = {self.max_wall_s:g} s of host time "
                                   f"exceeded at t = {t:.3f} s simulated; the flight was stopped "
                                   f"(the partial result is on this error's .result)")

@@ -12,7 +12,9 @@ are due (a fleet's offload and separation: ``step(t, drones)``), then MuJoCo
 advances ``substeps`` physics steps in one C call, and the contacts are checked:
 a drone touching another drone has crashed (both have); a drone flipped over, or
 touching anything else faster than ``CRASH_SPEED`` (not while still on its pad at
-take-off), has crashed. The loop ends when every drone has ended. No pandas,
+take-off), has crashed. The loop ends when every drone has ended. With
+``max_wall_s``, a watchdog (``watchdog.py``) interrupts a call that never returns
+at the deadline: the flight stops as it does between ticks. No pandas,
 dicts or numpy allocation per tick: the components keep preallocated buffers
 and Python floats.
 """
@@ -24,6 +26,8 @@ import math
 from .._mujoco import mujoco
 from ..control.stages import DONE, STAGES, TAKEOFF
 from ..errors import SimulationError
+from .ending import WallClockGuard
+from .watchdog import Overrun, watching
 
 CRASH_SPEED = 2.0        # m/s: touching anything faster than this is a crash
 
@@ -48,10 +52,28 @@ class Member:
 def fly(flight, steps=()) -> list:
     """Fly every drone of ``flight`` (an ``assemble.Flight``) until each has ended;
     ``steps``: flight-wide steps (``next_due``, ``step(t, drones)``) after the drones'
-    components. Sets each run's ``t_end``; returns the loop's drones (``Member``)."""
+    components. Sets each run's ``t_end``; returns the loop's drones (``Member``).
+    With ``max_wall_s``, a call that never returns is interrupted at the deadline
+    (``watchdog.py``): the same ``SimulationError`` as between ticks, naming the call."""
+    members = [Member(r) for r in flight.runs]
+    guards = [c for m in members for c in m.comps if isinstance(c, WallClockGuard)]
+    deadline = min([g.deadline for g in guards], default=None)
+    try:
+        with watching(deadline):
+            return _fly(flight, members, steps)
+    except Overrun as exc:
+        err = SimulationError(
+            f"Mission: max_wall_s = {min(g.max_wall_s for g in guards):g} s of host time "
+            f"exceeded at t = {flight.data.time:.3f} s simulated inside a call that did not "
+            f"return ({getattr(exc, 'where', Overrun.where)}); the call was interrupted and "
+            f"the flight stopped (the partial result is on this error's .result)")
+        err.end_reason = "wall_time"
+        raise err from None
+
+
+def _fly(flight, members, steps) -> list:
     model, data, runs = flight.model, flight.data, flight.runs
     nsub = runs[0].plan.substeps
-    members = [Member(r) for r in runs]
     live = list(members)                 # the drones still flying, in the given order
     body_of = {m.body: i for i, m in enumerate(members)}
     step, sqrt = mujoco.mj_step, math.sqrt

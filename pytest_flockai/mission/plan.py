@@ -187,6 +187,7 @@ def check_policies(policies, mission) -> tuple:
         if not isinstance(p, Policy):
             raise ConfigError(f"Mission: policies[{i}] = {p!r} is not a Policy; use fa.policy.Rule, "
                               f"Follow, SearchThenOrbit or subclass fa.Policy")
+        _check.overrides(p, Policy, "decide", "(t, drone)")    # one that skipped Policy.__init__
         if p.name in names:
             raise ConfigError(f"Mission: two policies are named {p.name!r}; give them name=... "
                               f"(policy names prefix their KPIs)")

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _check
+from .. import _check, limits
 from ..errors import ConfigError
 from ..world.truth import CLASSES
 from .models import Model, _check_macs
@@ -61,6 +61,8 @@ class Oracle(Model):
         self.miss_rate = _check.fraction("miss_rate", miss_rate, where=where)
         self.box_noise_px = _check.non_negative("box_noise_px", box_noise_px, where=where)
         self.false_positives = _check.non_negative("false_positives", false_positives, where=where)
+        limits.check_at_most("false_positives", self.false_positives,
+                             "MAX_ORACLE_FALSE_POSITIVES", where=where, unit=" per frame")
         self.delay_s = _check.non_negative("delay_s", delay_s, where=where)
         self.macs = _check_macs(macs, where, allow_none=False)
         self.min_visible = _check.fraction("min_visible", min_visible, where=where)

@@ -327,6 +327,7 @@ class Policy(Clocked):
     modes: tuple = ()
 
     def __init__(self, name: str | None = None, period_s: float = 0.1) -> None:
+        _check.overrides(self, Policy, "decide", "(t, drone)")
         nm = name if name is not None else type(self).__name__.lower()
         if not isinstance(nm, str) or not nm or "." in nm:
             raise ConfigError(f"{type(self).__name__}: name = {nm!r} is not allowed; expected a "

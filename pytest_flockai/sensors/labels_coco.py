@@ -6,6 +6,10 @@ base name; each annotation's ``bbox`` ``[x, y, w, h]`` must lie in its image (up
 to ``EDGE_TOLERANCE_PX``). Optional fields are checked when present: ``width`` /
 ``height`` (ints equal to the file's), ``iscrowd`` (0 or 1: 1 is an ignore region),
 ``visible`` (a fraction; our own exports write it). Ids must be ints or strings.
+Every image of the folder needs an ``images`` entry (one with no annotations is an
+image with no objects) and no two entries may name the same file: anything else is a
+``ConfigError`` naming the file and the entry (an image would be scored as empty, or
+one entry's boxes lost).
 Classes are the category names, in category id order.
 """
 
@@ -32,6 +36,13 @@ def read_coco(path, images, sizes):
     names, cat_slot = _categories(doc["categories"], w0)
     by_name = {os.path.basename(f): (i, size) for i, (f, size) in enumerate(zip(images, sizes))}
     img_slot = _images(doc["images"], by_name, w0)
+    covered = {slot for slot, _, _ in img_slot.values()}
+    missing = [os.path.basename(f) for i, f in enumerate(images) if i not in covered]
+    if missing:
+        raise ConfigError(f"{w0}: image {missing[0]!r} of the folder has no entry in 'images'"
+                          f"{f' (nor {len(missing) - 1} other image(s))' if len(missing) > 1 else ''}"
+                          f"; add an entry (with no annotations: an image with no objects) or "
+                          f"move the image out of the folder")
     rows: list = [[] for _ in images]
     seen = set()
     for i, a in enumerate(doc["annotations"]):
@@ -59,7 +70,7 @@ def read_coco(path, images, sizes):
 
 def _load(path) -> dict:
     try:
-        with open(path) as f:
+        with open(path, encoding="utf-8") as f:
             doc = json.load(f)
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise ConfigError(f"annotations {path!r}: not a readable JSON file ({exc})") from None
@@ -89,6 +100,7 @@ def _categories(cats, w0):
 
 def _images(entries, by_name, w0) -> dict:
     img_slot: dict = {}
+    names_seen: dict = {}
     for i, im in enumerate(entries):
         where = f"{w0}: images[{i}]"
         if not isinstance(im, dict) or not {"id", "file_name"} <= set(im):
@@ -102,6 +114,10 @@ def _images(entries, by_name, w0) -> dict:
         if base not in by_name:
             raise ConfigError(f"{where}: file_name = {im['file_name']!r} is not an image of the folder")
         slot, (w, h) = by_name[base]
+        if base in names_seen:
+            raise ConfigError(f"{where}: file_name = {im['file_name']!r} is also the file of "
+                              f"images[{names_seen[base]}]; one entry per image file")
+        names_seen[base] = i
         sz = [_count(im[k], k, where) for k in ("width", "height") if k in im]
         if len(sz) == 2 and tuple(sz) != (w, h):
             raise ConfigError(f"{where}: size {sz[0]}x{sz[1]} differs from the image file's {w}x{h}")

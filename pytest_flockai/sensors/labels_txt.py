@@ -17,6 +17,7 @@ import math
 
 from ..errors import ConfigError
 from .labels_coco import inside, objects_of
+from .labelsets import read_text
 
 #: VisDrone-DET categories, by their id in the annotation files
 VISDRONE_CLASSES = ("ignored regions", "pedestrian", "people", "bicycle", "car", "van", "truck",
@@ -89,5 +90,5 @@ def _visdrone_one(label, size):
 def _lines(path):
     if path is None:
         return []
-    with open(path) as f:
-        return [(i, line) for i, line in enumerate(f, 1) if line.strip()]
+    text = read_text(path, "annotations")        # UTF-8, a regular file: else ConfigError
+    return [(i, line) for i, line in enumerate(text.splitlines(), 1) if line.strip()]

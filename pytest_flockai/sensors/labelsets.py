@@ -19,11 +19,18 @@ Layouts read:
 
 A folder with a ``split`` sub-folder (``images/val``) is read when ``split`` names it
 or when it is the only one.
+
+Nothing is guessed: a folder with several COCO files (``instances_train.json`` and
+``instances_val.json``) is read when ``split`` picks one (``instances_<split>*.json``)
+or ``annotations=`` names the file itself, else it is a ``ConfigError`` listing them;
+a label path that exists but is not a regular file (a folder, a FIFO, a link to a
+device) is a ``ConfigError`` naming it (it would be read as "no objects").
 """
 
 from __future__ import annotations
 
 import os
+import stat
 from dataclasses import dataclass, field
 
 from ..errors import ConfigError
@@ -51,11 +58,52 @@ def list_images(folder: str) -> list:
                   if f.lower().endswith(IMAGE_EXT))
 
 
+def regular(path, where) -> bool:
+    """Whether a regular file (or a link to one) is at ``path``; False when nothing is
+    there; ConfigError naming it when something else is (a folder, a FIFO, a device)."""
+    try:
+        st = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        if os.path.islink(path):
+            raise ConfigError(f"{where}: label file {os.fspath(path)!r} is a link to nothing "
+                              f"({os.readlink(path)!r} does not exist)") from None
+        return False
+    except OSError as exc:
+        raise ConfigError(f"{where}: label file {os.fspath(path)!r} cannot be read: "
+                          f"{exc.strerror or exc}") from None
+    if not stat.S_ISREG(st.st_mode):
+        what = "a folder" if stat.S_ISDIR(st.st_mode) else "a FIFO, a device or a socket"
+        raise ConfigError(f"{where}: label file {os.fspath(path)!r} is not a regular file "
+                          f"({what}); labels are read from regular files only")
+    return True
+
+
+def read_text(path, where) -> str:
+    """A label file's text (UTF-8); ConfigError naming the file when it is not."""
+    regular(path, where)
+    try:
+        with open(path, encoding="utf-8") as f:
+            return f.read()
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{where}: label file {os.fspath(path)!r} is not UTF-8 text (byte "
+                          f"{exc.start}: {exc.object[exc.start:exc.start + 1]!r})") from None
+    except OSError as exc:
+        raise ConfigError(f"{where}: label file {os.fspath(path)!r} cannot be read: "
+                          f"{exc.strerror or exc}") from None
+
+
 def find_labelset(path, *, fmt="auto", split=None, where: str = "annotations") -> LabelSet:
-    """The LabelSet at ``path`` (a folder or a data.yaml); ConfigError when nothing is there."""
+    """The LabelSet at ``path`` (a folder or a data.yaml); ConfigError when nothing is
+    there. ``fmt`` may also be the path of a COCO .json file: that file is read."""
+    chosen = None
+    if isinstance(fmt, (str, os.PathLike)) and os.fspath(fmt).lower().endswith(".json"):
+        chosen = os.fspath(fmt)
+        if not regular(chosen, where):
+            raise ConfigError(f"{where}: annotations = {chosen!r}: no such COCO file")
+        fmt = "coco"
     if fmt is not None and fmt not in FORMATS:
         raise ConfigError(f"{where}: annotations = {fmt!r} is not allowed; allowed: "
-                          f"{', '.join(map(repr, FORMATS))} or None")
+                          f"{', '.join(map(repr, FORMATS))}, a COCO .json file or None")
     p = os.fspath(path)
     if os.path.isfile(p) and p.lower().endswith((".yaml", ".yml")):
         return _from_yaml(p, split, fmt, where)
@@ -66,6 +114,9 @@ def find_labelset(path, *, fmt="auto", split=None, where: str = "annotations") -
     img_dir = _images_dir(p, split, where)
     ls = LabelSet(root=p, images=list_images(img_dir))
     if fmt is None:
+        return ls
+    if chosen is not None:
+        ls.fmt, ls.coco_file = "coco", chosen
         return ls
     return _labels_of(ls, img_dir, fmt, split, where)
 
@@ -97,8 +148,9 @@ def _split_dir(folder, split, where):
 
 def _labels_of(ls, img_dir, fmt, split, where) -> LabelSet:
     root = ls.root
-    coco = coco_file(root) or (coco_file(os.path.join(root, "annotations"))
-                               if os.path.isdir(os.path.join(root, "annotations")) else None)
+    coco = coco_file(root, split, where) or (
+        coco_file(os.path.join(root, "annotations"), split, where)
+        if os.path.isdir(os.path.join(root, "annotations")) else None)
     yolo_dir = _yolo_dir(root, img_dir)
     vis_dir = os.path.join(root, "annotations")
     has_vis = img_dir != root and os.path.isdir(vis_dir) and any(
@@ -119,7 +171,7 @@ def _labels_of(ls, img_dir, fmt, split, where) -> LabelSet:
         raise ConfigError(f"{where}: a VisDrone-DET folder has images/ and annotations/; "
                           f"{root!r} has no annotations/")
     ls.fmt, ls.label_dir = fmt, label_dir
-    ls.label_files = [_label_path(f, label_dir) for f in ls.images]
+    ls.label_files = [_label_path(f, label_dir, where) for f in ls.images]
     if fmt == "yolo":
         ls.names = _declared_names(root, where)
     return ls
@@ -133,32 +185,42 @@ def _yolo_dir(root, img_dir):
     return os.path.normpath(os.path.join(root, "labels", rel))
 
 
-def _label_path(image, label_dir):
+def _label_path(image, label_dir, where="annotations"):
     p = os.path.join(label_dir, os.path.splitext(os.path.basename(image))[0] + ".txt")
-    return p if os.path.isfile(p) else None
+    return p if regular(p, where) else None
 
 
 def _any_label(images, label_dir) -> bool:
-    return os.path.isdir(label_dir) and any(_label_path(f, label_dir) for f in images)
+    return os.path.isdir(label_dir) and any(
+        os.path.lexists(os.path.join(label_dir, os.path.splitext(os.path.basename(f))[0] + ".txt"))
+        for f in images)
 
 
-def coco_file(folder):
-    """The COCO file of a folder: annotations.json, else the first instances*.json."""
+def coco_file(folder, split=None, where="annotations"):
+    """The COCO file of a folder: annotations.json or an instances*.json when it is the
+    only one, else the one ``split`` names (``instances_<split>*.json``); several and
+    no split to choose: ConfigError listing them."""
     if not os.path.isdir(folder):
         return None
-    for name in ["annotations.json"] + sorted(f for f in os.listdir(folder)
-                                              if f.startswith("instances") and f.endswith(".json")):
-        p = os.path.join(folder, name)
-        if os.path.isfile(p):
-            return p
-    return None
+    names = sorted(f for f in os.listdir(folder) if f == "annotations.json"
+                   or f.startswith("instances") and f.endswith(".json"))
+    found = [os.path.join(folder, n) for n in names if regular(os.path.join(folder, n), where)]
+    if len(found) > 1 and split is not None:
+        picked = [f for f in found if os.path.basename(f).startswith(f"instances_{split}")]
+        if len(picked) == 1:
+            return picked[0]
+    if len(found) > 1:
+        raise ConfigError(f"{where}: folder {folder!r} holds {len(found)} COCO files "
+                          f"({', '.join(os.path.basename(f) for f in found)}); choose one: "
+                          f"split='val' reads instances_val*.json, or annotations='<file>.json'"
+                          f"{f' (split = {split!r} matches none or several)' if split else ''}")
+    return found[0] if found else None
 
 
 def _declared_names(root, where):
     txt = os.path.join(root, "classes.txt")
-    if os.path.isfile(txt):
-        with open(txt) as f:
-            return tuple(line.strip() for line in f if line.strip())
+    if regular(txt, where):
+        return tuple(line.strip() for line in read_text(txt, where).splitlines() if line.strip())
     for n in ("data.yaml", "data.yml"):
         y = os.path.join(root, n)
         if os.path.isfile(y):
@@ -196,7 +258,7 @@ def _from_yaml(path, split, fmt, where) -> LabelSet:
     head, sep, tail = img_dir.rpartition(os.sep + "images")
     label_dir = head + os.sep + "labels" + tail if sep else img_dir
     ls.fmt, ls.label_dir = "yolo", label_dir
-    ls.label_files = [_label_path(f, label_dir) for f in ls.images]
+    ls.label_files = [_label_path(f, label_dir, where) for f in ls.images]
     ls.names = yaml_names(doc, path, where)
     return ls
 
@@ -206,24 +268,23 @@ def read_yaml(path, where) -> dict:
     ``- item`` / ``key: value`` lines (what Ultralytics' files use)."""
     doc: dict = {}
     key = None
-    with open(path) as f:
-        for line in f:
-            s = line.split(" #")[0].rstrip()
-            if not s.strip() or s.lstrip().startswith("#"):
-                continue
-            if not line[:1].isspace() and ":" in s:
-                key, _, rest = s.partition(":")
-                key, rest = key.strip(), rest.strip()
-                doc[key] = _inline(rest) if rest else []
-            elif key is not None and line[:1].isspace():
-                item = s.strip()
-                if item.startswith("-"):
-                    _add(doc, key, None, _scalar(item[1:]))
-                elif ":" in item:
-                    k, _, v = item.partition(":")
-                    _add(doc, key, _scalar(k), _scalar(v))
-            else:
-                raise ConfigError(f"{where}: {path!r}: line {line.rstrip()!r} is not 'key: value'")
+    for line in read_text(path, where).splitlines(keepends=True):
+        s = line.split(" #")[0].rstrip()
+        if not s.strip() or s.lstrip().startswith("#"):
+            continue
+        if not line[:1].isspace() and ":" in s:
+            key, _, rest = s.partition(":")
+            key, rest = key.strip(), rest.strip()
+            doc[key] = _inline(rest) if rest else []
+        elif key is not None and line[:1].isspace():
+            item = s.strip()
+            if item.startswith("-"):
+                _add(doc, key, None, _scalar(item[1:]))
+            elif ":" in item:
+                k, _, v = item.partition(":")
+                _add(doc, key, _scalar(k), _scalar(v))
+        else:
+            raise ConfigError(f"{where}: {path!r}: line {line.rstrip()!r} is not 'key: value'")
     return doc
 
 

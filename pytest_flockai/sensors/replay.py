@@ -37,7 +37,7 @@ from . import replay_conditions as _conditions
 from .annotations import load_annotations, orphan_labels
 from .base import DroneBody, Sensor
 from .classnames import person_index
-from .labelsets import IMAGE_EXT, find_labelset
+from .labelsets import IMAGE_EXT, find_labelset, regular
 
 #: frames of slack when the clock picks a frame: a read a hair before a frame's
 #: start (floating-point sums of the tick) still shows it
@@ -81,8 +81,16 @@ class ReplayCamera(Sensor):
             self.n_frames: int | None = len(self.files)
             self.height, self.width = first.shape[:2]
             tj = os.path.join(p, "truth.json")
-            if os.path.isfile(tj):
-                self._truth = _load_truth(tj, w)
+            if regular(tj, w):
+                self._truth, named = _load_truth(tj, w)
+                _check_truth_files(tj, named, self.files, w)
+                if len(self._truth) != len(self.files):
+                    raise ConfigError(
+                        f"{w}: {tj!r} has {len(self._truth)} frame(s) for the folder's "
+                        f"{len(self.files)} image(s) (first not covered: "
+                        f"{os.path.basename(self.files[min(len(self._truth), len(self.files) - 1)])!r}"
+                        f"); export_dataset writes one frame per image: re-export, or move the "
+                        f"truth.json out to score the images by their labels")
             self._attach_objects(ls, classes, w)
             for f, tr in zip(self.files, self._truth or ()):
                 tr.file = f         # the image a frame record shows (galleries, results)
@@ -250,12 +258,23 @@ def _truth_of(k, objs: Objects, person) -> Truth:
 
 def _load_truth(path, where):
     try:
-        with open(path) as f:
+        with open(path, encoding="utf-8") as f:
             rows = json.load(f)["frames"]
         return [Truth(float(r.get("t", 0.0)), np.array(r["indices"], dtype=int),
                       np.array(r["pixels"], dtype=float).reshape(-1, 2),
                       np.array(r.get("cam_pos", (np.nan,) * 3), dtype=float),
-                      blur_px=tuple(r.get("blur_px", (0.0, 0.0)))) for r in rows]
+                      blur_px=tuple(r.get("blur_px", (0.0, 0.0)))) for r in rows], \
+            [r.get("file") for r in rows]
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise ConfigError(f"{where}: {path!r} is not a truth file written by export_dataset: "
                           f"{exc}") from None
+
+
+def _check_truth_files(path, named, files, where):
+    """ConfigError when a frame of truth.json names another image than the folder's
+    image at its place (images sorted by name, as export_dataset wrote them)."""
+    for k, (name, f) in enumerate(zip(named, files)):
+        if isinstance(name, str) and os.path.basename(name) != os.path.basename(f):
+            raise ConfigError(f"{where}: {path!r} frames[{k}] file = {name!r} is not the "
+                              f"folder's image {k} ({os.path.basename(f)!r}); truth.json must "
+                              f"cover the folder's images in name order")

@@ -17,7 +17,9 @@
   of ``batch_size`` per task; results come back as each task finishes. A task
   that fails without an answer (Dask's ``KilledWorker`` after a variant killed
   its workers ``allowed-failures`` times) has its variants flown again one per
-  task once, then each is a row with the error. A pool of yours that breaks
+  task once, then each is a row with the error; a task the cluster cancelled
+  (``CancelledError``: a worker died under it) is flown again alone once even in a
+  batch of one, then its row says ``"worker died: ..."``. A pool of yours that breaks
   cannot be restarted by the sweep: every variant not back is a row
   ``"worker died: BrokenProcessPool: ..."``.
 
@@ -31,7 +33,7 @@ import multiprocessing
 import re
 import signal
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, Executor, wait
+from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, CancelledError, Executor, wait
 from contextlib import contextmanager
 
 from ..errors import ConfigError
@@ -246,14 +248,21 @@ def _take(f, ids, retried, plan, sink, submit) -> None:
     try:
         answer = f.result()
     except Exception as exc:             # noqa: BLE001 - a task lost, not a variant's error
-        if len(ids) > 1 and not retried and not isinstance(exc, BrokenExecutor):
+        # a task the cluster cancelled (Dask: a worker died under it, or under data it
+        # needed) was no variant's fault: flown again, alone, even a batch of one
+        lost = isinstance(exc, CancelledError)
+        if (len(ids) > 1 or lost) and not retried and not isinstance(exc, BrokenExecutor):
             for i in ids:
                 submit([i], True)
             return
         name = type(exc).__name__
         text = _worker.describe(exc)[0]
-        text = f"worker died: {text}" if name in ("KilledWorker", "BrokenProcessPool") \
-            else f"not flown: {text}"
+        if lost:
+            text = "worker died: the cluster lost the task twice (a worker died under it)"
+        elif name in ("KilledWorker", "BrokenProcessPool"):
+            text = f"worker died: {text}"
+        else:
+            text = f"not flown: {text}"
         for i in ids:
             sink(i, _worker.failed(plan[i], text))
         return

@@ -172,6 +172,7 @@ def walkers(n: int, area, seed: int = 0, *, legs: int = 4, speed: float = WALK_S
     drawn from ``seed`` (same seed, same walks); speeds vary +-10 % around ``speed``."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ConfigError(f"walkers: n = {n!r} is not allowed; expected an int >= 0")
+    limits.check_at_most("n", int(n), "MAX_ACTORS", where="walkers")
     x0, y0, x1, y1 = _check.area(area, where="walkers")
     rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(25,)))
     out = []
@@ -188,6 +189,7 @@ def traffic(world, n: int, seed: int = 0, *, speed: float = CAR_SPEED) -> list:
     street and the direction drawn from ``seed``; speeds vary +-10 % around ``speed``."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ConfigError(f"traffic: n = {n!r} is not allowed; expected an int >= 0")
+    limits.check_at_most("n", int(n), "MAX_ACTORS", where="traffic")
     streets = list(getattr(world, "streets", []) or [])
     if n and not streets:
         raise ConfigError(f"traffic: world {getattr(world, 'name', world)!r} has no streets; "
@@ -210,11 +212,20 @@ def traffic(world, n: int, seed: int = 0, *, speed: float = CAR_SPEED) -> list:
 
 def check_actors(actors, world, where: str = "Mission") -> tuple:
     """The actors as a tuple, each checked to stay inside ``world`` (its size, or
-    ``limits.MAX_EXTENT_M`` for unbounded worlds)."""
+    ``limits.MAX_EXTENT_M`` for unbounded worlds); at most ``limits.MAX_ACTORS``, each
+    object listed once (one actor listed twice would be two objects on one path)."""
     try:
         actors = tuple(actors or ())
     except TypeError:
         raise ConfigError(f"{where}: actors = {actors!r} is not a list of fa.actors.Person / Car") from None
+    limits.check_at_most("len(actors)", len(actors), "MAX_ACTORS", where=where)
+    first: dict[int, int] = {}
+    for i, a in enumerate(actors):
+        j = first.setdefault(id(a), i)
+        if j != i:
+            raise ConfigError(f"{where}: actors[{i}] = {a!r} is the same object as actors[{j}]; "
+                              f"list each actor once (two people on one path: two Person(...) "
+                              f"objects)")
     size = getattr(world, "size", None) if world is not None else None
     hx, hy = ((size[0] / 2, size[1] / 2) if size is not None
               else (limits.MAX_EXTENT_M, limits.MAX_EXTENT_M))

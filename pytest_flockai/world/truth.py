@@ -256,26 +256,104 @@ def _visible_fraction(table, cand, cam_pos, cam_mat, fov_deg, width, height, occ
 def _hide_behind_objects(seen, pts, point_owner, obox, owner, cam_pos):
     """Clear ``seen`` for points whose line of sight crosses another object's box.
 
+    A point inside another object's box is hidden by it only when that object is the
+    clearly bigger body (its bounding volume over ``ENGULF_RATIO`` times the point's
+    object's: a person under a car is hidden from above). Bodies of one size at one
+    spot (two walkers meeting, a crowd, two cars) overlap without hiding each other:
+    each keeps the points the other's box does not cover from the camera.
+
     The objects are low (a few metres), so only the stretch of a sight line below
-    the tallest box can meet one: the boxes tested against a point are those
-    whose xy extent meets that stretch's xy extent (a cheap prefilter)."""
+    the tallest box can meet one: the boxes tested against a point are those whose
+    xy extent meets that stretch's xy extent, found through a uniform xy grid
+    (``_near_pairs``), so the cost grows with the pairs that are near, not with
+    points x boxes (thousands of walkers in view stay within a few MiB per chunk)."""
     idx = np.flatnonzero(seen)
-    p = pts[idx]
     top = obox[:, 5].max()
-    dz = cam_pos[2] - p[:, 2]
+    n_obj = int(max(owner.max(), point_owner.max())) + 1
+    lo3, hi3 = np.full((n_obj, 3), np.inf), np.full((n_obj, 3), -np.inf)
+    np.minimum.at(lo3, owner, obox[:, :3])
+    np.maximum.at(hi3, owner, obox[:, 3:])
+    vol = np.where(np.isfinite(lo3).all(axis=1), np.prod(np.maximum(hi3 - lo3, 0.0), axis=1), 0.0)
+    for c0 in range(0, len(idx), _CHUNK):
+        ci = idx[c0:c0 + _CHUNK]
+        p = pts[ci]
+        dz = cam_pos[2] - p[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.clip(np.where(dz > 0, (top - p[:, 2]) / dz, 1.0), 0.0, 1.0)
+        q = p[:, :2] + t[:, None] * (cam_pos[:2] - p[:, :2])   # where the line rises above `top`
+        lo, hi = np.minimum(p[:, :2], q), np.maximum(p[:, :2], q)
+        pi, bi = _near_pairs(lo, hi, obox)
+        b, mine, other = obox[bi], point_owner[ci][pi], owner[bi]
+        inside = ((p[pi] >= b[:, :3]) & (p[pi] <= b[:, 3:])).all(axis=1)
+        keep = ((b[:, 0] <= hi[pi, 0]) & (b[:, 3] >= lo[pi, 0]) & (b[:, 1] <= hi[pi, 1])
+                & (b[:, 4] >= lo[pi, 1]) & (other != mine)
+                & (~inside | (vol[other] > ENGULF_RATIO * vol[mine])))
+        pi, b = pi[keep], b[keep]
+        hit = _pair_hits(cam_pos, p[pi], b)
+        seen[ci[np.unique(pi[hit])]] = False
+
+
+#: how much bigger (bounding volume) a body must be to hide the points of another that
+#: lie inside its box (a car over a person: ~20x); bodies closer in size never do
+ENGULF_RATIO = 2.0
+#: sight-line points handled at once by the occlusion test (bounds its memory)
+_CHUNK = 20_000
+
+
+def _near_pairs(lo, hi, boxes):
+    """(point index, box index) of every point rectangle [lo, hi] (N, 2) and box (M, 6)
+    sharing a cell of a uniform xy grid (cells as wide as the widest box), each once."""
+    ext = np.maximum(boxes[:, 3] - boxes[:, 0], boxes[:, 4] - boxes[:, 1])
+    cell = max(float(ext.max()), 0.25)
+    ox = min(float(lo[:, 0].min()), float(boxes[:, 0].min()))
+    oy = min(float(lo[:, 1].min()), float(boxes[:, 1].min()))
+
+    def span(a0, a1, o):
+        return (np.floor((a0 - o) / cell).astype(np.int64),
+                np.floor((a1 - o) / cell).astype(np.int64))
+
+    bx0, bx1 = span(boxes[:, 0], boxes[:, 3], ox)
+    by0, by1 = span(boxes[:, 1], boxes[:, 4], oy)
+    px0, px1 = span(lo[:, 0], hi[:, 0], ox)
+    py0, py1 = span(lo[:, 1], hi[:, 1], oy)
+    ny = int(max(by1.max(), py1.max())) + 1
+    bcell, bown = _cells(bx0, bx1, by0, by1, ny)
+    order = np.argsort(bcell, kind="stable")
+    bcell, bown = bcell[order], bown[order]
+    pcell, pown = _cells(px0, px1, py0, py1, ny)
+    start = np.searchsorted(bcell, pcell, side="left")
+    cnt = np.searchsorted(bcell, pcell, side="right") - start
+    pi = np.repeat(pown, cnt)
+    k = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    bi = bown[np.repeat(start, cnt) + k]
+    code = np.unique(pi * len(boxes) + bi)
+    return code // len(boxes), code % len(boxes)
+
+
+def _cells(x0, x1, y0, y1, ny):
+    """(cell id, owner) of every grid cell each rectangle [x0..x1] x [y0..y1] covers."""
+    wy = y1 - y0 + 1
+    n = (x1 - x0 + 1) * wy
+    own = np.repeat(np.arange(len(x0), dtype=np.int64), n)
+    k = np.arange(int(n.sum()), dtype=np.int64) - np.repeat(np.cumsum(n) - n, n)
+    return (x0[own] + k // wy[own]) * ny + (y0[own] + k % wy[own]), own
+
+
+def _pair_hits(cam_pos, p, b) -> np.ndarray:
+    """(K,) bool: the segment cam_pos -> p[k] crosses box b[k] (the slab test of
+    ``segment_hits``, one box per point)."""
+    o = np.asarray(cam_pos, dtype=float).reshape(1, 3)
+    d = p - o
+    lo, hi = b[:, :3], b[:, 3:]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.clip(np.where(dz > 0, (top - p[:, 2]) / dz, 1.0), 0.0, 1.0)
-    q = p[:, :2] + t[:, None] * (cam_pos[:2] - p[:, :2])       # where the line rises above `top`
-    lo, hi = np.minimum(p[:, :2], q), np.maximum(p[:, :2], q)
-    near = ((obox[None, :, 0] <= hi[:, None, 0]) & (obox[None, :, 3] >= lo[:, None, 0])
-            & (obox[None, :, 1] <= hi[:, None, 1]) & (obox[None, :, 4] >= lo[:, None, 1])
-            & (owner[None, :] != point_owner[idx][:, None]))
-    rows = np.flatnonzero(near.any(axis=1))
-    if len(rows) == 0:
-        return
-    cols = np.flatnonzero(near[rows].any(axis=0))
-    hit = segment_hits(cam_pos, p[rows], obox[cols]) & near[np.ix_(rows, cols)]
-    seen[idx[rows[hit.any(axis=1)]]] = False
+        inv = 1.0 / d
+        t1 = (lo - o) * inv
+        t2 = (hi - o) * inv
+    tmin = np.where(np.isnan(t1), -np.inf, np.minimum(t1, t2))
+    tmax = np.where(np.isnan(t1), np.inf, np.maximum(t1, t2))
+    par = (d == 0.0) & ((o < lo) | (o > hi))
+    enter, leave = tmin.max(axis=1), tmax.min(axis=1)
+    return (enter <= leave) & (leave >= 0.0) & (enter <= 1.0) & ~par.any(axis=1)
 
 
 class CameraModel:
