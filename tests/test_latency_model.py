@@ -1,0 +1,171 @@
+"""Issue 34: latency from the network's layers, the runtime and the precision.
+
+Runtimes and precisions a computer cannot run are ConfigErrors naming both; the roofline
+responds to what it should (MACs, precision, threads, depthwise layers); a bare MAC count
+falls back to the old rule with a warning; the tuning reads the tuning half only; tasks
+fly with the predicted latency of their deployment."""
+
+import math
+import warnings
+
+import numpy as np
+import onnx
+import pytest
+from onnx import TensorProto, helper, numpy_helper
+
+import pytest_flockai as fa
+from pytest_flockai.compute import published, runtimes, tuning
+from pytest_flockai.compute.predict import LatencyFallbackWarning, params_for, predict_latency
+from pytest_flockai.errors import ConfigError
+
+
+def convnet(depthwise=False, channels=32, side=64) -> onnx.ModelProto:
+    """Conv-BN-ReLU x3 on a 1x3xSxS input (weights from a fixed seed)."""
+    rng = np.random.default_rng(0)
+    nodes, inits, name, c_in = [], [], "x", 3
+    for i in range(3):
+        group = c_in if depthwise and i > 0 else 1
+        c_out = c_in if group > 1 else channels
+        w = (rng.standard_normal((c_out, c_in // group, 3, 3)) * 0.1).astype(np.float32)
+        inits.append(numpy_helper.from_array(w, f"w{i}"))
+        for p in ("s", "b", "m", "v"):
+            inits.append(numpy_helper.from_array(np.ones(c_out, np.float32), f"{p}{i}"))
+        nodes += [helper.make_node("Conv", [name, f"w{i}"], [f"c{i}"], pads=[1, 1, 1, 1],
+                                   group=group),
+                  helper.make_node("BatchNormalization", [f"c{i}", f"s{i}", f"b{i}", f"m{i}",
+                                                          f"v{i}"], [f"n{i}"]),
+                  helper.make_node("Relu", [f"n{i}"], [f"r{i}"])]
+        name, c_in = f"r{i}", c_out
+    g = helper.make_graph(nodes, "net", [helper.make_tensor_value_info(
+        "x", TensorProto.FLOAT, [1, 3, side, side])], [helper.make_tensor_value_info(
+            name, TensorProto.FLOAT, None)], inits)
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    return m
+
+
+def test_nine_computers_each_with_a_datasheet():
+    names = {"raspberry-pi-4", "raspberry-pi-5", "jetson-nano-5w", "jetson-nano-10w",
+             "jetson-orin-nano", "jetson-orin-nano-super", "jetson-orin-nx-16gb",
+             "coral-dev-board", "ground-gpu"}
+    assert names <= set(fa.devices())
+    for n in names:
+        d = fa.compute.device(n)
+        assert d.units and d.bandwidth_gbs > 0 and d.runtimes and d.active_w > d.idle_w > 0
+
+
+@pytest.mark.parametrize("kw, words", [
+    ({"runtime": "tensorrtt"}, ["runtime", "'tensorrtt'", "tensorrt"]),
+    ({"precision": "fp8"}, ["precision", "'fp8'", "fp32, fp16, int8"]),
+    ({"target": "tpu"}, ["target", "'tpu'", "cpu, gpu, npu"]),
+    ({"threads": 0}, ["threads", "0", ">= 1"]),
+])
+def test_unknown_names_are_refused_naming_field_value_and_allowed(kw, words):
+    with pytest.raises(ConfigError) as e:
+        predict_latency(convnet(), "raspberry-pi-4", **kw)
+    for w in words:
+        assert w in str(e.value)
+
+
+@pytest.mark.parametrize("computer, kw, words", [
+    ("raspberry-pi-4", {"runtime": "tensorrt"}, ["tensorrt", "raspberry-pi-4", "NVIDIA",
+                                                 "onnxruntime"]),
+    ("coral-dev-board", {"runtime": "edgetpu", "precision": "fp32"},
+     ["fp32", "edgetpu", "coral-dev-board", "allowed there: int8"]),
+    ("jetson-nano-10w", {"runtime": "tensorrt", "precision": "int8"},
+     ["int8", "tensorrt", "jetson-nano-10w"]),
+    ("raspberry-pi-4", {"threads": 8}, ["threads", "8", "4 cores"]),
+])
+def test_what_a_computer_cannot_run_names_both(computer, kw, words):
+    with pytest.raises(ConfigError) as e:
+        predict_latency(convnet(), computer, **kw)
+    for w in words:
+        assert w in str(e.value)
+
+
+def test_roofline_responds_to_precision_threads_and_depthwise():
+    net = convnet()
+    fp16 = predict_latency(net, "jetson-orin-nano", runtime="tensorrt", precision="fp16")
+    int8 = predict_latency(net, "jetson-orin-nano", runtime="tensorrt", precision="int8")
+    assert int8.seconds < fp16.seconds and fp16.method == "roofline"
+    one = predict_latency(net, "raspberry-pi-4", runtime="onnxruntime", threads=1)
+    four = predict_latency(net, "raspberry-pi-4", runtime="onnxruntime", threads=4)
+    assert one.seconds > 1.5 * four.seconds
+    # per MAC, depthwise layers run slower than dense ones
+    dw = predict_latency(convnet(depthwise=True), "jetson-orin-nano", runtime="tensorrt")
+    assert dw.seconds / dw.macs > fp16.seconds / fp16.macs
+    # MACs as counted by the graph: 3x3 convs, BN and ReLU fused (no time of their own)
+    want = 64 * 64 * 9 * (32 * 3 + 32 * 32 + 32 * 32)
+    assert sum(n[2] > 0 for n in fp16.per_node) == 3
+    assert fp16.macs >= want
+    dev = fa.compute.device("jetson-orin-nano")
+    assert fp16.energy_j == pytest.approx(fp16.seconds * (dev.active_w - dev.idle_w))
+    assert fp16.band[0] < fp16.seconds < fp16.band[1]
+
+
+def test_a_bare_mac_count_falls_back_to_the_old_rule_with_a_warning():
+    pi = fa.compute.device("raspberry-pi-4")
+    with pytest.warns(LatencyFallbackWarning, match="MAC-count rule"):
+        p = predict_latency(5.26e8, "raspberry-pi-4")
+    assert p.method == "macs" and p.seconds == pytest.approx(pi.overhead_s + 5.26e8 / pi.macs_per_s)
+
+
+def _rows(held_latency_s):
+    """Synthetic rows: tuning rows generated by the roofline with known efficiencies,
+    held-out rows with whatever latency the caller gives."""
+    truth = {"targets": {"cpu": {"mem": 0.3, "dispatch_s": 3e-5, "overhead_s": 2e-3,
+                                 "dwconv": 0.05}},
+             "groups": {"onnxruntime/cpu/fp32": {"scale": 0.4}, "ncnn/cpu/fp32": {"scale": 0.8}}}
+    from pytest_flockai.compute._nodes import analyze
+    rows = []
+    for i, (side, dw) in enumerate([(s, d) for s in (64, 96, 128, 160) for d in (False, True)]):
+        cost = analyze(convnet(depthwise=dw, side=side))
+        for j, (rt, comp) in enumerate([("onnxruntime", "raspberry-pi-4"),
+                                        ("ncnn", "raspberry-pi-5")]):
+            r = published.Row(f"{i}{j}", "s", "tuning", comp, rt, "cpu", "fp32", "n", str(side),
+                              1.0, cost)
+            secs = published.predict_row(r, truth)
+            rows.append(published.Row(r.row_id, "s", "tuning", comp, rt, "cpu", "fp32", "n",
+                                      str(side), secs, cost))
+    rows += [published.Row(f"h{k}", "h", "heldout", "raspberry-pi-4", "onnxruntime", "cpu",
+                           "fp32", "n", "64", held_latency_s, rows[0].cost) for k in range(3)]
+    return rows
+
+
+def test_tuning_reads_the_tuning_half_only_and_recovers_known_efficiencies():
+    a = tuning.tune(_rows(0.001))
+    b = tuning.tune(_rows(50.0))                      # held-out rows moved 50000x
+    assert a["targets"] == b["targets"] and a["groups"] == b["groups"]
+    s = published.summary(_rows(0.001), a)
+    assert s["tuning"]["all"]["median_abs_ln"] < math.log(1.05)
+    assert set(s) == {"tuning", "heldout"}
+    # the vectorised fit and the predictor agree on the fitted table
+    r = _rows(1.0)[0]
+    dep = runtimes.resolve(fa.compute.device(r.computer), r.runtime, r.precision, r.target)
+    assert params_for(a, dep)["tuned"]
+
+
+def test_tasks_fly_with_the_latency_of_their_deployment(tmp_path):
+    path = tmp_path / "net.onnx"
+    onnx.save(convnet(side=64), path)
+    model = fa.ml.OnnxModel(path)
+
+    def fly(**kw):
+        task = fa.Task(model, period_s=1.0, device="jetson-orin-nano", alert="result", **kw)
+        r = fa.ml.TaskRunner(task).bind(0)
+        r.on_frame(0.0, np.zeros((64, 64, 3), np.uint8))
+        r.advance(10.0)
+        return r.kpis()["inference_latency_p50_s"]
+
+    want = predict_latency(path, "jetson-orin-nano", runtime="onnxruntime", target="cpu")
+    assert fly(runtime="onnxruntime", target="cpu") == pytest.approx(want.seconds)
+    assert fly(runtime="tensorrt", precision="int8") < fly(runtime="onnxruntime", target="cpu")
+    with pytest.raises(ConfigError, match="edgetpu.*jetson-orin-nano"):
+        fa.Task(model, device="jetson-orin-nano", runtime="edgetpu")
+    with pytest.raises(ConfigError, match="precision = 'fp9'"):
+        fa.Task(model, precision="fp9")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fa.Task(model, device="jetson-orin-nano", runtime="tensorrt")      # no fallback warning
+    with pytest.warns(LatencyFallbackWarning):
+        fa.Task(fa.ml.PythonModel(lambda f: 0, macs=1e6), runtime="tensorrt", device="ground-gpu")
