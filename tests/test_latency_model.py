@@ -169,3 +169,21 @@ def test_tasks_fly_with_the_latency_of_their_deployment(tmp_path):
         fa.Task(model, device="jetson-orin-nano", runtime="tensorrt")      # no fallback warning
     with pytest.warns(LatencyFallbackWarning):
         fa.Task(fa.ml.PythonModel(lambda f: 0, macs=1e6), runtime="tensorrt", device="ground-gpu")
+
+
+def test_the_drones_blueprint_sets_the_default_runtime_of_its_tasks(tmp_path):
+    path = tmp_path / "net.onnx"
+    onnx.save(convnet(side=64), path)
+    model = fa.ml.OnnxModel(path)
+    drone = fa.drone("generic-hexa-680", runtime="tensorrt", precision="int8")
+    assert drone.runtime == "tensorrt" and drone.to_dict()["precision"] == "int8"
+    r = fa.Mission(drone, fa.pilots.Hover(altitude=3.0, duration=3.0), seed=0,
+                   tasks=[fa.Task(model, period_s=1.0, alert="result")]).run()
+    want = predict_latency(model, "jetson-orin-nano", runtime="tensorrt", precision="int8",
+                           input_shape=(1, 3, 64, 64))
+    assert r.kpis["inference_latency_p50_s"] == pytest.approx(want.seconds)
+    with pytest.raises(ConfigError, match="runtime = 'tensorrtt'"):
+        fa.drone("generic-hexa-680", runtime="tensorrtt")
+    with pytest.raises(ConfigError, match="tensorrt.*raspberry-pi-4"):
+        fa.Mission(fa.drone("dji-mavic-2-pro", device="raspberry-pi-4", runtime="tensorrt"),
+                   fa.pilots.Hover(altitude=3.0, duration=3.0), tasks=[fa.Task(model)]).run()

@@ -27,7 +27,7 @@ COMPUTERS = DATA / "computers.toml"
 _CPU_ONLY = ["onnxruntime/cpu", "tflite/cpu", "ncnn/cpu", "openvino/cpu", "opencv-dnn/cpu",
              "pytorch/cpu"]
 _JETSON = ["tensorrt/gpu", "onnxruntime/gpu", "pytorch/gpu", "onnxruntime/cpu", "ncnn/cpu",
-           "tflite/cpu", "opencv-dnn/cpu", "pytorch/cpu", "ncnn/gpu", "opencv-dnn/gpu"]
+           "tflite/cpu", "opencv-dnn/cpu", "pytorch/cpu", "ncnn/gpu", "opencv-dnn/gpu", "openvino/cpu"]
 
 
 def _cpu(cores, ghz, fp32, int8, fp16=None):

@@ -59,6 +59,8 @@ class Device:
     bandwidth_gbs: float = 0.0
     deployments: tuple[str, ...] = ()
     mode: str = ""
+    #: the default (runtime, precision, target, threads) a drone's blueprint sets for its tasks
+    defaults: tuple[tuple[str, object], ...] = ()
     sources: tuple[tuple[str, str], ...] = field(default=(), compare=False)
 
     def unit(self, kind: str) -> Unit:

@@ -108,13 +108,15 @@ def efficiencies(path=None) -> dict:
 
 def params_for(table: dict, dep: _rt.Deployment) -> dict:
     """The efficiencies for one deployment: the target's figures (tuned, else the prior)
-    with the group's ``scale`` (tuned for this runtime/target/precision, else the
-    target's median scale, else 1)."""
+    with the group's ``scale`` (tuned for this runtime/target/precision, else the median of
+    the same runtime and target at other precisions, else the target's median, else 1)."""
     tgt = {**PRIOR_TARGET[dep.target], **table.get("targets", {}).get(dep.target, {})}
     groups = table.get("groups", {})
     g = groups.get(dep.key)
-    if g is None:
-        same = [v["scale"] for k, v in groups.items() if k.split("/")[1] == dep.target]
+    if g is None:          # the same runtime on this target at other precisions, else the target
+        rt = [v["scale"] for k, v in groups.items()
+              if k.split("/")[:2] == [dep.runtime, dep.target]]
+        same = rt or [v["scale"] for k, v in groups.items() if k.split("/")[1] == dep.target]
         scale = float(np.median(same)) if same else 1.0
     else:
         scale = float(g["scale"])

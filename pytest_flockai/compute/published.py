@@ -153,7 +153,7 @@ def bands(rows: list[Row], table: dict) -> dict:
         return {}
     inv = 1.0 / ratios(held, table)
     out: dict = {}
-    for label, key in (("cr", lambda x: f"{x.computer}/{x.runtime}"),
+    for _label, key in (("cr", lambda x: f"{x.computer}/{x.runtime}"),
                        ("t", lambda x: f"*/{x.target}")):
         groups: dict[str, list[float]] = {}
         for x, v in zip(held, inv):

@@ -92,6 +92,12 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
     computer, the runtime and what it can run)."""
     check_names(runtime, precision, target, threads, where=where)
     w = f"{where}: " if where else ""
+    dflt = dict(getattr(device, "defaults", ()))      # a drone's defaults for its tasks
+    if dflt and runtime is None and (target is None or target == dflt.get("target", target)):
+        runtime, target = dflt.get("runtime"), target or dflt.get("target")
+        precision = precision or dflt.get("precision")
+    if threads is None:
+        threads = dflt.get("threads")
     deps = [tuple(d.split("/")) for d in device.deployments]
     if not deps:
         raise ConfigError(f"{w}device {device.name!r} has no datasheet (no runtimes listed): "

@@ -38,8 +38,8 @@ from ..comm.link import link as _link
 from ..compute.latency import calibrate, compute_seconds, resolve_device, scale_to_device
 from ..errors import ConfigError
 from .events import DeviceClock, InferenceEvent
-from .latency_model import InferenceTimer, is_measured
 from .jpeg import JPEG_MACS_PER_PIXEL, annotate, decode_jpeg, encode_jpeg, is_image
+from .latency_model import InferenceTimer, is_measured
 from .metrics import SortedValues, invalid_prediction
 from .scoring import Scorer
 from .task import Task

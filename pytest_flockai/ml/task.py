@@ -19,8 +19,8 @@ from ..comm.link import Link
 from ..comm.link import link as _link
 from ..compute import runtimes as _rt
 from ..compute.devices import Device
-from ..compute.predict import LatencyFallbackWarning
 from ..compute.latency import LATENCY_MODES, resolve_device
+from ..compute.predict import LatencyFallbackWarning
 from ..errors import ConfigError
 from ..world.truth import CLASSES
 from .detections import DECODERS
