@@ -102,12 +102,19 @@ def test_macs_grouped_conv_strides_matmul_and_dynamic_dims():
     assert count_macs(g).macs == 3 * 10 * 16
 
 
-def test_count_macs_reports_what_it_cannot_count():
-    m = _model([helper.make_node("TopK", ["x", "k"], ["v", "i"])],
-               [_vi("x", [1, 10])], [_vi("v", None), _vi("i", None, TensorProto.INT64)],
+def test_count_macs_refuses_what_it_cannot_count_or_warns_when_allowed():
+    # TopK is counted (in_elements comparisons); a custom-domain op is not: refused by name
+    nodes = [helper.make_node("TopK", ["x", "k"], ["v", "i"]),
+             helper.make_node("Mystery", ["v"], ["y"], name="head/mystery", domain="com.example")]
+    m = _model(nodes, [_vi("x", [1, 10])], [_vi("y", None), _vi("i", None, TensorProto.INT64)],
                [numpy_helper.from_array(np.array([3], np.int64), "k")])
-    rep = count_macs(m)
-    assert rep.macs == 0 and any("TopK" in u for u in rep.uncounted)
+    m.opset_import.append(helper.make_opsetid("com.example", 1))
+    with pytest.raises(ConfigError, match=r"Mystery head/mystery: custom domain 'com.example'"):
+        count_macs(m)
+    with pytest.warns(UserWarning, match=r"1 of 2 nodes .*\(50.0%\) are not counted"):
+        rep = count_macs(m, allow_uncounted=True)
+    assert rep.macs == 10 and rep.by_op == {"TopK": 10}
+    assert rep.uncounted == ["Mystery head/mystery: custom domain 'com.example'"]
 
 
 # -- OnnxModel ----------------------------------------------------------------------------

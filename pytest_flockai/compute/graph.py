@@ -1,0 +1,454 @@
+"""What one inference of an ONNX network costs, node by node.
+
+``analyze(model, input_shape=None)`` gives a ``NetworkCost``: per node its MACs, the
+elements it reads and writes, its weights, its class (``kind``) and the node it is
+fused into the way runtimes fuse. Shapes come from the whole graph (``_shapes``:
+ONNX shape inference with data propagation, then one ONNX Runtime run for the rest).
+A node whose cost cannot be counted (unknown operator, custom domain, a shape no
+engine could read) is a ``ConfigError`` naming it; ``allow_uncounted=True`` turns that
+into a warning giving the uncounted share.
+
+=====================  ========== =====================================================
+operator               kind       MACs
+=====================  ========== =====================================================
+Conv (group 1),        conv       out_elements * (C_in / group) * prod(kernel);
+ConvTranspose                     ConvTranspose: in_elements * (C_out / group) * k
+Conv (group > 1)       dwconv     the same formula (depthwise and grouped)
+Gemm, MatMul           matmul     M * N * K (batched per numpy rules); bias not counted
+Max/Average/LpPool     pool       out_elements * prod(kernel_shape)
+Global*Pool            pool       in_elements
+element-wise, norms,   elementwise out_elements (Resize, activations, BatchNorm...);
+Reduce*, TopK                     Reduce*, ArgMax, TopK: in_elements
+data movement          data       0: Reshape Transpose Concat Split Slice Gather Cast ...
+=====================  ========== =====================================================
+
+Fusion (``fused_into``, the name of the node that absorbs it): a Conv or
+ConvTranspose absorbs a following BatchNormalization, then one activation (Relu,
+Clip, LeakyRelu, Sigmoid, HardSigmoid, HardSwish, Tanh, Elu, Selu, Softplus, or
+SiLU / hard-swish written as ``x * Sigmoid(x)`` / ``x * HardSigmoid(x)``); a MatMul
+absorbs a bias ``Add`` and then an activation; each link only when the tensor has
+that one consumer and is not a graph output. Nodes computed from constants only
+(shape arithmetic, ``Constant``, ``Shape`` of a static tensor) carry
+``fused_into = FOLDED``, kind ``data`` and 0 MACs: runtimes fold them when they load
+the model.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import warnings
+from dataclasses import dataclass, field, replace
+
+import onnx
+
+from .._io import atomic_write
+from ..errors import ConfigError
+from ._shapes import (
+    constant_shapes,
+    fix_input_shapes,
+    graph_inputs,
+    infer_shapes,
+    load_onnx,
+    static_shape,
+)
+
+KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
+#: ``fused_into`` of a node that runtimes fold into a constant before running
+FOLDED = "<constant>"
+CSV_FIELDS = ("name", "op_type", "kind", "macs", "weight_elems", "in_elems", "out_elems",
+              "fused_into")
+CSV_SCHEMA = "flockai-network-cost/1"
+
+ELEMENTWISE = frozenset("""
+Add Sub Mul Div Pow Sqrt Exp Log Abs Neg Reciprocal Floor Ceil Round Sign Max Min Sum Mean
+Relu LeakyRelu PRelu Elu Selu Celu ThresholdedRelu Sigmoid HardSigmoid HardSwish Tanh Softplus
+Softsign Clip Erf Gelu Mish Sin Cos Softmax LogSoftmax BatchNormalization InstanceNormalization
+LayerNormalization GroupNormalization LRN Where Equal Greater GreaterOrEqual Less LessOrEqual
+Not And Or Xor Mod IsNaN IsInf Hardmax Shrink BitShift Swish
+""".split())
+REDUCE = frozenset("""ReduceMean ReduceSum ReduceMax ReduceMin ReduceProd ReduceL1 ReduceL2
+ReduceLogSum ReduceLogSumExp ReduceSumSquare ArgMax ArgMin TopK""".split())
+POOL = frozenset(("MaxPool", "AveragePool", "LpPool"))
+GLOBAL_POOL = frozenset(("GlobalAveragePool", "GlobalMaxPool", "GlobalLpPool"))
+RESAMPLE = frozenset(("Resize", "Upsample", "GridSample", "RoiAlign"))
+CONV = frozenset(("Conv", "ConvInteger", "QLinearConv", "ConvTranspose"))
+MATMUL = frozenset(("Gemm", "MatMul", "MatMulInteger", "QLinearMatMul"))
+ZERO = frozenset("""Reshape Flatten Transpose Squeeze Unsqueeze Concat Split Slice Gather
+GatherElements GatherND Identity Cast CastLike Shape Size Constant ConstantOfShape Dropout Pad
+Expand Tile DepthToSpace SpaceToDepth QuantizeLinear DequantizeLinear DynamicQuantizeLinear
+NonZero Range ScatterND ScatterElements Scatter OneHot Trilu Compress NonMaxSuppression
+EyeLike ReverseSequence""".split())
+_ACTIVATIONS = frozenset("""Relu Clip LeakyRelu Sigmoid HardSigmoid HardSwish Tanh Elu Selu
+Softplus""".split())
+_WEIGHT_TYPES = frozenset((onnx.TensorProto.FLOAT, onnx.TensorProto.FLOAT16,
+                           onnx.TensorProto.DOUBLE, onnx.TensorProto.BFLOAT16,
+                           onnx.TensorProto.INT8, onnx.TensorProto.UINT8))
+
+
+@dataclass(frozen=True)
+class NodeCost:
+    """Cost of one node of one inference (elements, not bytes: the precision decides)."""
+
+    name: str
+    op_type: str
+    kind: str
+    macs: int
+    weight_elems: int
+    in_elems: int
+    out_elems: int
+    fused_into: str | None = None
+
+
+@dataclass(frozen=True)
+class NetworkCost:
+    """Per-node costs of one inference of a network, with totals."""
+
+    nodes: tuple[NodeCost, ...]
+    name: str = ""
+    input_shape: tuple[int, ...] | None = None
+    uncounted: tuple[str, ...] = ()
+    meta: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def macs(self) -> int:
+        return sum(n.macs for n in self.nodes)
+
+    @property
+    def weight_elems(self) -> int:
+        return sum(n.weight_elems for n in self.nodes)
+
+    @property
+    def in_elems(self) -> int:
+        return sum(n.in_elems for n in self.nodes)
+
+    @property
+    def out_elems(self) -> int:
+        return sum(n.out_elems for n in self.nodes)
+
+    @property
+    def run_nodes(self) -> tuple[NodeCost, ...]:
+        """The nodes a runtime dispatches: neither folded nor fused into another."""
+        return tuple(n for n in self.nodes if n.fused_into is None)
+
+    def by_kind(self) -> dict[str, int]:
+        """MACs per kind (every kind present, 0 when none)."""
+        out = dict.fromkeys(KINDS, 0)
+        for n in self.nodes:
+            out[n.kind] += n.macs
+        return out
+
+    def by_op(self) -> dict[str, int]:
+        """MACs per operator type (types with MACs > 0)."""
+        out: dict[str, int] = {}
+        for n in self.nodes:
+            if n.macs:
+                out[n.op_type] = out.get(n.op_type, 0) + n.macs
+        return out
+
+    def to_csv(self, path=None) -> str:
+        """The costs as CSV text (``# key=value`` header lines, then one row per node);
+        written atomically to ``path`` when given."""
+        buf = io.StringIO()
+        buf.write(f"# schema={CSV_SCHEMA}\n# name={self.name}\n")
+        if self.input_shape is not None:
+            buf.write(f"# input_shape={'x'.join(str(d) for d in self.input_shape)}\n")
+        for k, v in self.meta.items():
+            buf.write(f"# {k}={str(v).replace(chr(10), ' ')}\n")
+        for u in self.uncounted:
+            buf.write(f"# uncounted={u}\n")
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(CSV_FIELDS)
+        for n in self.nodes:
+            w.writerow((n.name, n.op_type, n.kind, n.macs, n.weight_elems, n.in_elems,
+                        n.out_elems, "" if n.fused_into is None else n.fused_into))
+        text = buf.getvalue()
+        if path is not None:
+            atomic_write(path, lambda fh: fh.write(text))
+        return text
+
+    @classmethod
+    def from_csv(cls, source) -> NetworkCost:
+        """Read ``to_csv`` output: a path or the CSV text itself."""
+        where = "network cost CSV"
+        if isinstance(source, os.PathLike) or (isinstance(source, str) and "\n" not in source):
+            where = f"network cost CSV {os.fspath(source)!r}"
+            try:
+                with open(source, encoding="utf-8") as fh:
+                    source = fh.read()
+            except OSError as e:
+                raise ConfigError(f"{where}: cannot be read ({e})") from None
+        head: dict[str, str] = {}
+        uncounted: list[str] = []
+        body = []
+        for line in str(source).splitlines():
+            if line.startswith("#"):
+                k, _, v = line[1:].strip().partition("=")
+                if k == "uncounted":
+                    uncounted.append(v)
+                else:
+                    head[k] = v
+            elif line.strip():
+                body.append(line)
+        if head.get("schema") != CSV_SCHEMA:
+            raise ConfigError(f"{where}: schema = {head.get('schema')!r} is not allowed; "
+                              f"expected {CSV_SCHEMA!r}")
+        rows = list(csv.reader(body))
+        if not rows or tuple(rows[0]) != CSV_FIELDS:
+            raise ConfigError(f"{where}: header = {rows[0] if rows else None!r}; expected "
+                              f"{list(CSV_FIELDS)}")
+        nodes = []
+        for i, r in enumerate(rows[1:], start=2):
+            try:
+                if len(r) != len(CSV_FIELDS) or r[2] not in KINDS:
+                    raise ValueError(r)
+                nums = [int(x) for x in r[3:7]]
+                if min(nums) < 0:
+                    raise ValueError(r)
+            except ValueError:
+                raise ConfigError(f"{where}: row {i} = {r!r} is not allowed; expected "
+                                  f"{list(CSV_FIELDS)} with kind in {list(KINDS)} and "
+                                  f"counts >= 0") from None
+            nodes.append(NodeCost(r[0], r[1], r[2], nums[0], nums[1], nums[2], nums[3], r[7] or None))
+        name = head.pop("name", "")
+        shape = head.pop("input_shape", "")
+        head.pop("schema")
+        return cls(tuple(nodes), name, tuple(int(d) for d in shape.split("x")) if shape else None,
+                   tuple(uncounted), head)
+
+
+def _proto_and_shapes(model, input_shape):
+    """(ModelProto, {input name: shape} or None, default name) from what analyze takes."""
+    name = ""
+    if isinstance(model, onnx.ModelProto):
+        proto = model
+    elif isinstance(model, (bytes, bytearray)):
+        try:
+            proto = onnx.load_from_string(bytes(model))
+        except Exception as e:
+            raise ConfigError(f"model = <{len(model)} bytes> is not a valid ONNX model: "
+                              f"{type(e).__name__}: {e}") from None
+    elif isinstance(model, (str, os.PathLike)):
+        proto = load_onnx(model)
+        name = os.path.splitext(os.path.basename(os.fspath(model)))[0]
+    elif hasattr(model, "session") and isinstance(getattr(model, "path", None), str):
+        proto = getattr(model, "_proto", None) or load_onnx(model.path)  # an OnnxModel
+        name = getattr(model, "name", "") or ""
+        if input_shape is None and getattr(model, "input_size", None) is not None:
+            h, w = model.input_size
+            c = model.channels
+            input_shape = (1, c, h, w) if model.layout == "NCHW" else (1, h, w, c)
+    else:
+        raise ConfigError(f"model = {model!r} is not allowed; expected an ONNX path, bytes, "
+                          f"an onnx.ModelProto or an OnnxModel")
+    return proto, _input_shapes(proto, input_shape), name or proto.graph.name
+
+
+def _input_shapes(proto, input_shape):
+    if input_shape is None or isinstance(input_shape, dict):
+        return input_shape
+    inputs = graph_inputs(proto)
+    if not inputs:
+        raise ConfigError(f"input_shape = {input_shape!r}: the model has no inputs to shape")
+    first = inputs[0]
+    dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else None
+            for d in first.type.tensor_type.shape.dim]
+    if isinstance(input_shape, (int,)) and not isinstance(input_shape, bool):
+        side = int(input_shape)
+        if len(dims) != 4 or side < 1:
+            raise ConfigError(f"input_shape = {input_shape!r} is not allowed for input "
+                              f"{first.name!r} of rank {len(dims)}; give the full shape")
+        if dims[1] in (1, 3, 4) or dims[3] not in (1, 3, 4):
+            return {first.name: (1, dims[1] or 3, side, side)}
+        return {first.name: (1, side, side, dims[3])}
+    try:
+        return {first.name: tuple(int(d) for d in input_shape)}
+    except (TypeError, ValueError):
+        raise ConfigError(f"input_shape = {input_shape!r} is not allowed; expected a side "
+                          f"(int), a full shape or {{input name: shape}}") from None
+
+
+def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
+            name: str | None = None) -> NetworkCost:
+    """Per-node costs of one inference of ``model`` (ONNX path, bytes, ModelProto or
+    OnnxModel). ``input_shape``: the first input's full shape, its square side (an int,
+    batch 1), or ``{input name: shape}``; dynamic batch dims default to 1."""
+    proto, shapes_in, default_name = _proto_and_shapes(model, input_shape)
+    fixed = fix_input_shapes(proto, shapes_in)
+    for inp in graph_inputs(fixed):
+        if static_shape(inp.type) is None:
+            dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else "?"
+                    for d in inp.type.tensor_type.shape.dim]
+            raise ConfigError(f"input_shape = {input_shape!r}: input {inp.name!r} of "
+                              f"{default_name or 'the model'!r} has dims {dims}; give its full "
+                              f"shape (e.g. input_shape={{{inp.name!r}: (1, 3, 480, 640)}})")
+    shapes, how, error = infer_shapes(fixed)
+    consts = set(constant_shapes(fixed))
+    weights = _weight_names(fixed)
+    g = fixed.graph
+    nodes: list[NodeCost] = []
+    uncounted: list[str] = []
+    folded: set[str] = set()
+    for node in g.node:
+        label = node.name or node.output[0]
+        is_const = _is_folded(node, consts, shapes)
+        if is_const:
+            folded.add(label)
+            consts.update(o for o in node.output if o)
+        kind, macs, why = _node_cost(node, shapes)
+        if is_const:                     # computed once when the runtime loads the model
+            kind, macs = "data", 0
+        elif why is not None:
+            uncounted.append(f"{node.op_type} {label}: {why}")
+            kind, macs = "data", 0
+
+        def elems(names, *, weight=False):
+            return sum(math.prod(shapes[n]) for n in names
+                       if n and n in shapes and ((n in weights) == weight))
+        nodes.append(NodeCost(label, node.op_type, kind, int(macs), elems(node.input, weight=True),
+                              elems(node.input), elems(node.output),
+                              FOLDED if is_const else None))
+    nodes = _fuse(g, nodes)
+    shape = next(iter(shapes.get(i.name) for i in graph_inputs(fixed)), None)
+    cost = NetworkCost(tuple(nodes), name or default_name, shape, tuple(uncounted),
+                       {"shapes": how})
+    if uncounted:
+        _refuse_or_warn(cost, error, allow_uncounted)
+    return cost
+
+
+def _refuse_or_warn(cost: NetworkCost, error, allow: bool) -> None:
+    n_run = sum(1 for n in cost.nodes if n.fused_into != FOLDED)
+    share = len(cost.uncounted) / max(1, n_run)
+    shown = "; ".join(cost.uncounted[:8]) + (f"; ... {len(cost.uncounted) - 8} more"
+                                             if len(cost.uncounted) > 8 else "")
+    text = (f"{len(cost.uncounted)} of {n_run} nodes of {cost.name or 'the model'!r} "
+            f"({share:.1%}) are not counted: {shown}" + (f" ({error})" if error else ""))
+    if not allow:
+        raise ConfigError(f"{text}. Its cost would be under-counted; pass allow_uncounted=True "
+                          f"to count them as 0 with a warning, or state the MACs yourself "
+                          f"(e.g. OnnxModel(..., macs=N))")
+    warnings.warn(f"pytest-flockai: {text}; counted as 0 (allow_uncounted=True)", stacklevel=3)
+
+
+def _weight_names(m: onnx.ModelProto) -> set[str]:
+    out = {t.name for t in m.graph.initializer if t.data_type in _WEIGHT_TYPES}
+    for node in m.graph.node:
+        if node.op_type == "Constant":
+            for a in node.attribute:
+                if a.name == "value" and a.t.data_type in _WEIGHT_TYPES:
+                    out.add(node.output[0])
+    return out
+
+
+def _is_folded(node, consts: set[str], shapes: dict) -> bool:
+    if node.op_type == "Constant":
+        return True
+    if node.op_type in ("Shape", "Size"):
+        return bool(node.input) and node.input[0] in shapes
+    ins = [i for i in node.input if i]
+    return bool(ins) and all(i in consts for i in ins) and node.op_type not in (
+        "RandomNormal", "RandomUniform", "RandomNormalLike", "RandomUniformLike", "Multinomial")
+
+
+def _node_cost(node, shapes) -> tuple[str, int, str | None]:
+    """(kind, MACs, None) or (kind, 0, why it cannot be counted)."""
+    op = node.op_type
+    if node.domain not in ("", "ai.onnx"):
+        return "data", 0, f"custom domain {node.domain!r}"
+
+    def s(i, outs=False):
+        names = node.output if outs else node.input
+        return shapes.get(names[i]) if len(names) > i and names[i] else None
+    out, x = s(0, True), s(0)
+    if op in ZERO:
+        return "data", 0, None
+    attrs = {a.name: onnx.helper.get_attribute_value(a) for a in node.attribute}
+    need = out
+    macs = 0
+    kind = "elementwise"
+    if op in CONV:
+        w = s(3) if op == "QLinearConv" else s(1)
+        kind = "dwconv" if int(attrs.get("group", 1)) > 1 else "conv"
+        if op == "ConvTranspose":
+            need = None if x is None or w is None else x
+            macs = math.prod(x) * math.prod(w[1:]) if need else 0
+        else:
+            need = None if out is None or w is None else out
+            macs = math.prod(out) * math.prod(w[1:]) if need else 0
+    elif op in MATMUL:
+        kind = "matmul"
+        if op == "Gemm":
+            need = out if x is not None and out is not None and len(x) == 2 else None
+            macs = math.prod(out) * (x[0] if attrs.get("transA", 0) else x[1]) if need else 0
+        else:
+            need = out if x is not None and out is not None else None
+            macs = max(1, math.prod(out)) * x[-1] if need else 0
+    elif op in POOL:
+        kind = "pool"
+        ks = attrs.get("kernel_shape")
+        macs = math.prod(out) * math.prod(ks) if out is not None and ks else 0
+        need = out if ks else None
+    elif op in GLOBAL_POOL or op in REDUCE:
+        kind = "pool" if op in GLOBAL_POOL else "elementwise"
+        need = x
+        macs = math.prod(x) if x is not None else 0
+    elif op in ELEMENTWISE or op in RESAMPLE:
+        macs = math.prod(out) if out is not None else 0
+    else:
+        return "data", 0, "operator not counted"
+    if need is None:
+        return kind, 0, "shapes unknown after shape inference and an onnxruntime run"
+    return kind, int(macs), None
+
+
+def _fuse(g, nodes: list[NodeCost]) -> list[NodeCost]:
+    """Mark BatchNorm / bias / activation nodes fused into the Conv or MatMul before them."""
+    consumers: dict[str, list[int]] = {}
+    for i, node in enumerate(g.node):
+        for t in node.input:
+            consumers.setdefault(t, []).append(i)
+    outputs = {o.name for o in g.output}
+    fused: dict[int, str] = {}
+    inits = frozenset(_constant_names(g))
+
+    def only(t):
+        c = consumers.get(t, [])
+        return c[0] if len(c) == 1 and t not in outputs and c[0] not in fused else None
+
+    for i, node in enumerate(g.node):
+        op = node.op_type
+        if nodes[i].fused_into is not None or i in fused or not node.output:
+            continue
+        if op not in ("Conv", "ConvTranspose", "MatMul", "Gemm"):
+            continue
+        head, t = nodes[i].name, node.output[0]
+        j = only(t)
+        first = "BatchNormalization" if op.startswith("Conv") else "Add"
+        if j is not None and g.node[j].op_type == first and (
+                first != "Add" or all(x == t or x in inits for x in g.node[j].input)):
+            fused[j], t = head, g.node[j].output[0]
+            j = only(t)
+        if j is not None and g.node[j].op_type in _ACTIVATIONS:
+            fused[j] = head
+            continue
+        c = consumers.get(t, [])          # x * Sigmoid(x), x * HardSigmoid(x)
+        if len(c) == 2 and t not in outputs and not (set(c) & set(fused)):
+            a, b = sorted(c, key=lambda k: g.node[k].op_type != "Mul")
+            gate = g.node[b]
+            if (g.node[a].op_type == "Mul" and gate.op_type in ("Sigmoid", "HardSigmoid")
+                    and gate.output[0] in g.node[a].input
+                    and consumers.get(gate.output[0]) == [a]):
+                fused[a] = fused[b] = head
+    return [replace(n, fused_into=fused[i]) if i in fused else n for i, n in enumerate(nodes)]
+
+
+def _constant_names(g) -> list[str]:
+    """Names of the graph's initializers and ``Constant`` outputs."""
+    return [t.name for t in g.initializer] + [n.output[0] for n in g.node
+                                              if n.op_type == "Constant" and n.output]
+
+
+__all__ = ["FOLDED", "KINDS", "NetworkCost", "NodeCost", "analyze"]

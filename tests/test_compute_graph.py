@@ -1,0 +1,195 @@
+"""compute.graph: per-node costs, classes, fusion and shapes through the whole graph."""
+
+import numpy as np
+import onnx
+import pytest
+from onnx import TensorProto, helper, numpy_helper
+
+from pytest_flockai.compute.graph import FOLDED, NetworkCost, analyze
+from pytest_flockai.errors import ConfigError
+from pytest_flockai.ml import count_macs
+
+_RNG = np.random.default_rng(3)
+
+
+def _w(name, shape):
+    return numpy_helper.from_array(_RNG.standard_normal(shape).astype(np.float32), name)
+
+
+def _i64(name, values):
+    return numpy_helper.from_array(np.asarray(values, np.int64), name)
+
+
+def _model(nodes, inputs, outputs, inits, opset=17):
+    g = helper.make_graph(nodes, "g", inputs, outputs, inits)
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", opset)])
+    m.ir_version = 8
+    return m
+
+
+def _x(shape):
+    return helper.make_tensor_value_info("x", TensorProto.FLOAT, shape)
+
+
+def _y(name="y"):
+    return helper.make_tensor_value_info(name, TensorProto.FLOAT, None)
+
+
+def _silu(src, dst, tag):
+    return [helper.make_node("Sigmoid", [src], [f"{tag}_s"], name=f"{tag}/Sigmoid"),
+            helper.make_node("Mul", [src, f"{tag}_s"], [dst], name=f"{tag}/Mul")]
+
+
+def _conv(src, dst, w, tag, **kw):
+    return helper.make_node("Conv", [src, w], [dst], name=f"{tag}/Conv", **kw)
+
+
+def test_classes_fusion_folding_and_csv_round_trip(tmp_path):
+    nodes = [
+        _conv("x", "c1", "w1", "a", pads=[1, 1, 1, 1]),                       # 1x8x8x8 dense
+        helper.make_node("BatchNormalization", ["c1", "g", "b", "m", "v"], ["n1"], name="a/BN"),
+        helper.make_node("Relu", ["n1"], ["r1"], name="a/Relu"),
+        _conv("r1", "d1", "wd", "dw", pads=[1, 1, 1, 1], group=8),            # depthwise
+        *_silu("d1", "s1", "dw"),
+        helper.make_node("Shape", ["s1"], ["sh"], name="shape/Shape"),       # folded: static
+        helper.make_node("Gather", ["sh", "zero"], ["n0"], name="shape/Gather", axis=0),
+        helper.make_node("Unsqueeze", ["n0", "zero1"], ["n0u"], name="shape/Unsqueeze"),
+        helper.make_node("Concat", ["n0u", "minus1"], ["flat"], name="shape/Concat", axis=0),
+        helper.make_node("Reshape", ["s1", "flat"], ["f"], name="head/Reshape"),  # 1x512
+        helper.make_node("MatMul", ["f", "wm"], ["mm"], name="head/MatMul"),       # 1x10
+        helper.make_node("Add", ["mm", "bm"], ["ab"], name="head/Add"),
+        helper.make_node("Relu", ["ab"], ["y"], name="head/Relu"),
+    ]
+    inits = [_w("w1", (8, 3, 3, 3)), _w("g", (8,)), _w("b", (8,)), _w("m", (8,)),
+             numpy_helper.from_array(np.ones(8, np.float32), "v"), _w("wd", (8, 1, 3, 3)),
+             _i64("zero", 0), _i64("zero1", [0]), _i64("minus1", [-1]), _w("wm", (512, 10)),
+             _w("bm", (10,))]
+    cost = analyze(_model(nodes, [_x([1, 3, 8, 8])], [_y()], inits), name="small")
+    by = {n.name: n for n in cost.nodes}
+    assert by["a/Conv"].kind == "conv" and by["a/Conv"].macs == 512 * 27
+    assert by["a/Conv"].weight_elems == 8 * 27 and by["a/Conv"].in_elems == 192
+    assert by["dw/Conv"].kind == "dwconv" and by["dw/Conv"].macs == 512 * 9
+    assert by["head/MatMul"].kind == "matmul" and by["head/MatMul"].macs == 10 * 512
+    assert by["head/Reshape"].kind == "data" and by["head/Reshape"].macs == 0
+    assert {n: by[n].fused_into for n in ("a/BN", "a/Relu")} == {"a/BN": "a/Conv",
+                                                                 "a/Relu": "a/Conv"}
+    assert by["dw/Sigmoid"].fused_into == by["dw/Mul"].fused_into == "dw/Conv"
+    assert by["head/Add"].fused_into == by["head/Relu"].fused_into == "head/MatMul"
+    assert all(by[f"shape/{k}"].fused_into == FOLDED for k in ("Shape", "Gather", "Unsqueeze",
+                                                               "Concat"))
+    assert [n.name for n in cost.run_nodes] == ["a/Conv", "dw/Conv", "head/Reshape",
+                                                "head/MatMul"]
+    kinds = cost.by_kind()
+    assert kinds["conv"] == 512 * 27 and kinds["dwconv"] == 512 * 9
+    assert cost.macs == sum(kinds.values()) == count_macs(
+        _model(nodes, [_x([1, 3, 8, 8])], [_y()], inits)).macs
+    assert cost.input_shape == (1, 3, 8, 8) and cost.uncounted == ()
+    back = NetworkCost.from_csv(cost.to_csv(tmp_path / "small.csv"))
+    assert back == cost and NetworkCost.from_csv((tmp_path / "small.csv").read_text()) == cost
+    bad = cost.to_csv().replace(",dwconv,", ",warp,")
+    with pytest.raises(ConfigError, match=r"row \d+ .*kind in"):
+        NetworkCost.from_csv(bad)
+    with pytest.raises(ConfigError, match="schema"):
+        NetworkCost.from_csv("name,op_type\nx,y\n")
+
+
+def _yolo_like():
+    """A YOLOv8n-style block as plain torch.onnx.export writes it: SiLU as Sigmoid*Mul,
+    C2f's chunk as a Split whose sizes are computed from the tensor's shape, a
+    bottleneck with a residual Add, an upsample whose Resize sizes are computed, a
+    concat with the stem, and a head reshaped with Shape/Gather/Concat arithmetic."""
+    n = [_conv("x", "c1", "w1", "m0", pads=[1] * 4, strides=[2, 2]), *_silu("c1", "s1", "m0"),
+         _conv("s1", "c2", "w2", "m1", pads=[1] * 4, strides=[2, 2]), *_silu("c2", "s2", "m1"),
+         _conv("s2", "c3", "w3", "m2.cv1"), *_silu("c3", "s3", "m2.cv1"),
+         helper.make_node("Shape", ["s3"], ["sh3"], name="m2/Shape"),
+         helper.make_node("Gather", ["sh3", "one"], ["ch"], name="m2/Gather", axis=0),
+         helper.make_node("Div", ["ch", "two"], ["half"], name="m2/Div"),
+         helper.make_node("Unsqueeze", ["half", "zero1"], ["half1"], name="m2/Unsqueeze"),
+         helper.make_node("Concat", ["half1", "half1"], ["sizes"], name="m2/Concat", axis=0),
+         helper.make_node("Split", ["s3", "sizes"], ["a", "b"], name="m2/Split", axis=1),
+         _conv("b", "c4", "w4", "m2.m.0", pads=[1] * 4), *_silu("c4", "s4", "m2.m.0"),
+         helper.make_node("Add", ["b", "s4"], ["r4"], name="m2.m.0/Add"),
+         helper.make_node("Concat", ["a", "b", "r4"], ["cat"], name="m2/Concat_1", axis=1),
+         _conv("cat", "c5", "w5", "m2.cv2"), *_silu("c5", "s5", "m2.cv2"),
+         helper.make_node("Shape", ["s5"], ["sh5"], name="up/Shape"),
+         helper.make_node("Slice", ["sh5", "zero1", "two1"], ["nc"], name="up/Slice"),
+         helper.make_node("Slice", ["sh5", "two1", "four1"], ["hw"], name="up/Slice_1"),
+         helper.make_node("Mul", ["hw", "two"], ["hw2"], name="up/Mul"),
+         helper.make_node("Concat", ["nc", "hw2"], ["size"], name="up/Concat", axis=0),
+         helper.make_node("Resize", ["s5", "", "", "size"], ["up"], name="up/Resize",
+                          mode="nearest"),
+         helper.make_node("Concat", ["up", "s1"], ["cat2"], name="m4/Concat", axis=1),
+         _conv("cat2", "c6", "w6", "m5"), *_silu("c6", "s6", "m5"),
+         helper.make_node("Shape", ["s6"], ["sh6"], name="head/Shape"),
+         helper.make_node("Gather", ["sh6", "zero"], ["bs"], name="head/Gather", axis=0),
+         helper.make_node("Unsqueeze", ["bs", "zero1"], ["bs1"], name="head/Unsqueeze"),
+         helper.make_node("Concat", ["bs1", "c16", "minus1"], ["rs"], name="head/Concat", axis=0),
+         helper.make_node("Reshape", ["s6", "rs"], ["flat"], name="head/Reshape"),
+         helper.make_node("Transpose", ["flat"], ["t"], name="head/Transpose", perm=[0, 2, 1]),
+         helper.make_node("MatMul", ["t", "wm"], ["mm"], name="head/MatMul"),
+         helper.make_node("Sigmoid", ["mm"], ["y"], name="head/Sigmoid")]
+    inits = [_w("w1", (16, 3, 3, 3)), _w("w2", (32, 16, 3, 3)), _w("w3", (32, 32, 1, 1)),
+             _w("w4", (16, 16, 3, 3)), _w("w5", (32, 48, 1, 1)), _w("w6", (16, 48, 1, 1)),
+             _w("wm", (16, 4)), _i64("zero", 0), _i64("one", 1), _i64("two", 2),
+             _i64("zero1", [0]), _i64("two1", [2]), _i64("four1", [4]), _i64("c16", [16]),
+             _i64("minus1", [-1])]
+    return _model(n, [_x(["batch", 3, "h", "w"])], [_y()], inits)
+
+
+def _yolo_like_hand_count(s=64):
+    e1, e2 = 16 * (s // 2) ** 2, 32 * (s // 4) ** 2        # stem (stride 2), stride 4 maps
+    half = e2 // 2
+    convs = (e1 * 27 + e2 * 16 * 9 + e2 * 32                # m0, m1, m2.cv1
+             + half * 16 * 9 + e2 * 48                      # bottleneck, m2.cv2
+             + e1 * 48)                                     # m5 after the upsample concat
+    silu = 2 * (e1 + e2 + e2 + half + e2 + e1)              # Sigmoid + Mul per SiLU
+    add, resize = half, 2 * e1                              # residual; 32 ch at stride 2
+    head = (s // 2) ** 2 * 4 * 16 + (s // 2) ** 2 * 4       # MatMul M N K, Sigmoid
+    return convs + silu + add + resize + head
+
+
+def test_yolo_like_torch_export_counts_whole_graph(tmp_path):
+    m = _yolo_like()
+    path = tmp_path / "yolo_like.onnx"
+    onnx.save(m, str(path))
+    hand = _yolo_like_hand_count(64)
+    cost = analyze(path, 64)
+    assert cost.uncounted == () and cost.input_shape == (1, 3, 64, 64)
+    assert abs(cost.macs - hand) <= 0.02 * hand
+    assert cost.macs == hand                       # exact: every node has its shapes
+    assert cost.meta["shapes"] == "onnx+onnxruntime"   # the computed Split needed the run
+    by = {n.name: n for n in cost.nodes}
+    assert by["m2.m.0/Conv"].macs == 16 * 16 * 16 * 16 * 9      # after the computed Split
+    assert by["m5/Conv"].macs == 16 * 32 * 32 * 48               # after the computed Resize
+    assert by["up/Resize"].out_elems == 32 * 32 * 32
+    assert by["m2/Div"].fused_into == FOLDED and by["up/Mul"].fused_into == FOLDED
+    assert count_macs(path, {"x": [1, 3, 64, 64]}).macs == hand
+    # another size: the Split and Resize follow it
+    assert analyze(m, (1, 3, 96, 96)).macs == _yolo_like_hand_count(96)
+
+
+def test_dynamic_input_without_shape_and_bad_inputs_are_refused(tmp_path):
+    with pytest.raises(ConfigError, match=r"input 'x' .* has dims \[1, 3, '\?', '\?'\]"):
+        analyze(_yolo_like())
+    with pytest.raises(ConfigError, match="model = 3.5 is not allowed"):
+        analyze(3.5)
+    with pytest.raises(ConfigError, match="not a valid ONNX model"):
+        analyze(b"not onnx")
+    with pytest.raises(ConfigError, match="'nope' is not an input"):
+        analyze(_yolo_like(), {"nope": (1, 3, 8, 8)})
+    with pytest.raises(ConfigError, match="does not exist"):
+        analyze(tmp_path / "missing.onnx")
+
+
+def test_unreadable_shapes_are_refused_naming_the_nodes_or_warned():
+    # a custom op ONNX Runtime cannot run: the nodes after it have no shape from any engine
+    nodes = [helper.make_node("Warp", ["x"], ["w"], name="pre/warp", domain="com.example"),
+             _conv("w", "c", "wc", "body"), helper.make_node("Relu", ["c"], ["y"], name="act")]
+    m = _model(nodes, [_x([1, 3, 8, 8])], [_y()], [_w("wc", (4, 3, 3, 3))])
+    m.opset_import.append(helper.make_opsetid("com.example", 1))
+    with pytest.raises(ConfigError, match=r"3 of 3 nodes .*Warp pre/warp: custom domain.*"
+                                          r"Conv body/Conv: shapes unknown"):
+        analyze(m)
+    with pytest.warns(UserWarning, match=r"\(100.0%\) are not counted"):
+        cost = analyze(m, allow_uncounted=True)
+    assert cost.macs == 0 and len(cost.uncounted) == 3
