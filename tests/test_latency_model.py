@@ -116,7 +116,7 @@ def _rows(held_latency_s):
     truth = {"targets": {"cpu": {"mem": 0.3, "dispatch_s": 3e-5, "overhead_s": 2e-3,
                                  "dwconv": 0.05}},
              "groups": {"onnxruntime/cpu/fp32": {"scale": 0.4}, "ncnn/cpu/fp32": {"scale": 0.8}}}
-    from pytest_flockai.compute._nodes import analyze
+    from pytest_flockai.compute.graph import analyze
     rows = []
     for i, (side, dw) in enumerate([(s, d) for s in (64, 96, 128, 160) for d in (False, True)]):
         cost = analyze(convnet(depthwise=dw, side=side))

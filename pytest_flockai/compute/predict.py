@@ -172,10 +172,7 @@ def _cached_analyze(path: str, mtime: float, input_shape):
 
 
 def _analyzer():
-    try:
-        from .graph import analyze
-    except ImportError:                     # compute.graph not installed: the stand-in
-        from ._nodes import analyze
+    from .graph import analyze
     return analyze
 
 

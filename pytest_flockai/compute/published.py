@@ -59,15 +59,7 @@ def network_cost(network: str, size: str, folder: Path = NETWORKS):
     p = folder / f"{network}-{size}.csv"
     if not p.is_file():
         return None
-    try:
-        from .graph import NetworkCost
-    except ImportError:              # compute.graph not installed: read the CSV directly
-        from ._nodes import NetworkCost, NodeCost
-        rows = _read_csv(p)
-        return NetworkCost(tuple(NodeCost(r["name"], r["op_type"], r["kind"], float(r["macs"]),
-                                          float(r["weight_elems"]), float(r["in_elems"]),
-                                          float(r["out_elems"]), r["fused_into"] or None)
-                                 for r in rows), network)
+    from .graph import NetworkCost
     return NetworkCost.from_csv(p)
 
 
