@@ -14,7 +14,7 @@ there), read by ``compute.datasheets``; ``DEVICES`` maps the profile names to th
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 from ..errors import ConfigError, close_matches
 
@@ -62,6 +62,8 @@ class Device:
     #: the default (runtime, precision, target, threads) a drone's blueprint sets for its tasks
     defaults: tuple[tuple[str, object], ...] = ()
     sources: tuple[tuple[str, str], ...] = field(default=(), compare=False)
+    #: a measured profile (``compute.profile``) whose samples give the inference latencies
+    measured: object = field(default=None, compare=False, repr=False)
 
     def unit(self, kind: str) -> Unit:
         """The unit of ``kind`` (cpu/gpu/npu); ConfigError when the computer has none."""
@@ -78,7 +80,9 @@ class Device:
 
     def to_dict(self) -> dict:
         """The fields as a JSON-ready dict."""
-        return asdict(self)
+        out = asdict(replace(self, measured=None))
+        out["measured"] = getattr(self.measured, "path", None) if self.measured else None
+        return out
 
 
 def _load() -> dict[str, Device]:

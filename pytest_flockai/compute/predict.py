@@ -43,6 +43,7 @@ from ..errors import ConfigError
 from . import runtimes as _rt
 from .devices import Device
 from .devices import device as _device
+from .measured import is_measured
 
 EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
 KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
@@ -192,7 +193,7 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
     deployment (defaults: the computer's first listed runtime and the unit's first
     precision). ``input_shape``: the full input shape for a graph with dynamic dims."""
     dev = _resolve_dev(device)
-    if hasattr(dev, "latency_samples"):                      # a measured profile
+    if is_measured(dev) or getattr(dev, "measured", None) is not None:   # a measured profile
         return _measured(model, dev)
     if not isinstance(dev, Device):
         raise ConfigError(f"device = {device!r} is not a device; expected a profile name "
@@ -229,6 +230,8 @@ def mac_rule_seconds(macs: float, dev: Device) -> float:
 
 
 def _measured(model, dev) -> LatencyPrediction:
+    if not is_measured(dev):
+        dev = dev.measured
     s = np.asarray(dev.latency_samples(model), dtype=np.float64)
     p5, p50, p95 = (float(x) for x in np.percentile(s, (5, 50, 95)))
     busy = getattr(dev, "busy_w", None)

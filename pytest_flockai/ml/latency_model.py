@@ -20,7 +20,6 @@ import warnings
 import numpy as np
 
 from ..compute import runtimes as _rt
-from ..compute.devices import Device
 from ..compute.predict import mac_rule_seconds, predict_latency
 from .models import OnnxModel
 
@@ -35,8 +34,8 @@ def graph_model(model):
 
 
 def is_measured(dev) -> bool:
-    """A measured profile (``compute.profile``) rather than a datasheet."""
-    return hasattr(dev, "sample_latency")
+    """A computer whose latencies come from a measured profile (``compute.profile``)."""
+    return getattr(dev, "measured", None) is not None
 
 
 def input_shape(model: OnnxModel, frame) -> tuple[int, ...]:
@@ -58,11 +57,11 @@ class InferenceTimer:
         gm = graph_model(task.model)
         if is_measured(device):
             self.method = "measured"
-        elif gm is not None and isinstance(device, Device) and device.deployments:
+        elif gm is not None and device.deployments:
             self.method = "roofline"
         else:
             self.method = "macs"
-        if isinstance(device, Device) and device.deployments and not is_measured(device):
+        if device.deployments and not is_measured(device):
             self.deployment = _rt.resolve(device, task.runtime, task.precision, task.target,
                                           task.threads, where=f"task {task.name!r} on "
                                                               f"{device.name!r}")
@@ -70,7 +69,7 @@ class InferenceTimer:
     def seconds(self, model, frame, macs) -> float:
         """Device seconds of one inference on ``frame`` (``macs``: its MAC count)."""
         if self.method == "measured":
-            return float(self.device.sample_latency(model, self.rng))
+            return float(self.device.measured.sample_latency(model, self.rng))
         if self.method == "roofline":
             gm = graph_model(model)
             if gm is not None:

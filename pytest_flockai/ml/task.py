@@ -159,7 +159,7 @@ class Task:
         self.runtime, self.precision, self.target, self.threads = (runtime, precision, target,
                                                                    threads)
         dev = self.device if self.execution == "onboard" else self.ground_device
-        if dev is not None and getattr(dev, "deployments", ()):
+        if dev is not None and dev.deployments and dev.measured is None:
             _rt.resolve(dev, runtime, precision, target, threads,
                         where=f"{where} on {dev.name!r}")
         if (runtime, precision, target) != (None, None, None) and graph_model(self.model) is None:
