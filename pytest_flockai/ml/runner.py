@@ -74,8 +74,8 @@ class TaskRunner:
         self.ground_device = (resolve_device(ground_device, "ground_device")
                               if ground_device is not None else t.ground_device)
         self.link = _link(link) if link is not None else t.link
-        self.timers = {id(d): InferenceTimer(t, d, self.rng.spawn(1)[0] if is_measured(d) else None)
-                       for d in (self.device, self.ground_device)}
+        d = self.device if t.execution == "onboard" else self.ground_device
+        self.timers = {id(d): InferenceTimer(t, d, self.rng.spawn(1)[0] if is_measured(d) else None)}
         self.calibration = None
         if t.latency == "measured":
             self.calibration = calibration or calibrate()
