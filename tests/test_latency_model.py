@@ -51,7 +51,15 @@ def test_nine_computers_each_with_a_datasheet():
     assert names <= set(fa.devices())
     for n in names:
         d = fa.compute.device(n)
-        assert d.units and d.bandwidth_gbs > 0 and d.runtimes and d.active_w > d.idle_w > 0
+        assert d.units and d.runtimes and d.active_w > d.idle_w > 0 and d.memory_mb > 0
+        assert all(v > 0 for u in d.units for _, v in u.peak)
+    # the datasheet's figures with their sources (computers.toml)
+    pi = fa.compute.device("raspberry-pi-4")
+    assert pi.unit("cpu").cores == 4 and pi.bandwidth_gbs > 0
+    assert any(k.endswith("clock_ghz_source") for k, _ in pi.sources)
+    # no int8 on the Nano's Maxwell GPU, no fp16 arithmetic on the Pi 4's Cortex-A72
+    assert "int8" not in fa.compute.device("jetson-nano-10w").unit("gpu").precisions
+    assert "fp16" not in pi.unit("cpu").precisions
 
 
 @pytest.mark.parametrize("kw, words", [
