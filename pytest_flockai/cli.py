@@ -6,7 +6,8 @@
 with the same schema; a test present in several inputs keeps its last entry.
 ``flockai blueprints`` lists the built-in drones. ``flockai compare`` and
 ``flockai history`` compare runs across commits (``reports/commands.py``);
-``flockai cache info|prune`` shows and trims the flight cache.
+``flockai cache info|prune`` shows and trims the flight cache. ``flockai
+profile-device`` times ONNX models on this computer (``compute/profiler.py``).
 
 Exit statuses, the same for every subcommand (docs/how-to/ci-cache.md):
 0 done, 1 a regression (``compare`` only), 2 a usage or input error (a bad
@@ -25,6 +26,7 @@ from . import cache as _cache
 from . import limits
 from . import report as _report
 from .airframe import blueprints
+from .compute import profiler as _profiler
 from .errors import ConfigError, FlockAIError
 from .reports import commands as _commands
 
@@ -73,6 +75,7 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("inputs", type=Path, nargs="+")
     sub.add_parser("blueprints", help="list the built-in drone blueprints")
     _commands.add_parsers(sub)
+    _profiler.add_parser(sub)
     c = sub.add_parser("cache", help="the flight cache: info, or prune it")
     csub = c.add_subparsers(dest="cache_cmd", required=True)
     for name, help_ in (("info", "entries, size, limit and key source of the flight cache"),
@@ -159,6 +162,8 @@ def _run(a) -> int:
         return OK
     if a.cmd == "cache":
         return _cache_cmd(a)
+    if a.cmd == "profile-device":
+        return _profiler.run_cli(a)
     _report.check_writable(a.out, "flockai merge: OUT")
     merged = merge_reports(a.inputs)
     _report.write_json_atomic(a.out, merged)

@@ -13,6 +13,7 @@ computer. A file that is not such a profile is a ``ConfigError`` naming the fiel
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
@@ -32,12 +33,19 @@ PRECISIONS = ("fp32", "fp16", "int8")
 
 def model_sha256(path) -> str:
     """SHA-256 of an ONNX file's bytes, then (when it has any) of each external data file
-    it names, in sorted order; the plain ``sha256sum`` of a self-contained file."""
-    import onnx
+    it names, in sorted order; the plain ``sha256sum`` of a self-contained file. Memoised
+    on the path, size and modification time."""
     p = os.fspath(path)
     if not os.path.isfile(p):
         raise ConfigError(f"model path = {p!r} does not exist or is not a file; expected an "
                           f".onnx file")
+    st = os.stat(p)
+    return _sha256(os.path.abspath(p), st.st_size, st.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=256)
+def _sha256(p: str, size: int, mtime_ns: int) -> str:
+    import onnx
     h = hashlib.sha256()
     with open(p, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):

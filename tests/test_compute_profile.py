@@ -1,0 +1,130 @@
+"""flockai profile-device on this computer (ONNX Runtime standing in for the drone's) and
+compute.profile(): the measured samples, seeded draws, power, and bad profile files."""
+
+import hashlib
+import json
+
+import numpy as np
+import onnx
+import onnxruntime as ort
+import pytest
+from onnx import TensorProto, helper, numpy_helper
+
+import pytest_flockai as fa
+from pytest_flockai.cli import main
+from pytest_flockai.compute.profile import from_dict, model_sha256
+from pytest_flockai.errors import ConfigError
+
+
+def _net(tmp_path, name="net.onnx", width=16):
+    rng = np.random.default_rng(0)
+    w1 = numpy_helper.from_array(rng.standard_normal((width, 3, 3, 3)).astype(np.float32), "w1")
+    w2 = numpy_helper.from_array(rng.standard_normal((width, width, 3, 3)).astype(np.float32),
+                                 "w2")
+    nodes = [helper.make_node("Conv", ["x", "w1"], ["c1"], pads=[1] * 4),
+             helper.make_node("Relu", ["c1"], ["r1"]),
+             helper.make_node("Conv", ["r1", "w2"], ["c2"], pads=[1] * 4),
+             helper.make_node("GlobalAveragePool", ["c2"], ["y"])]
+    g = helper.make_graph(nodes, "net", [helper.make_tensor_value_info(
+        "x", TensorProto.FLOAT, ["n", 3, 64, 64])],
+        [helper.make_tensor_value_info("y", TensorProto.FLOAT, None)], [w1, w2])
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    p = tmp_path / name
+    onnx.save(m, str(p))
+    return p
+
+
+@pytest.fixture(scope="module")
+def measured(tmp_path_factory):
+    d = tmp_path_factory.mktemp("prof")
+    a, b = _net(d, "small.onnx", 8), _net(d, "wide.onnx", 32)
+    power = d / "meter.csv"
+    power.write_text("power_w\n6.0\n6.5\n7.0\n")
+    out = d / "profile.json"
+    rc = main(["profile-device", str(a), str(b), "--runtime", "onnxruntime", "--threads", "1",
+               "--runs", "60", "--warmup", "3", "--power-csv", str(power), "--idle-w", "2.5",
+               "--name", "this-host", "--out", str(out)])
+    assert rc == 0
+    return out, a, b
+
+
+def test_profile_device_writes_a_profile_that_loads(measured, tmp_path):
+    out, a, b = measured
+    dev = fa.compute.profile(out)
+    assert dev.name == "this-host" and dev.runtime == "onnxruntime"
+    assert dev.runtime_version == ort.__version__ and dev.threads == 1
+    assert dev.target == "cpu" and dev.precision == "fp32"
+    assert dev.host["cpu_count"] >= 1 and dev.host["machine"]
+    assert model_sha256(a) == hashlib.sha256(a.read_bytes()).hexdigest()
+    assert set(dev.models) == {model_sha256(a), model_sha256(b)}
+    small, wide = dev.latency_samples(a), dev.latency_samples(str(b))
+    assert small.shape == wide.shape == (60,) and np.all(small > 0)
+    assert np.median(wide) > np.median(small)          # 16x the MACs of the second conv
+    assert dev.model("small").macs == 64 * 64 * 8 * 27 + 64 * 64 * 8 * 72 + 64 * 64 * 8 + 8 * 4096
+    # the same model under another name: the same SHA-256, the same samples
+    copy = tmp_path / "renamed.onnx"
+    copy.write_bytes(a.read_bytes())
+    np.testing.assert_array_equal(dev.latency_samples(copy), small)
+    assert dev.busy_w == pytest.approx(6.5) and dev.idle_w == 2.5
+    assert dev.energy_j(a) == pytest.approx(np.median(small) * 4.0)
+    with pytest.raises(ConfigError, match="was not profiled on 'this-host'.*small"):
+        dev.latency_samples(_net(tmp_path, "other.onnx", 4))
+
+
+def test_seeded_draws_repeat_and_reproduce_p50_p95(measured):
+    out, a, _ = measured
+    dev = fa.compute.profile(out)
+    draws = [dev.sample_latency(a, np.random.default_rng(7)) for _ in range(3)]
+    assert draws[0] == draws[1] == draws[2]
+    rng1, rng2 = np.random.default_rng(11), np.random.default_rng(11)
+    s1 = np.array([dev.sample_latency(a, rng1) for _ in range(4000)])
+    s2 = np.array([dev.sample_latency(a, rng2) for _ in range(4000)])
+    np.testing.assert_array_equal(s1, s2)
+    measured_s = dev.latency_samples(a)
+    assert set(np.unique(s1)) <= set(measured_s)
+    for q in (50, 95):
+        assert np.percentile(s1, q) == pytest.approx(np.percentile(measured_s, q), rel=0.05)
+
+
+def _doc(out):
+    return json.loads(out.read_text())
+
+
+@pytest.mark.parametrize("edit, field", [
+    (lambda d: d.update(schema="other/1"), "'schema'"),
+    (lambda d: d.pop("name"), "'name'"),
+    (lambda d: d["runtime"].update(name="coreml"), "'name' = 'coreml'"),
+    (lambda d: d["runtime"].update(precision="fp64"), "'precision' = 'fp64'"),
+    (lambda d: d["runtime"].update(threads=-1), "'threads' = -1"),
+    (lambda d: d.update(models=[]), "'models' = \\[\\]"),
+    (lambda d: d["models"][1].update(latency_s=[0.01, -1.0]), "models\\[1\\]: field 'latency_s'"),
+    (lambda d: d["models"][0].update(sha256="abc"), "models\\[0\\]: field 'sha256' = 'abc'"),
+    (lambda d: d["power"].update(busy_w="hot"), "power: field 'busy_w' = 'hot'"),
+])
+def test_bad_profile_files_name_the_field(measured, tmp_path, edit, field):
+    doc = _doc(measured[0])
+    edit(doc)
+    p = tmp_path / "bad.json"
+    p.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match=field):
+        fa.compute.profile(p)
+
+
+def test_not_a_profile_and_bad_cli_input(tmp_path, capsys, measured):
+    (tmp_path / "x.json").write_text("{not json")
+    with pytest.raises(ConfigError, match="is not a profile"):
+        fa.compute.profile(tmp_path / "x.json")
+    with pytest.raises(ConfigError, match="does not exist"):
+        fa.compute.profile(tmp_path / "none.json")
+    with pytest.raises(ConfigError, match="expected a JSON object"):
+        from_dict([1, 2])
+    net, out = measured[1], tmp_path / "p.json"
+    for args, text in ((["--runtime", "tensorrt"], "--runtime = 'tensorrt' is not allowed"),
+                       (["--runs", "0"], "--runs = 0"),
+                       (["--input-shape", "1x3xA"], "--input-shape = '1x3xA'"),
+                       (["--jetson-rails"], "no INA3221 input rail"),
+                       (["--power-csv", str(net)], "--power-csv")):
+        assert main(["profile-device", str(net), "--out", str(out), *args]) == 2
+        assert text in capsys.readouterr().err
+    assert not out.exists()
