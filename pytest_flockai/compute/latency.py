@@ -32,8 +32,8 @@ from onnx import TensorProto, helper, numpy_helper
 
 from ..errors import ConfigError
 from .devices import Device
-from .measured import as_device, is_measured
 from .devices import device as _device
+from .measured import as_device, is_measured
 
 LATENCY_MODES = ("modeled", "measured")
 
