@@ -150,7 +150,8 @@ def _unit(u: dict, where: str) -> Unit:
         order = [p for p in ("fp16", "int8", "fp32") if p in peak]
         if kind == "npu":
             order = sorted(order, key=lambda p: p != "int8")
-    return Unit(kind, cores, ghz, tuple((p, peak[p]) for p in order), str(u.get("name", "")))
+    return Unit(kind, cores, ghz, tuple((p, peak[p]) for p in order), str(u.get("name", "")),
+                int(u.get("tensor_cores", 0)))
 
 
 def from_table(name: str, t: dict) -> Device:
@@ -201,6 +202,7 @@ def from_datasheet(name: str, t: dict) -> Device:
             units.append({"kind": kind, "cores": int(u.get("cores", 1)) if kind == "cpu" else 1,
                           "clock_ghz": float(u.get("clock_ghz", 0.0)),
                           "name": str(u.get("core_type", u.get("arch", u.get("kind", "")))),
+                          "tensor_cores": int(u.get("tensor_cores", 0)),
                           "peak_tmacs": {p: v / 1e12 for p, v in peaks.items()}})
     have = {u["kind"] for u in units}
     deps = [f"{r}/{k}" for r in t.get("runtimes", ()) for k in TARGET_ORDER.get(r, ())

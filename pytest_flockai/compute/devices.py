@@ -29,6 +29,7 @@ class Unit:
     clock_ghz: float
     peak: tuple[tuple[str, float], ...]
     name: str = ""
+    tensor_cores: int = 0
 
     @property
     def precisions(self) -> tuple[str, ...]:

@@ -127,9 +127,9 @@ def params_for(table: dict, dep: _rt.Deployment) -> dict:
 def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
     """(seconds, per-node timings) of a network cost on a deployment with efficiencies."""
     unit = dev.unit(dep.target)
-    peak = unit.peak_macs(dep.precision, dep.threads if dep.target == "cpu" else None)
+    peak = _rt.peak_macs(dep, unit)
     bw = dev.bandwidth_gbs * 1e9 * prm["mem"]
-    nbytes = _rt.BYTES[dep.precision]
+    nbytes = _rt.compute_precision(dep, unit)[1]
     clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
     dispatch = prm["dispatch_s"] / clock
     total, per = prm["overhead_s"] / clock, []

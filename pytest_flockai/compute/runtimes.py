@@ -60,6 +60,42 @@ class Deployment:
                 "threads": self.threads}
 
 
+#: runtimes whose fp32 convolutions run as TF32 on tensor cores by default (Ampere and
+#: later): TensorRT ("TF32 is enabled by default", TensorRT developer guide, "Reduced
+#: Precision"), PyTorch (``torch.backends.cudnn.allow_tf32`` defaults to True, PyTorch
+#: notes "TensorFloat-32 (TF32) on Ampere devices"), ONNX Runtime's CUDA provider
+#: (``use_tf32`` defaults to 1, CUDA Execution Provider options)
+TF32_BY_DEFAULT = frozenset(("tensorrt", "pytorch", "onnxruntime"))
+
+
+def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
+    """(precision the arithmetic runs at, bytes per stored element) of a deployment.
+
+    - ncnn on a CPU with fp16 arithmetic (Armv8.2: Cortex-A76, A78AE) computes and stores in
+      fp16 when asked for fp32: its defaults ``use_fp16_arithmetic`` / ``use_fp16_storage``
+      are true (ncnn ``src/option.cpp``);
+    - fp32 on a GPU with tensor cores runs TF32 (half the fp16 tensor rate) with the
+      runtimes of ``TF32_BY_DEFAULT``; element size stays 4 bytes.
+    """
+    p = dep.precision
+    if (dep.runtime == "ncnn" and dep.target == "cpu" and p == "fp32"
+            and "fp16" in unit.precisions):
+        return "fp16", float(BYTES["fp16"])
+    if (p == "fp32" and dep.target == "gpu" and dep.runtime in TF32_BY_DEFAULT
+            and getattr(unit, "tensor_cores", 0) > 0 and "fp16" in unit.precisions):
+        return "tf32", float(BYTES["fp32"])
+    return p, float(BYTES[p])
+
+
+def peak_macs(dep: Deployment, unit) -> float:
+    """The unit's peak MAC/s for the deployment (``compute_precision``; threads on a CPU)."""
+    p, _ = compute_precision(dep, unit)
+    threads = dep.threads if dep.target == "cpu" else None
+    if p == "tf32":
+        return max(unit.peak_macs("fp32"), unit.peak_macs("fp16") / 2.0)
+    return unit.peak_macs(p, threads)
+
+
 def _choice(field: str, value, allowed, where: str) -> str:
     if not isinstance(value, str) or value not in allowed:
         raise ConfigError(f"{where}{field} = {value!r} is not allowed"
@@ -133,4 +169,5 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
 
 
 __all__ = ["BYTES", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
-           "Deployment", "check_names", "resolve"]
+           "TF32_BY_DEFAULT", "Deployment", "check_names", "compute_precision", "peak_macs",
+           "resolve"]

@@ -49,13 +49,13 @@ class _Compiled:
         unit = dev.unit(dep.target)
         nodes = [n for n in row.cost.nodes if not getattr(n, "fused_into", None)]
         self.target, self.group = dep.target, dep.key
-        self.peak = unit.peak_macs(dep.precision, dep.threads if dep.target == "cpu" else None)
+        self.peak = _rt.peak_macs(dep, unit)
         self.bw = dev.bandwidth_gbs * 1e9
         self.clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
         self.kind = np.array([_KIND[n.kind] for n in nodes], dtype=int)
         self.macs = np.array([float(n.macs) for n in nodes])
         self.bytes = np.array([float(n.weight_elems + n.in_elems + n.out_elems)
-                               for n in nodes]) * _rt.BYTES[dep.precision]
+                               for n in nodes]) * _rt.compute_precision(dep, unit)[1]
         self.n = len(nodes)
         self.published = row.latency_s
 
