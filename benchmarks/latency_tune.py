@@ -26,8 +26,10 @@ from pytest_flockai.compute import predict, published, tuning
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(predict.EFFICIENCIES))
+    ap.add_argument("--networks", default=str(published.NETWORKS),
+                    help="folder of the per-node network summaries")
     a = ap.parse_args(argv)
-    rows, skipped = published.load_rows()
+    rows, skipped = published.load_rows(networks=Path(a.networks))
     if not any(r.half == "tuning" for r in rows):
         print("no usable tuning rows:", *skipped[:10], sep="\n  ")
         return 1

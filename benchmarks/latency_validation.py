@@ -46,8 +46,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rows", action="store_true", help="print every row's ratio")
     ap.add_argument("--markdown", help="also write the table as Markdown to this file")
+    ap.add_argument("--networks", default=str(published.NETWORKS),
+                    help="folder of the per-node network summaries")
     a = ap.parse_args(argv)
-    rows, skipped = published.load_rows()
+    rows, skipped = published.load_rows(networks=Path(a.networks))
     table = predict.efficiencies()
     if not rows:
         print("no usable rows:", *skipped[:10], sep="\n  ")
@@ -62,6 +64,15 @@ def main(argv=None) -> int:
             print(f"{r.half:8s} {r.row_id:>6s} {r.computer:24s} {r.group:26s} "
                   f"{r.network}-{r.input:5s} published {1e3 * r.latency_s:9.2f} ms  "
                   f"predicted/published {q:6.2f}")
+    print("\nEnergy per inference against the published watt-meter figures "
+          "(predicted latency x busy power, whole board):")
+    for e in published.energy_check(table, networks=Path(a.networks)):
+        if "skipped" in e:
+            print(f"  {e['id']}: skipped ({e['skipped']})")
+        else:
+            print(f"  {e['id']}: {e['computer']} {e['deployment']} {e['network']}: published "
+                  f"{e['published_j']:.3f} J, predicted {e['predicted_j']:.3f} J, ratio "
+                  f"{e['ratio']:.2f}")
     print(f"{len(rows)} rows used, {len(skipped)} skipped")
     for why in skipped:
         print("  skipped", why)

@@ -197,7 +197,9 @@ def from_datasheet(name: str, t: dict) -> Device:
     units = []
     for kind in ("gpu", "npu", "cpu"):
         u = t.get(kind)
-        peaks = _peaks(kind, u) if isinstance(u, dict) else {}
+        if not isinstance(u, dict):
+            continue
+        peaks = _peaks(kind, u)
         if peaks:
             units.append({"kind": kind, "cores": int(u.get("cores", 1)) if kind == "cpu" else 1,
                           "clock_ghz": float(u.get("clock_ghz", 0.0)),

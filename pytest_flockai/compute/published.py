@@ -155,5 +155,43 @@ def bands(rows: list[Row], table: dict) -> dict:
     return out
 
 
-__all__ = ["NETWORKS", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
+ENERGY = DATA / "energy_published.csv"
+
+
+def energy_check(table: dict, path: Path = ENERGY, networks: Path = NETWORKS) -> list[dict]:
+    """Energy per inference, predicted against the published watt-meter figures.
+
+    Per row of ``energy_published.csv`` whose computer, deployment and network are known:
+    the published energy (``energy_j``, else ``power_w`` x latency) against the predicted
+    latency x the computer's busy power (both whole-board energy per inference), and, where
+    the source gives the idle power too, the above-idle energies."""
+    if not path.is_file():
+        return []
+    out = []
+    for r in _read_csv(path):
+        cost = network_cost(r["network"], r["input"], networks)
+        if r["computer"] not in DEVICES or cost is None:
+            out.append({"id": r["energy_id"], "skipped": "no profile or network summary"})
+            continue
+        dev = DEVICES[r["computer"]]
+        row = Row(r["energy_id"], r["source_id"], "energy", r["computer"], r["runtime"],
+                  r["target"], r["precision"], r["network"], r["input"], 1.0, cost)
+        try:
+            secs = predict_row(row, table)
+        except ConfigError as e:
+            out.append({"id": r["energy_id"], "skipped": str(e)})
+            continue
+        lat = float(r["latency_ms"]) / 1e3
+        pub = float(r["energy_j"]) if r.get("energy_j") else float(r["power_w"]) * lat
+        rec = {"id": r["energy_id"], "computer": r["computer"], "deployment": row.group,
+               "network": f"{r['network']}-{r['input']}", "published_j": pub,
+               "predicted_j": secs * dev.active_w, "ratio": secs * dev.active_w / pub}
+        if r.get("idle_w") and r.get("power_w"):
+            above = (float(r["power_w"]) - float(r["idle_w"])) * lat
+            rec["above_idle_ratio"] = secs * (dev.active_w - dev.idle_w) / above
+        out.append(rec)
+    return out
+
+
+__all__ = ["ENERGY", "NETWORKS", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
            "predict_row", "ratios", "summary"]
