@@ -39,7 +39,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..errors import ConfigError
-from .devices import Device, Unit
+from ._device import Device, Unit
 
 DATA = Path(__file__).with_name("data")
 COMPUTERS = DATA / "computers.toml"

@@ -43,6 +43,7 @@ from ..errors import ConfigError
 from . import runtimes as _rt
 from .devices import Device
 from .devices import device as _device
+from .graph import analyze
 from .measured import is_measured
 
 EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
@@ -158,7 +159,6 @@ def _cost(model, input_shape):
     """A network cost (nodes) from a NetworkCost, an OnnxModel, a path, bytes or a proto."""
     if hasattr(model, "nodes"):
         return model
-    analyze = _analyzer()
     if hasattr(model, "_proto") and hasattr(model, "input_name"):        # an OnnxModel
         proto = model._proto if model._proto is not None else model._load_proto(model.path)
         return analyze(proto, input_shape)
@@ -169,12 +169,7 @@ def _cost(model, input_shape):
 
 @lru_cache(maxsize=32)
 def _cached_analyze(path: str, mtime: float, input_shape):
-    return _analyzer()(path, input_shape)
-
-
-def _analyzer():
-    from .graph import analyze
-    return analyze
+    return analyze(path, input_shape)
 
 
 def _resolve_dev(dev):

@@ -21,6 +21,8 @@ import numpy as np
 from ..errors import ConfigError
 from . import runtimes as _rt
 from .devices import DEVICES
+from .graph import NetworkCost
+from .predict import params_for, roofline
 
 DATA = Path(__file__).with_name("data")
 TABLE = DATA / "published_latency.csv"
@@ -59,7 +61,6 @@ def network_cost(network: str, size: str, folder: Path = NETWORKS):
     p = folder / f"{network}-{size}.csv"
     if not p.is_file():
         return None
-    from .graph import NetworkCost
     return NetworkCost.from_csv(p)
 
 
@@ -98,7 +99,6 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
 
 def predict_row(row: Row, table: dict) -> float:
     """Predicted seconds of one row with the efficiency table ``table``."""
-    from .predict import params_for, roofline
     dev = DEVICES[row.computer]
     dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
     return roofline(row.cost, dev, dep, params_for(table, dep))[0]

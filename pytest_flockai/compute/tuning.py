@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from . import runtimes as _rt
 from .devices import DEVICES
@@ -103,8 +104,6 @@ def _prior(targets, groups):
 
 def tune(rows) -> dict:
     """The efficiency table fitted on the tuning rows of ``rows`` (see the module docstring)."""
-    from scipy.optimize import least_squares
-
     tuning = [r for r in rows if r.half == "tuning"]
     comp = [_Compiled(r) for r in tuning]
     targets = sorted({c.target for c in comp})
