@@ -290,13 +290,13 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
     g = fixed.graph
     nodes: list[NodeCost] = []
     uncounted: list[str] = []
-    folded: set[str] = set()
     for node in g.node:
         label = node.name or node.output[0]
         is_const = _is_folded(node, consts, shapes)
         if is_const:
-            folded.add(label)
             consts.update(o for o in node.output if o)
+            if node.op_type not in ("Shape", "Size") and any(i in weights for i in node.input):
+                weights.update(o for o in node.output if o)     # e.g. Identity(weight)
         kind, macs, why = _node_cost(node, shapes)
         if is_const:                     # computed once when the runtime loads the model
             kind, macs = "data", 0
