@@ -11,8 +11,8 @@ roofline: the slower of
 - memory: ``bytes / (bandwidth * mem[target])``, bytes = (weights + inputs + outputs) x the
   precision's element size,
 
-plus a dispatch cost per unfused node (``dispatch_s[target]`` at 1 GHz, scaled by the
-unit's clock), plus a per-inference overhead. The efficiencies (``eff``, ``mem``,
+plus a dispatch cost per unfused node (``dispatch_s[target]`` at 1 GHz times a factor per
+runtime/target, scaled by the unit's clock), plus a per-inference overhead. The efficiencies (``eff``, ``mem``,
 ``scale``, ``dispatch_s``, ``overhead_s``) are read from ``data/latency_efficiencies.json``,
 written by ``benchmarks/latency_tune.py`` from the TUNING half of the published
 measurements only (the procedure is in that script); the same file records, per
@@ -111,7 +111,8 @@ def efficiencies(path=None) -> dict:
 def params_for(table: dict, dep: _rt.Deployment) -> dict:
     """The efficiencies for one deployment: the target's figures (tuned, else the prior)
     with the group's ``scale`` (tuned for this runtime/target/precision, else the median of
-    the same runtime and target at other precisions, else the target's median, else 1)."""
+    the same runtime and target at other precisions, else the target's median, else 1), and
+    the dispatch cost times the runtime/target's tuned ``dispatch`` factor (else 1)."""
     tgt = {**PRIOR_TARGET[dep.target], **table.get("targets", {}).get(dep.target, {})}
     groups = table.get("groups", {})
     g = groups.get(dep.key)
@@ -122,6 +123,9 @@ def params_for(table: dict, dep: _rt.Deployment) -> dict:
         scale = float(np.median(same)) if same else 1.0
     else:
         scale = float(g["scale"])
+    d = table.get("dispatch", {}).get(f"{dep.runtime}/{dep.target}")
+    if d is not None:
+        tgt["dispatch_s"] = tgt["dispatch_s"] * float(d["factor"])
     return {**tgt, "scale": scale, "tuned": g is not None}
 
 

@@ -74,10 +74,15 @@ def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
     - ncnn on a CPU with fp16 arithmetic (Armv8.2: Cortex-A76, A78AE) computes and stores in
       fp16 when asked for fp32: its defaults ``use_fp16_arithmetic`` / ``use_fp16_storage``
       are true (ncnn ``src/option.cpp``);
+    - ONNX Runtime's CPU provider runs an fp16 model in fp32: it implements few operators in
+      fp16 and casts to fp32 around the others (ONNX Runtime docs, "Float16 and mixed
+      precision models"; the CPU provider's kernels are fp32);
     - fp32 on a GPU with tensor cores runs TF32 (half the fp16 tensor rate) with the
       runtimes of ``TF32_BY_DEFAULT``; element size stays 4 bytes.
     """
     p = dep.precision
+    if dep.runtime == "onnxruntime" and dep.target == "cpu" and p == "fp16":
+        return "fp32", float(BYTES["fp32"])
     if (dep.runtime == "ncnn" and dep.target == "cpu" and p == "fp32"
             and "fp16" in unit.precisions):
         return "fp16", float(BYTES["fp16"])

@@ -10,10 +10,13 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
    - per target (cpu, gpu, npu): depthwise and matrix-product efficiency relative to dense
      convolution, the memory efficiency (fraction of the DRAM peak), the dispatch cost per
      node and the per-inference overhead (both at 1 GHz, scaled by the unit's clock);
-   - per runtime/target/precision with tuning rows: one scale of the compute efficiency.
+   - per runtime/target/precision with tuning rows: one scale of the compute efficiency;
+   - per runtime/target with tuning rows: one factor on the dispatch cost (how much a
+     runtime fuses and how cheaply it launches: TensorRT against eager PyTorch).
 
    Nothing is per network, per computer or per row. A runtime/target/precision without
-   tuning rows takes its target's median scale.
+   tuning rows takes the median scale of the same runtime and target at other precisions,
+   else its target's median; a runtime/target without rows, a dispatch factor of 1.
 3. Fit: robust least squares (``scipy.optimize.least_squares``, soft-L1 loss with a 0.3
    scale) of ln(predicted / published) over the tuning rows, in log-parameters, with a
    weak pull (weight ``PRIOR_WEIGHT``) toward the untuned priors (``predict.PRIOR_TARGET``)
@@ -50,6 +53,7 @@ class _Compiled:
         unit = dev.unit(dep.target)
         nodes = [n for n in row.cost.nodes if not getattr(n, "fused_into", None)]
         self.target, self.group = dep.target, dep.key
+        self.rt = f"{dep.runtime}/{dep.target}"
         self.peak = _rt.peak_macs(dep, unit)
         self.bw = dev.bandwidth_gbs * 1e9
         self.clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
@@ -60,18 +64,18 @@ class _Compiled:
         self.n = len(nodes)
         self.published = row.latency_s
 
-    def seconds(self, tgt: dict, scale: float) -> float:
+    def seconds(self, tgt: dict, scale: float, dispatch: float = 1.0) -> float:
         eff = np.array([tgt["conv"] * scale, tgt["dwconv"] * scale, tgt["matmul"] * scale,
                         tgt["elementwise"], tgt["pool"], tgt["data"]])
         eff = np.minimum(eff, 1.0)
         tc = self.macs / (self.peak * eff[self.kind])
         tm = self.bytes / (self.bw * tgt["mem"]) if self.bw > 0 else 0.0 * self.bytes
-        return float(np.sum(np.maximum(tc, tm)) + (self.n * tgt["dispatch_s"]
+        return float(np.sum(np.maximum(tc, tm)) + (self.n * tgt["dispatch_s"] * dispatch
                                                    + tgt["overhead_s"]) / self.clock)
 
 
-def _unpack(theta, targets, groups):
-    out_t, out_g, i = {}, {}, 0
+def _unpack(theta, targets, groups, rts):
+    out_t, out_g, out_d, i = {}, {}, {}, 0
     for t in targets:
         p = dict(PRIOR_TARGET[t])
         conv = p["conv"]
@@ -83,10 +87,13 @@ def _unpack(theta, targets, groups):
     for g in groups:
         out_g[g] = math.exp(theta[i])
         i += 1
-    return out_t, out_g
+    for r in rts:
+        out_d[r] = math.exp(theta[i])
+        i += 1
+    return out_t, out_g, out_d
 
 
-def _prior(targets, groups):
+def _prior(targets, groups, rts):
     th, lo, hi = [], [], []
     for t in targets:
         p = PRIOR_TARGET[t]
@@ -99,6 +106,10 @@ def _prior(targets, groups):
         th.append(0.0)
         lo.append(math.log(0.01))
         hi.append(math.log(4.0))
+    for _ in rts:
+        th.append(0.0)
+        lo.append(math.log(0.05))
+        hi.append(math.log(20.0))
     return np.array(th), np.array(lo), np.array(hi)
 
 
@@ -108,18 +119,22 @@ def tune(rows) -> dict:
     comp = [_Compiled(r) for r in tuning]
     targets = sorted({c.target for c in comp})
     groups = sorted({c.group for c in comp})
-    th0, lo, hi = _prior(targets, groups)
+    rts = sorted({c.rt for c in comp})
+    th0, lo, hi = _prior(targets, groups, rts)
     th0 = np.clip(th0, lo + 1e-9, hi - 1e-9)
 
     def resid(theta):
-        tg, gs = _unpack(theta, targets, groups)
-        r = [math.log(c.seconds(tg[c.target], gs[c.group]) / c.published) for c in comp]
+        tg, gs, ds = _unpack(theta, targets, groups, rts)
+        r = [math.log(c.seconds(tg[c.target], gs[c.group], ds[c.rt]) / c.published)
+             for c in comp]
         return np.concatenate([r, PRIOR_WEIGHT * (theta - th0)])
 
     fit = least_squares(resid, th0, bounds=(lo, hi), loss="soft_l1", f_scale=0.3,
                         x_scale=1.0, max_nfev=4000)
-    tg, gs = _unpack(fit.x, targets, groups)
+    tg, gs, ds = _unpack(fit.x, targets, groups, rts)
     return {"targets": {t: {k: float(v) for k, v in p.items()} for t, p in tg.items()},
+            "dispatch": {r: {"factor": float(v), "rows": sum(c.rt == r for c in comp)}
+                         for r, v in ds.items()},
             "groups": {g: {"scale": float(v), "rows": sum(c.group == g for c in comp)}
                        for g, v in gs.items()},
             "fit": {"rows": len(comp), "cost": float(fit.cost), "nfev": int(fit.nfev),
