@@ -195,3 +195,23 @@ def test_the_drones_blueprint_sets_the_default_runtime_of_its_tasks(tmp_path):
     with pytest.raises(ConfigError, match="tensorrt.*raspberry-pi-4"):
         fa.Mission(fa.drone("dji-mavic-2-pro", device="raspberry-pi-4", runtime="tensorrt"),
                    fa.pilots.Hover(altitude=3.0, duration=3.0), tasks=[fa.Task(model)]).run()
+
+
+def test_compare_models_gives_the_latency_per_runtime(tmp_path):
+    """The paper's Q4 with runtimes: one row per model and runtime, the layer model for the
+    ONNX detector, the MAC-count rule for a model given by its MACs."""
+    from labelled_sets import make_set, perfect_model
+
+    path, sc = make_set(tmp_path / "set", "yolo-images-labels", n=4)
+    det = fa.ml.shipped("detector")
+    stated = fa.ml.PythonModel(perfect_model(sc), macs=3e9, name="stated")
+    df = fa.ml.compare_models({"det": det, "stated": stated}, path, device="jetson-orin-nano",
+                              runtimes=["tensorrt", ("tensorrt", "int8"), "onnxruntime"])
+    assert len(df) == 6 and set(df["runtime"]) == {"tensorrt", "onnxruntime"}
+    d = df[df.model == "det"].set_index(["runtime", "runtime_precision"])["latency_s"]
+    assert d[("tensorrt", "int8")] < d[("tensorrt", "fp16")] < d[("onnxruntime", "fp32")]
+    s = df[df.model == "stated"]
+    assert set(s["latency_model"]) == {"macs"} and s["latency_s"].nunique() == 1
+    assert set(df[df.model == "det"]["latency_model"]) == {"roofline"}
+    with pytest.raises(ConfigError, match="edgetpu"):
+        fa.ml.compare_models({"det": det}, path, device="jetson-orin-nano", runtimes=["edgetpu"])

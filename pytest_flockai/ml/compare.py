@@ -9,8 +9,9 @@ default runtime):
 
 - ``latency_s``: the latency a flight charges (``ml.latency_model``: the layer model
   ``compute.predict_latency`` for an ONNX model, at the frames' size; the computer's
-  MAC-count rule for a model known by its MAC count), with ``runtime``, ``precision``
-  and ``latency_model`` (``roofline`` or ``macs``) beside it;
+  MAC-count rule for a model known by its MAC count), with ``runtime``,
+  ``runtime_precision`` (fp32/fp16/int8; ``precision`` is the detection KPI) and
+  ``latency_model`` (``roofline`` or ``macs``) beside it;
 - ``energy_per_inference_j``: that compute time at the device's busy-over-idle
   power (what ``<task>.compute_energy_j`` charges per inference);
 - ``task_power_w``: one inference every ``period_s`` (at most back to back);
@@ -60,7 +61,8 @@ def compare_models(models: dict, path, *, flight=None, device="raspberry-pi-4",
             e = lat * (dev.active_w - dev.idle_w)
             power = e / max(period_s, lat)
             d = timer.describe()
-            row = {"model": name, "runtime": d.get("runtime"), "precision": d.get("precision"),
+            row = {"model": name, "runtime": d.get("runtime"),
+                   "runtime_precision": d.get("precision"),
                    "latency_model": d["latency_model"], "macs": float(macs),
                    "params": getattr(m, "params", None),
                    **{k: ev.kpis[k] for k in ACCURACY if k in ev.kpis},
