@@ -215,3 +215,19 @@ def test_compare_models_gives_the_latency_per_runtime(tmp_path):
     assert set(df[df.model == "det"]["latency_model"]) == {"roofline"}
     with pytest.raises(ConfigError, match="edgetpu"):
         fa.ml.compare_models({"det": det}, path, device="jetson-orin-nano", runtimes=["edgetpu"])
+
+
+def test_fleet_offload_times_the_ground_inference_with_the_layer_model(tmp_path):
+    path = tmp_path / "net.onnx"
+    onnx.save(convnet(side=64), path)
+    off = fa.fleet.Offload(model=path, runtime="tensorrt", precision="fp16")
+    want = predict_latency(path, "ground-gpu", runtime="tensorrt", precision="fp16")
+    assert off.compute_s == pytest.approx(want.seconds) and off.macs == want.macs
+    assert off.to_dict()["prediction"]["runtime"] == "tensorrt"
+    plain = fa.fleet.Offload(macs=8.7e9)          # a MAC count: the ground GPU's MAC rule
+    gpu = fa.compute.device("ground-gpu")
+    assert plain.compute_s == pytest.approx(gpu.overhead_s + 8.7e9 / gpu.macs_per_s)
+    with pytest.raises(ConfigError, match="edgetpu.*ground-gpu"):
+        fa.fleet.Offload(model=path, runtime="edgetpu")
+    with pytest.raises(ConfigError, match="runtime = 'trt'"):
+        fa.fleet.Offload(runtime="trt")
