@@ -70,6 +70,7 @@ SLOW_TESTS = {
     "test_a_slow_radio_degrades_the_loop",
     "test_lands_on_the_marker",
     "test_a_measured_profile_in_flight_reproduces_its_p50_and_p95",
+    "test_the_stored_efficiencies_are_what_the_tuning_procedure_gives",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",

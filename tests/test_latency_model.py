@@ -231,3 +231,22 @@ def test_fleet_offload_times_the_ground_inference_with_the_layer_model(tmp_path)
         fa.fleet.Offload(model=path, runtime="edgetpu")
     with pytest.raises(ConfigError, match="runtime = 'trt'"):
         fa.fleet.Offload(runtime="trt")
+
+
+def test_the_stored_efficiencies_are_what_the_tuning_procedure_gives():
+    """latency_efficiencies.json is the output of benchmarks/latency_tune.py on the data in
+    the repository (tuning half only), and the validation runs on every published row."""
+    rows, skipped = published.load_rows()
+    assert len(rows) >= 80 and not skipped
+    assert {r.half for r in rows} == {"tuning", "heldout"}
+    stored = fa.compute.predict.efficiencies()
+    again = tuning.tune(rows)
+    for t, p in again["targets"].items():
+        for k, v in p.items():
+            assert stored["targets"][t][k] == pytest.approx(v, rel=1e-6), (t, k)
+    assert {g: v["scale"] for g, v in stored["groups"].items()} == pytest.approx(
+        {g: v["scale"] for g, v in again["groups"].items()}, rel=1e-6)
+    s = published.summary(rows, stored)
+    assert stored["validation"]["heldout"]["n"] == s["heldout"]["all"]["n"]
+    assert s["heldout"]["all"]["median_abs_ln"] == pytest.approx(
+        stored["validation"]["heldout"]["median_abs_ln"])
