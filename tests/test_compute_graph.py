@@ -1,5 +1,8 @@
 """compute.graph: per-node costs, classes, fusion and shapes through the whole graph."""
 
+import csv
+from importlib import resources
+
 import numpy as np
 import onnx
 import pytest
@@ -193,3 +196,21 @@ def test_unreadable_shapes_are_refused_naming_the_nodes_or_warned():
     with pytest.warns(UserWarning, match=r"\(100.0%\) are not counted"):
         cost = analyze(m, allow_uncounted=True)
     assert cost.macs == 0 and len(cost.uncounted) == 3
+
+
+def test_reference_network_summaries_load_and_agree_with_their_index():
+    nets = resources.files("pytest_flockai.compute") / "data" / "networks"
+    with (nets / "index.csv").open(encoding="utf-8") as fh:
+        index = list(csv.DictReader(fh))
+    assert len(index) >= 29
+    for row in index:
+        cost = NetworkCost.from_csv(str(nets / row["file"]))
+        assert cost.macs == int(row["macs"]) and len(cost.run_nodes) == int(row["run_nodes"])
+        assert cost.meta["opset"] == "17" and cost.uncounted == ()
+        names = {n.name for n in cost.nodes}
+        assert all(n.fused_into in names for n in cost.nodes if n.fused_into is not None)
+        assert cost.input_shape == (1, 3, int(row["input"]), int(row["input"]))
+    macs = {r["file"]: int(r["macs"]) for r in index}
+    assert abs(macs["yolov8n-640.csv"] / 4.41e9 - 1) < 0.02      # plain torch.onnx.export
+    assert abs(macs["resnet50-224.csv"] / 4.1e9 - 1) < 0.02      # He et al. 2016: 4.1 GMAC
+    assert abs(macs["mobilenet_v2-224.csv"] / 300e6 - 1) < 0.03  # Sandler et al. 2018: 300 M

@@ -14,6 +14,7 @@ import os
 
 import numpy as np
 import onnx
+import onnxruntime as ort
 from onnx import TensorProto
 
 from ..errors import ConfigError
@@ -141,10 +142,6 @@ _NP = {TensorProto.FLOAT: np.float32, TensorProto.FLOAT16: np.float16,
 
 def _run_shapes(fixed: onnx.ModelProto, names: list[str]) -> tuple[dict, str | None]:
     """Shapes of ``names`` read off one ONNX Runtime run fed with zeros."""
-    try:
-        import onnxruntime as ort
-    except ImportError:  # pragma: no cover - a core dependency
-        return {}, "onnxruntime is not installed"
     feeds: dict[str, np.ndarray] = {}
     for inp in graph_inputs(fixed):
         shape = static_shape(inp.type)

@@ -21,6 +21,7 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
+import onnx
 
 from ..errors import ConfigError
 
@@ -45,7 +46,6 @@ def model_sha256(path) -> str:
 
 @functools.lru_cache(maxsize=256)
 def _sha256(p: str, size: int, mtime_ns: int) -> str:
-    import onnx
     h = hashlib.sha256()
     with open(p, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -78,6 +78,12 @@ class MeasuredModel:
 
     def percentile(self, q: float) -> float:
         return float(np.percentile(np.asarray(self.latency_s), q))
+
+    def draw(self, rng: np.random.Generator, size=None):
+        """Measured latencies drawn uniformly with ``rng`` (each one of the samples)."""
+        idx = rng.integers(len(self.latency_s), size=size)
+        return float(self.latency_s[int(idx)]) if size is None else \
+            np.asarray(self.latency_s, dtype=float)[idx]
 
 
 @dataclass(frozen=True)
@@ -122,12 +128,12 @@ class MeasuredDevice:
         """The measured latencies of ``model`` in seconds, in measurement order."""
         return np.asarray(self.model(model).latency_s, dtype=float)
 
-    def sample_latency(self, model, rng) -> float:
-        """One inference's latency (s) drawn from the measured samples with ``rng`` (a
-        ``numpy.random.Generator``, or an int seed)."""
-        s = self.model(model).latency_s
+    def sample_latency(self, model, rng, size=None):
+        """One inference's latency (s): one of the measured samples, drawn uniformly with
+        ``rng`` (a ``numpy.random.Generator``, or an int seed); ``size``: an array of
+        that many draws instead of one float."""
         g = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-        return float(s[int(g.integers(len(s)))])
+        return self.model(model).draw(g, size)
 
     def energy_j(self, model) -> float | None:
         """Energy per inference above idle (J): median latency x (busy - idle power);

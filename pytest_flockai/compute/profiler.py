@@ -11,7 +11,8 @@ host's facts (CPU, cores, board model, memory, OS) and, when given, the busy pow
 
 - ``--power-csv``: a watt meter's log, a CSV with a power column (``power_w``, ``watts``
   or ``power``) and optionally ``time_s`` (Unix seconds). With times, busy power is the
-  mean over the timed runs and idle power the mean before the first warm-up; without,
+  mean over the timed runs (widened by one meter period when no sample falls inside)
+  and idle power the mean before the first warm-up; without,
   every row is busy and ``--idle-w`` gives idle.
 - ``--jetson-rails``: the board's own INA3221 input rail (``VDD_IN`` on Orin,
   ``POM_5V_IN`` on Nano), sampled every 50 ms: 2 s idle first, then during the runs.
@@ -28,12 +29,17 @@ import os
 import platform
 import threading
 import time
+import warnings
 from pathlib import Path
 
+import cv2
 import numpy as np
+import onnx
+import onnxruntime as ort
 
 from .._io import atomic_write
 from ..errors import ConfigError
+from .graph import analyze
 from .profile import RUNTIMES, SCHEMA, from_dict, model_sha256
 
 MEASURABLE = ("onnxruntime", "opencv-dnn")
@@ -152,13 +158,14 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
     return {"schema": SCHEMA, "name": name or host.get("board") or host["machine"],
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "runtime": {"name": runtime, "version": version, "target": target,
-                        "precision": _precision(models[0]), "threads": threads},
+                        "precision": _precision(models[0]), "threads": threads,
+                        "libraries": {"onnxruntime": ort.__version__, "opencv": cv2.__version__,
+                                      "onnx": onnx.__version__, "numpy": np.__version__}},
             "host": host, "power": power, "models": out_models}
 
 
 def _runner(path, runtime, target, threads, shape, seed):
     """(a no-argument call running one inference, the input shape, runtime version)."""
-    import onnx
     proto = onnx.load(os.fspath(path), load_external_data=False)
     inits = {i.name for i in proto.graph.initializer}
     inp = next(i for i in proto.graph.input if i.name not in inits)
@@ -181,8 +188,11 @@ def _runner(path, runtime, target, threads, shape, seed):
     x = (rng.integers(0, 128, dims).astype(dtype) if dtype in (np.uint8, np.int8)
          else rng.random(dims).astype(dtype))
     if runtime == "opencv-dnn":
-        import cv2
-        net = cv2.dnn.readNetFromONNX(os.fspath(path))
+        try:
+            net = cv2.dnn.readNetFromONNX(os.fspath(path))
+        except cv2.error as e:
+            raise ConfigError(f"model {str(path)!r}: --runtime opencv-dnn ({cv2.__version__}) "
+                              f"cannot load it: {str(e).strip()[-200:]}") from None
         if threads is not None:
             cv2.setNumThreads(threads)
 
@@ -190,7 +200,6 @@ def _runner(path, runtime, target, threads, shape, seed):
             net.setInput(x)
             net.forward()
         return run_cv, tuple(dims), cv2.__version__
-    import onnxruntime as ort
     opts = ort.SessionOptions()
     if threads is not None:
         opts.intra_op_num_threads = threads
@@ -200,15 +209,16 @@ def _runner(path, runtime, target, threads, shape, seed):
             raise ConfigError(f"--target = 'gpu' is not allowed here: onnxruntime "
                               f"{ort.__version__} has providers {ort.get_available_providers()}")
         providers.insert(0, "CUDAExecutionProvider")
-    sess = ort.InferenceSession(os.fspath(path), opts, providers=providers)
+    try:
+        sess = ort.InferenceSession(os.fspath(path), opts, providers=providers)
+    except Exception as e:  # noqa: BLE001 (onnxruntime's own exception types)
+        raise ConfigError(f"model {str(path)!r}: --runtime onnxruntime ({ort.__version__}) "
+                          f"cannot load it: {str(e).strip()[:200]}") from None
     feeds = {inp.name: x}
     return (lambda: sess.run(None, feeds)), tuple(dims), ort.__version__
 
 
 def _macs(path, shape):
-    import warnings
-
-    from .graph import analyze
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -218,7 +228,6 @@ def _macs(path, shape):
 
 
 def _precision(path) -> str:
-    import onnx
     proto = onnx.load(os.fspath(path), load_external_data=False)
     if any(n.op_type.startswith("QLinear") or n.op_type in ("ConvInteger", "MatMulInteger",
                                                              "DequantizeLinear")
@@ -276,9 +285,14 @@ def _power_from_csv(path, t_start, windows, idle_w) -> dict:
         raise ConfigError(f"{where}: power values must be watts >= 0")
     busy, idle = watts, None
     if times is not None:
+        # a run shorter than the meter's period: widen each window by one period
+        period = float(np.median(np.diff(np.sort(times)))) if len(times) > 1 else 0.0
         in_run = np.zeros(len(times), bool)
-        for t0, t1 in windows:
-            in_run |= (times >= t0) & (times <= t1)
+        for pad in (0.0, period):
+            for t0, t1 in windows:
+                in_run |= (times >= t0 - pad) & (times <= t1 + pad)
+            if in_run.any():
+                break
         busy, before = watts[in_run], watts[times < t_start]
         idle = float(before.mean()) if before.size else None
         if not busy.size:
