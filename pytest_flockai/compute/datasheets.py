@@ -15,11 +15,8 @@
 - a unit without a clock or a peak is left out (no deployment can use it);
 - each runtime runs on the units ``TARGET_ORDER`` lists for it that the computer has;
 - power: ``[.power]``'s ``idle_w`` / ``busy_w`` when published; else the previous profile's
-  figure (``PLACEHOLDER``, its source kept). Where the previous profile's busy-above-idle
-  is within 5 % of the published one, its figures stay (the Raspberry Pi 4: 2.7 / 6.0 W
-  against the published watt-meter 3.0 / 6.3 W: the same 3.3 W per busy second, and the
-  flights' idle draw does not move); the MAC-count rule (``macs_per_s``, ``overhead_s``)
-  always from the previous profile.
+  figure (``PLACEHOLDER``, its source kept); the MAC-count rule (``macs_per_s``,
+  ``overhead_s``) always from the previous profile.
 
 ``PLACEHOLDER`` also stands in entirely when ``computers.toml`` is absent.
 
@@ -215,11 +212,6 @@ def from_datasheet(name: str, t: dict) -> Device:
         if key not in power:
             src.append(f"{f} from the previous profile ({old.get('source', 'none')})")
     idle, busy = power.get("idle_w", old.get("idle_w")), power.get("busy_w", old.get("busy_w"))
-    if _same_delta(old, idle, busy):
-        idle, busy = old["idle_w"], old["busy_w"]
-        src.append(f"idle/busy {old['idle_w']:g}/{old['busy_w']:g} W kept from the previous "
-                   f"profile: the same busy-above-idle as the published {power['idle_w']:g}/"
-                   f"{power['busy_w']:g} W")
     table = {"idle_w": idle, "busy_w": busy,
              "memory_mb": t.get("memory_mb", old.get("memory_mb")),
              "bandwidth_gbs": t.get("memory_bandwidth_gbs", 0.0), "runtimes": deps,
@@ -228,15 +220,6 @@ def from_datasheet(name: str, t: dict) -> Device:
     dev = from_table(name, table)
     sources = tuple((k, str(v)) for k, v in _flat(t) if k.endswith("_source"))
     return replace(dev, sources=sources)
-
-
-def _same_delta(old: dict, idle, busy) -> bool:
-    """The previous profile's busy-above-idle within 5 % of the published one (then its
-    figures stay, so the flights' idle draw does not move for the same inference energy)."""
-    if not old or idle is None or busy is None or idle == old.get("idle_w"):
-        return False
-    d_old, d_new = old["busy_w"] - old["idle_w"], busy - idle
-    return d_new > 0 and abs(d_old - d_new) <= 0.05 * d_new
 
 
 def _flat(t: dict, prefix: str = ""):
