@@ -61,6 +61,10 @@ PRIOR_TARGET = {
 }
 
 
+#: held-out rows a (computer, runtime) needs for its own band (else its target's band)
+MIN_BAND_ROWS = 4
+
+
 class LatencyFallbackWarning(UserWarning):
     """The latency came from the MAC-count rule, not from the network's layers."""
 
@@ -68,7 +72,8 @@ class LatencyFallbackWarning(UserWarning):
 @dataclass(frozen=True)
 class LatencyPrediction:
     """One inference: ``seconds``, ``band`` (low, high seconds: the held-out half's range of
-    published/predicted for this computer and runtime), ``energy_j`` above idle, and
+    published/predicted for this computer and runtime, or for its target when that pair has
+    fewer than ``MIN_BAND_ROWS`` held-out rows), ``energy_j`` above idle, and
     ``per_node``: ((node, kind, seconds, bound), ...)."""
 
     seconds: float
@@ -153,7 +158,9 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
 
 def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tuple[float, float]:
     bands = table.get("bands", {})
-    b = bands.get(f"{dev.name}/{dep.runtime}") or bands.get(f"*/{dep.target}")
+    b = bands.get(f"{dev.name}/{dep.runtime}")
+    if not b or b.get("n", 0) < MIN_BAND_ROWS:      # too few rows: the target's held-out range
+        b = bands.get(f"*/{dep.target}")
     if not b:
         return (seconds / 2.0, seconds * 2.0)       # untuned: the issue's 2x bound
     return (seconds * float(b["min"]), seconds * float(b["max"]))
