@@ -123,9 +123,43 @@ def devices() -> str:
     """The computers tasks can run on."""
     from pytest_flockai.compute import DEVICES
 
-    rows = [[f"`{d.name}`", f"{d.idle_w:g}", f"{d.active_w:g}", f"{d.macs_per_s / 1e9:g}",
-             f"{d.overhead_s * 1e3:g}", d.source] for d in DEVICES.values()]
-    return _md(["device", "idle W", "active W", "GMAC/s", "overhead ms", "source"], rows)
+    rows = [[f"`{d.name}`", f"{d.idle_w:g}", f"{d.active_w:g}", d.runtimes[0] if d.runtimes
+             else "-", f"{d.macs_per_s / 1e9:g}", f"{d.overhead_s * 1e3:g}", d.source]
+            for d in DEVICES.values()]
+    return _md(["device", "idle W", "busy W", "default runtime", "MAC-count rule GMAC/s",
+                "overhead ms", "source"], rows)
+
+
+def computers() -> str:
+    """The computers' datasheets: units and peaks, memory bandwidth, power, runtimes."""
+    from pytest_flockai.compute.devices import DEVICES
+
+    rows = []
+    for d in DEVICES.values():
+        units = "; ".join(
+            f"{u.kind}{f' ({u.name})' if u.name else ''}: {u.cores} x {u.clock_ghz:g} GHz, "
+            + ", ".join(f"{p} {v / 1e9:,.0f} GMAC/s" for p, v in u.peak) for u in d.units)
+        rows.append([f"`{d.name}`", d.mode or "-", units, f"{d.bandwidth_gbs:g}",
+                     f"{d.memory_mb:g}", f"{d.idle_w:g}", f"{d.active_w:g}",
+                     ", ".join(d.deployments), d.source])
+    return _md(["computer", "power mode", "units (peak multiply-accumulates)", "DRAM GB/s",
+                "memory MB", "idle W", "busy W", "runtime/target (first: default)", "source"],
+               rows)
+
+
+def latency_validation() -> str:
+    """Predicted / published latency per half and computer (benchmarks/latency_validation.py)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from latency_validation import table_lines
+
+    from pytest_flockai.compute import predict, published
+
+    rows, skipped = published.load_rows()
+    if not rows:
+        return "(no published rows with network summaries yet)\n"
+    s = published.summary(rows, predict.efficiencies())
+    keep = [ln for ln in table_lines(s) if "| computer/runtime |" not in ln]
+    return "\n".join(keep) + f"\n\n{len(rows)} rows used, {len(skipped)} skipped.\n"
 
 
 def limits() -> str:
@@ -138,7 +172,8 @@ def limits() -> str:
 
 
 TABLES = {"options": options, "markers": markers, "kpis": kpis, "cli": cli, "layers": layers,
-          "blueprints": blueprints, "devices": devices, "limits": limits}
+          "blueprints": blueprints, "devices": devices, "limits": limits,
+          "computers": computers, "latency_validation": latency_validation}
 
 
 def public_modules() -> dict:

@@ -70,6 +70,8 @@ def test_q3_remote_saves_flight_time_but_latency_depends_on_the_link(sc_1b, sc_2
 def test_q4_cheaper_model_flies_longer_and_counts_worse(sc_1b, sc_3b):
     """Q4: the cheaper model is faster and flies longer, but counts worse."""
     cnn, cheap = sc_1b.kpis, sc_3b.kpis
-    assert cheap["inference_latency_p50_s"] < cnn["inference_latency_p50_s"] / 5
+    # the CNN's latency is the layer model's (ONNX Runtime on the Pi 4, ~31 ms); the blob
+    # counter's the MAC-count rule's (10 ms overhead + 2.3 M MAC-equivalents, ~12 ms)
+    assert cheap["inference_latency_p50_s"] < cnn["inference_latency_p50_s"] / 2
     assert cheap["endurance_s"] > cnn["endurance_s"]
     assert cheap["count_mae"] > cnn["count_mae"]

@@ -79,6 +79,8 @@ SLOW_TESTS = {
     "test_lands_on_the_marker",
     "test_a_decide_that_sleeps_for_ever_is_stopped_in_the_main_thread",
     "test_a_verify_fraction_without_the_verify_mode_is_a_usage_error",
+    "test_a_measured_profile_in_flight_reproduces_its_p50_and_p95",
+    "test_the_stored_efficiencies_are_what_the_tuning_procedure_gives",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from .. import _check
 from ..compute import device as _device
+from ..compute.runtimes import check_names
 from ..energy import EnergyModel
 from ..energy import battery as _cells
 from ..errors import ConfigError, close_matches
@@ -36,9 +37,12 @@ _ALIASES = {
     "battery_v": ("battery", "voltage_v"),
     "payload_kg": (None, "payload_kg"),
     "device": (None, "device"),
+    "runtime": (None, "runtime"), "precision": (None, "precision"),
+    "target": (None, "target"), "threads": (None, "threads"),
     "physics_hz": ("sim", "physics_hz"),
     "control_hz": ("sim", "control_hz"),
 }
+_DEPLOY = ("runtime", "precision", "target", "threads")
 _SECTIONS = {"airframe": Airframe, "rotor": Rotor, "battery": Battery, "radio": Radio,
              "camera": Camera, "sim": Sim}
 
@@ -87,8 +91,10 @@ class Drone:
         self.camera = Camera(data["camera"], where=f"{where} [camera]") if "camera" in data else None
         self.sim = Sim(data.get("sim", {}), where=f"{where} [sim]")
         compute = data.get("compute", {})
-        _no_unknown(compute, {"device"}, f"{where} [compute]")
+        _no_unknown(compute, {"device", *_DEPLOY}, f"{where} [compute]")
         self.device = compute.get("device", "none")
+        for k in _DEPLOY:       # the on-board tasks' default runtime, precision, target, threads
+            setattr(self, k, compute.get(k))
         sensors = data.get("sensors", {})
         _no_unknown(sensors, {"names"}, f"{where} [sensors]")
         names = sensors.get("names", [])
@@ -110,6 +116,8 @@ class Drone:
             value = _check.non_negative("payload_kg", value, where=self.name)
         elif name == "device":
             value = _check_str("device", value, getattr(self, "name", ""))
+        elif name in _DEPLOY:
+            check_names(**{name: value}, where=getattr(self, "name", ""))
         elif name in _SECTIONS and not isinstance(value, _SECTIONS[name]) and not (
                 value is None and name == "camera"):          # only the camera is optional
             raise ConfigError(f"{self.name}: {name} = {value!r} is not allowed; expected a "
@@ -206,6 +214,7 @@ class Drone:
         return {
             "name": self.name, "source": self.source, "payload_kg": self.payload_kg,
             "mass_kg": self.mass_kg, "device": self.device,
+            **{k: getattr(self, k) for k in _DEPLOY if getattr(self, k) is not None},
             "sensors": list(self.sensors) + [s.name for s in self.extra_sensors],
             "airframe": self.airframe.to_dict(), "rotor": self.rotor.to_dict(),
             "battery": self.battery.to_dict(), "sim": self.sim.to_dict(),

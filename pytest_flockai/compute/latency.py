@@ -33,6 +33,7 @@ from onnx import TensorProto, helper, numpy_helper
 from ..errors import ConfigError
 from .devices import Device
 from .devices import device as _device
+from .measured import as_device, is_measured
 
 LATENCY_MODES = ("modeled", "measured")
 
@@ -41,13 +42,16 @@ def resolve_device(dev, field: str = "device") -> Device:
     """A ``Device`` from a profile name or a ``Device``; ConfigError otherwise."""
     if isinstance(dev, Device):
         return dev
+    if is_measured(dev):            # a measured profile: its samples, a datasheet's power
+        return as_device(dev)
     if isinstance(dev, str):
         try:
             return _device(dev)
         except ConfigError as e:
             raise ConfigError(f"{field} = {dev!r}: {e}") from None
     raise ConfigError(f"{field} = {dev!r} is not a device; expected a profile name "
-                      f"(see pytest_flockai.devices()) or a Device")
+                      f"(see pytest_flockai.devices()), a Device or a measured profile "
+                      f"(fa.compute.profile(path))")
 
 
 def compute_seconds(macs: float, device) -> float:

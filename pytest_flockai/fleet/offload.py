@@ -6,7 +6,9 @@ station, whose ground device (``compute.device``) runs one inference of
 ``macs`` per frame and sends ``result_bytes`` back. Times come from the
 project's models: the radio from ``comm.Link.transfer`` (path loss, rate
 adaptation, losses; its random draws from the drone's seeded generator), the
-inference from ``compute.modeled_latency``.
+inference from ``compute.predict_latency`` when ``model`` (an ONNX path or ``OnnxModel``)
+is given, for the ground device's ``runtime``/``precision`` (defaults: its first listed
+runtime), else from the ground device's MAC-count rule for ``macs``.
 
 Contention (``shared_link=True``): the drones share one channel, which carries
 one uplink at a time (a single FIFO server); the senders of one period are
@@ -33,13 +35,15 @@ fleet's makespan).
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
 from .. import _check
 from ..comm.link import link as _link
 from ..compute import device as _device
-from ..compute.latency import modeled_latency
+from ..compute.predict import LatencyFallbackWarning, mac_rule_seconds, predict_latency
+from ..compute.runtimes import check_names
 from ..control.stages import PILOT
 from ..errors import ConfigError
 from ..mission.plan import seed_sequence
@@ -53,7 +57,8 @@ class Offload:
 
     def __init__(self, *, period_s: float = 1.0, frame_bytes: int = 60_000, result_bytes: int = 200,
                  macs: float = 8.7e9, ground_device: str = "ground-gpu", link="wifi-80211n",
-                 shared_link: bool = True, ground_station=(0.0, 0.0, 0.0)) -> None:
+                 shared_link: bool = True, ground_station=(0.0, 0.0, 0.0), model=None,
+                 runtime: str | None = None, precision: str | None = None) -> None:
         w = "Offload"
         self.period_s = _check.positive("period_s", period_s, where=w)
         for field, v in (("frame_bytes", frame_bytes), ("result_bytes", result_bytes)):
@@ -68,14 +73,26 @@ class Offload:
                               f"True or False")
         self.shared_link = shared_link
         self.ground_station = _check.vector("ground_station", ground_station, 3, where=w)
-        self.compute_s = modeled_latency(self.macs, self.ground_device)
+        self.runtime, self.precision, self.prediction = runtime, precision, None
+        if model is not None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", LatencyFallbackWarning)
+                self.prediction = predict_latency(model, self.ground_device, runtime=runtime,
+                                                  precision=precision)
+            self.macs = self.prediction.macs
+            self.compute_s = self.prediction.seconds
+        else:
+            check_names(runtime, precision, where=w)
+            self.compute_s = mac_rule_seconds(self.macs, self.ground_device)
 
     def to_dict(self) -> dict:
         """JSON-ready description for the fleet's scenario."""
         return {"period_s": self.period_s, "frame_bytes": self.frame_bytes,
                 "result_bytes": self.result_bytes, "macs": self.macs,
                 "ground_device": self.ground_device.name, "link": self.link.name,
-                "shared_link": self.shared_link, "ground_station": list(self.ground_station)}
+                "shared_link": self.shared_link, "ground_station": list(self.ground_station),
+                "compute_s": self.compute_s,
+                **({"prediction": self.prediction.to_dict()} if self.prediction else {})}
 
 
 class OffloadStep:

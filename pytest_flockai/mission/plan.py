@@ -11,7 +11,7 @@ between flies as edited.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from numbers import Real
 
 import numpy as np
@@ -20,6 +20,7 @@ from .. import _check, limits
 from ..airframe.drone import Drone
 from ..clock import Clocked
 from ..compute import device as _device
+from ..compute import runtimes as _rt
 from ..control.pilots import Pilot
 from ..errors import ConfigError
 from ..ml import Task
@@ -202,7 +203,19 @@ def onboard_device(tasks, drone):
     for tk in tasks:
         if tk.execution == "onboard" and tk.device is not None:
             return tk.device
-    return _device(drone.device) if drone.device != "none" else None
+    if drone.device == "none":
+        return None
+    return with_defaults(_device(drone.device), drone)
+
+
+def with_defaults(dev, drone):
+    """The drone's computer carrying the blueprint's / ``fa.drone()``'s default runtime,
+    precision, target and threads for its tasks (checked against the computer now)."""
+    d = {k: getattr(drone, k, None) for k in ("runtime", "precision", "target", "threads")}
+    if all(v is None for v in d.values()):
+        return dev
+    _rt.resolve(dev, **d, where=f"{drone.name} [compute]")
+    return replace(dev, defaults=tuple((k, v) for k, v in d.items() if v is not None))
 
 
 def computers(tasks, drone) -> list[dict]:

@@ -1,13 +1,18 @@
 """Would a cheaper model do? (the paper's Q4): several models on the same frames, one table.
 
-``compare_models(models, path, flight=None, device="raspberry-pi-4", period_s=1.0)``
-scores each model on the same labelled frames (``evaluate_dataset``: a folder a
-flight recorded with ``Mission(dataset_dir=...)``, or a team's own), and puts next
-to its accuracy what it costs on the drone's computer ``device``:
+``compare_models(models, path, flight=None, device="raspberry-pi-4", period_s=1.0,
+runtimes=None)`` scores each model on the same labelled frames (``evaluate_dataset``: a
+folder a flight recorded with ``Mission(dataset_dir=...)``, or a team's own), and puts
+next to its accuracy what it costs on the drone's computer ``device``, one row per model
+and runtime (``runtimes``: names, or (runtime, precision) pairs; None: the computer's
+default runtime):
 
-- ``latency_s``: the modeled latency (``compute.latency.modeled_latency``: overhead
-  plus MACs over the device's MAC rate) at the frames' size;
-- ``energy_per_inference_j``: that compute time at the device's active-over-idle
+- ``latency_s``: the latency a flight charges (``ml.latency_model``: the layer model
+  ``compute.predict_latency`` for an ONNX model, at the frames' size; the computer's
+  MAC-count rule for a model known by its MAC count), with ``runtime``,
+  ``runtime_precision`` (fp32/fp16/int8; ``precision`` is the detection KPI) and
+  ``latency_model`` (``roofline`` or ``macs``) beside it;
+- ``energy_per_inference_j``: that compute time at the device's busy-over-idle
   power (what ``<task>.compute_energy_j`` charges per inference);
 - ``task_power_w``: one inference every ``period_s`` (at most back to back);
 - ``endurance_s``: with ``flight`` (a FlightResult flown without the task), its
@@ -17,11 +22,13 @@ to its accuracy what it costs on the drone's computer ``device``:
 from __future__ import annotations
 
 import cv2
+import numpy as np
 import pandas as pd
 
-from ..compute.latency import modeled_latency, resolve_device
+from ..compute.latency import resolve_device
 from ..errors import ConfigError
 from .dataset_eval import evaluate_dataset
+from .latency_model import InferenceTimer
 from .models import as_model
 from .task import Task
 
@@ -29,12 +36,14 @@ ACCURACY = ("map50", "map50_95", "precision", "recall", "accuracy")
 
 
 def compare_models(models: dict, path, *, flight=None, device="raspberry-pi-4",
-                   period_s: float = 1.0, evaluate: str = "detection", **task_kw) -> pd.DataFrame:
-    """One row per model of ``models`` ({name: model}); see the module docstring."""
+                   period_s: float = 1.0, evaluate: str = "detection", runtimes=None,
+                   **task_kw) -> pd.DataFrame:
+    """One row per model of ``models`` ({name: model}) and runtime; see the module docstring."""
     if not isinstance(models, dict) or not models:
         raise ConfigError(f"compare_models: models = {models!r} is not allowed; expected a dict "
                           f"{{name: model}} of one or more models")
     dev = resolve_device(device, "device")
+    deps = _deployments(runtimes)
     rows = []
     for name, model in models.items():
         task = Task(as_model(model), name=name, evaluate=evaluate, period_s=period_s, **task_kw)
@@ -45,18 +54,40 @@ def compare_models(models: dict, path, *, flight=None, device="raspberry-pi-4",
         if macs is None:
             raise ConfigError(f"compare_models: model {name!r} has macs = None; the modeled "
                               f"latency needs its MAC count: give the model macs=...")
-        lat = modeled_latency(float(macs), dev)
-        e = lat * (dev.active_w - dev.idle_w)
-        power = e / max(period_s, lat)
-        row = {"model": name, "macs": float(macs), "params": getattr(m, "params", None),
-               **{k: ev.kpis[k] for k in ACCURACY if k in ev.kpis},
-               "images_scored": ev.kpis["images_scored"], "latency_s": lat,
-               "energy_per_inference_j": e, "task_power_w": power}
-        if flight is not None:
-            k = flight.kpis
-            row["endurance_s"] = k["endurance_s"] * k["mean_power_w"] / (k["mean_power_w"] + power)
-        rows.append(row)
+        for runtime, precision in deps:
+            task.runtime, task.precision = runtime, precision
+            timer = InferenceTimer(task, dev)
+            lat = timer.seconds(m, frame if frame is not None else _blank(m), macs)
+            e = lat * (dev.active_w - dev.idle_w)
+            power = e / max(period_s, lat)
+            d = timer.describe()
+            row = {"model": name, "runtime": d.get("runtime"),
+                   "runtime_precision": d.get("precision"),
+                   "latency_model": d["latency_model"], "macs": float(macs),
+                   "params": getattr(m, "params", None),
+                   **{k: ev.kpis[k] for k in ACCURACY if k in ev.kpis},
+                   "images_scored": ev.kpis["images_scored"], "latency_s": lat,
+                   "energy_per_inference_j": e, "task_power_w": power}
+            if flight is not None:
+                k = flight.kpis
+                row["endurance_s"] = (k["endurance_s"] * k["mean_power_w"]
+                                      / (k["mean_power_w"] + power))
+            rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _deployments(runtimes) -> list:
+    if runtimes is None:
+        return [(None, None)]
+    if isinstance(runtimes, str) or not isinstance(runtimes, (list, tuple)) or not runtimes:
+        raise ConfigError(f"compare_models: runtimes = {runtimes!r} is not allowed; expected a "
+                          f"list of runtime names or (runtime, precision) pairs")
+    return [tuple(r) if isinstance(r, (list, tuple)) else (r, None) for r in runtimes]
+
+
+def _blank(model):
+    hw = getattr(model, "input_size", None) or (240, 320)
+    return np.zeros((*hw, 3), np.uint8)
 
 
 def _first_frame(ev):

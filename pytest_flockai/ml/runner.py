@@ -35,16 +35,11 @@ import numpy as np
 
 from .. import memo
 from ..comm.link import link as _link
-from ..compute.latency import (
-    calibrate,
-    compute_seconds,
-    modeled_latency,
-    resolve_device,
-    scale_to_device,
-)
+from ..compute.latency import calibrate, compute_seconds, resolve_device, scale_to_device
 from ..errors import ConfigError
 from .events import DeviceClock, InferenceEvent
 from .jpeg import JPEG_MACS_PER_PIXEL, annotate, decode_jpeg, encode_jpeg, is_image
+from .latency_model import InferenceTimer, is_measured
 from .metrics import SortedValues, invalid_prediction
 from .scoring import Scorer
 from .task import Task
@@ -79,6 +74,8 @@ class TaskRunner:
         self.ground_device = (resolve_device(ground_device, "ground_device")
                               if ground_device is not None else t.ground_device)
         self.link = _link(link) if link is not None else t.link
+        d = self.device if t.execution == "onboard" else self.ground_device
+        self.timers = {id(d): InferenceTimer(t, d, self.rng.spawn(1)[0] if is_measured(d) else None)}
         self.calibration = None
         if t.latency == "measured":
             self.calibration = calibration or calibrate()
@@ -258,9 +255,7 @@ class TaskRunner:
             macs = model.macs_for(frame) if hasattr(model, "macs_for") else model.macs
         except Exception as e:
             err = err or f"MAC count failed: {type(e).__name__}: {e}"
-        if macs is None:
-            macs = getattr(model, "macs", None) or 0
-        return pred, err, modeled_latency(float(macs), device)
+        return pred, err, self.timers[id(device)].seconds(model, frame, macs)
 
     def _encode(self, frame, device):
         """(payload bytes, bytes count, device seconds) to send a sensor value."""

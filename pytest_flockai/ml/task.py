@@ -9,6 +9,7 @@ link), and how its predictions are scored against the simulator's truth
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Callable, Sequence
 from numbers import Integral
 from typing import Any
@@ -16,11 +17,14 @@ from typing import Any
 from .. import _check, _io, limits
 from ..comm.link import Link
 from ..comm.link import link as _link
+from ..compute import runtimes as _rt
 from ..compute.devices import Device
 from ..compute.latency import LATENCY_MODES, resolve_device
+from ..compute.predict import LatencyFallbackWarning
 from ..errors import ConfigError
 from ..world.truth import CLASSES
 from .detections import DECODERS
+from .latency_model import graph_model
 from .metrics import count_of
 from .models import OnnxModel, as_model
 from .templates import Template
@@ -64,6 +68,11 @@ class Task:
     read the model's output (``"auto"``, ``"boxes"``, ``"yolo"`` or a callable,
     see ``ml.detections``); ``min_visible``: objects less visible than this are
     ignore regions.
+
+    ``runtime``, ``precision``, ``target``, ``threads``: the deployment on the computer the
+    task runs on (``compute.runtimes``; defaults: the computer's first listed runtime and its
+    usual precision; threads: every core). They set the latency of an ONNX model
+    (``compute.predict_latency``); a computer that cannot run them is a ConfigError.
     """
 
     def __init__(self, model: Any, sensor: str = "camera", period_s: float = 5.0,
@@ -75,7 +84,9 @@ class Task:
                  alert: str = "frame", ground_station: Sequence[float] = (0.0, 0.0, 0.0),
                  max_queue: int = 16, evaluate: str = "count", classes: Sequence[str] = CLASSES,
                  score_threshold: float = 0.25, iou_threshold: float = 0.5,
-                 decode: str | Callable = "auto", min_visible: float = 0.25) -> None:
+                 decode: str | Callable = "auto", min_visible: float = 0.25,
+                 runtime: str | None = None, precision: str | None = None,
+                 target: str | None = None, threads: int | None = None) -> None:
         self.model = as_model(model)
         self.name = name if name is not None else str(getattr(self.model, "name", "task"))
         if not isinstance(self.name, str) or not self.name or "." in self.name:
@@ -96,6 +107,7 @@ class Task:
                               f"frame to send; model the transport as its delay_s instead")
         self.device = None if device is None else self._device("device", device, where)
         self.ground_device = self._device("ground_device", ground_device, where)
+        self._deployment(where, runtime, precision, target, threads)
         try:
             self.link = _link(link)
         except ConfigError as e:
@@ -140,6 +152,22 @@ class Task:
         self.decode = decode
         self.min_visible = _check.fraction("min_visible", min_visible, where=where)
 
+    def _deployment(self, where, runtime, precision, target, threads):
+        """The runtime/precision/target/threads: names checked now, and against the computer
+        now when it is known (else when the flight binds the drone's)."""
+        _rt.check_names(runtime, precision, target, threads, where=where)
+        self.runtime, self.precision, self.target, self.threads = (runtime, precision, target,
+                                                                   threads)
+        dev = self.device if self.execution == "onboard" else self.ground_device
+        if dev is not None and dev.deployments and dev.measured is None:
+            _rt.resolve(dev, runtime, precision, target, threads,
+                        where=f"{where} on {dev.name!r}")
+        if (runtime, precision, target) != (None, None, None) and graph_model(self.model) is None:
+            warnings.warn(f"{where}: runtime/precision/target given, but model {self.name!r} is "
+                          f"known only by its MAC count: its latency uses the computer's "
+                          f"MAC-count rule, whatever the runtime (give an ONNX model for the "
+                          f"layer model)", LatencyFallbackWarning, stacklevel=3)
+
     @staticmethod
     def _device(field, value, where) -> Device:
         try:
@@ -167,6 +195,8 @@ class Task:
                 "device": self.device.name if self.device is not None else None,
                 "ground_device": self.ground_device.name,
                 "link": self.link.name, "on_busy": self.on_busy, "latency": self.latency,
+                "runtime": self.runtime, "precision": self.precision, "target": self.target,
+                "threads": self.threads,
                 "result_bytes": self.result_bytes, "jpeg_quality": self.jpeg_quality,
                 "crowd_threshold": self.crowd_threshold, "alert": self.alert,
                 "ground_station": list(self.ground_station), "max_queue": self.max_queue,

@@ -1,0 +1,56 @@
+"""Choose the latency model's efficiencies on the TUNING half of the published table (issue 34).
+
+Reads ``pytest_flockai/compute/data/published_latency.csv`` and ``latency_sources.csv``
+(each source assigned to the ``tuning`` or ``heldout`` half before any efficiency was
+chosen) and the networks' per-node costs (``data/networks/``), fits the few shared
+efficiencies on the tuning rows only (the procedure: ``pytest_flockai/compute/tuning.py``),
+then writes ``pytest_flockai/compute/data/latency_efficiencies.json``: the parameters, the
+fit's statistics, the tuning and held-out ratios predicted/published, and the held-out
+ranges per computer/runtime that ``predict_latency(...).band`` reports. The held-out rows
+are evaluated after the fit and never fed back into it.
+
+    python benchmarks/latency_tune.py [--out FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from pytest_flockai._io import atomic_write
+from pytest_flockai.compute import predict, published, tuning
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default=str(predict.EFFICIENCIES))
+    ap.add_argument("--networks", default=str(published.NETWORKS),
+                    help="folder of the per-node network summaries")
+    a = ap.parse_args(argv)
+    rows, skipped = published.load_rows(networks=Path(a.networks))
+    if not any(r.half == "tuning" for r in rows):
+        print("no usable tuning rows:", *skipped[:10], sep="\n  ")
+        return 1
+    table = tuning.tune(rows)
+    table["procedure"] = ("fitted on the tuning half only (benchmarks/latency_tune.py, "
+                          "pytest_flockai/compute/tuning.py); held-out evaluated after the fit")
+    table["rows"] = {"tuning": sum(r.half == "tuning" for r in rows),
+                     "heldout": sum(r.half == "heldout" for r in rows), "skipped": len(skipped)}
+    table["bands"] = published.bands(rows, table)
+    s = published.summary(rows, table)
+    table["validation"] = {h: v["all"] for h, v in s.items()}
+    text = json.dumps(table, indent=1, sort_keys=True) + "\n"
+    atomic_write(Path(a.out), lambda fh: fh.write(text))
+    for half, v in s.items():
+        al = v["all"]
+        print(f"{half:8s} n={al['n']:3d} median ratio {al['median_ratio']:.2f} "
+              f"median |ln| {al['median_abs_ln']:.3f} worst {al['worst_ratio']:.2f} "
+              f"within 2x {al['within_2x']}/{al['n']}")
+    print(f"wrote {a.out} ({len(skipped)} rows skipped)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

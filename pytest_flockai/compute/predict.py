@@ -1,0 +1,252 @@
+"""Inference latency and energy predicted from the network, the runtime and the precision.
+
+``predict_latency(model, device, *, runtime=None, precision=None, target=None, threads=None)``
+walks the network's nodes (``compute.graph.analyze``: MACs, weight and activation
+elements and class per node, normalisation and activations fused into their
+convolution as runtimes fuse them) and times each node on the deployment's unit as a
+roofline: the slower of
+
+- compute: ``macs / (peak[precision] * eff[target][kind] * scale[runtime/target/precision])``
+  (``kind``: conv, dwconv, matmul, elementwise, pool, data), and
+- memory: ``bytes / (bandwidth * mem[target])``, bytes = (weights + inputs + outputs) x the
+  precision's element size,
+
+plus a dispatch cost per unfused node (``dispatch_s[target]`` at 1 GHz times a factor per
+runtime/target, scaled by the unit's clock), plus a per-inference overhead. The efficiencies (``eff``, ``mem``,
+``scale``, ``dispatch_s``, ``overhead_s``) are read from ``data/latency_efficiencies.json``,
+written by ``benchmarks/latency_tune.py`` from the TUNING half of the published
+measurements only (the procedure is in that script); the same file records, per
+(computer, runtime), the ratios predicted/published on the held-out half, which give
+``LatencyPrediction.band``.
+
+Energy per inference: ``seconds * (active_w - idle_w)`` (the computer's busy power above
+idle at its board input, measured where published).
+
+A model known only by its MAC count (``predict_latency(5.3e8, ...)``) falls back to the
+computer's MAC-count rule ``overhead_s + macs / macs_per_s`` with a ``LatencyFallbackWarning``.
+A ``MeasuredDevice`` (``compute.profile``) answers with its measured samples instead.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import warnings
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError
+from . import runtimes as _rt
+from .devices import Device
+from .devices import device as _device
+from .graph import analyze
+from .measured import is_measured
+
+EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
+KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
+#: untuned priors (used where the tuning file has no figure): dense convolution runs at a
+#: fraction of peak, depthwise far below it (low arithmetic intensity); memory at ~half
+#: the DRAM peak; a few microseconds per kernel dispatch at 1 GHz.
+PRIOR_TARGET = {
+    "cpu": {"conv": 0.5, "dwconv": 0.15, "matmul": 0.5, "elementwise": 0.25, "pool": 0.25,
+            "data": 0.25, "mem": 0.4, "dispatch_s": 20e-6, "overhead_s": 1e-3},
+    "gpu": {"conv": 0.4, "dwconv": 0.05, "matmul": 0.4, "elementwise": 0.1, "pool": 0.1,
+            "data": 0.1, "mem": 0.5, "dispatch_s": 10e-6, "overhead_s": 1e-3},
+    "npu": {"conv": 0.5, "dwconv": 0.2, "matmul": 0.3, "elementwise": 0.1, "pool": 0.1,
+            "data": 0.1, "mem": 0.3, "dispatch_s": 5e-6, "overhead_s": 2e-3},
+}
+
+
+#: held-out rows a (computer, runtime) needs for its own band (else its target's band)
+MIN_BAND_ROWS = 4
+
+
+class LatencyFallbackWarning(UserWarning):
+    """The latency came from the MAC-count rule, not from the network's layers."""
+
+
+@dataclass(frozen=True)
+class LatencyPrediction:
+    """One inference: ``seconds``, ``band`` (low, high seconds: the held-out half's range of
+    published/predicted for this computer and runtime, or for its target when that pair has
+    fewer than ``MIN_BAND_ROWS`` held-out rows), ``energy_j`` above idle, and
+    ``per_node``: ((node, kind, seconds, bound), ...)."""
+
+    seconds: float
+    band: tuple[float, float]
+    energy_j: float
+    device: str
+    runtime: str | None
+    target: str | None
+    precision: str | None
+    threads: int | None
+    method: str                      # "roofline", "macs" (fallback) or "measured"
+    macs: float
+    per_node: tuple = ()
+
+    @property
+    def milliseconds(self) -> float:
+        return 1e3 * self.seconds
+
+    def to_dict(self) -> dict:
+        return {"seconds": self.seconds, "band": list(self.band), "energy_j": self.energy_j,
+                "device": self.device, "runtime": self.runtime, "target": self.target,
+                "precision": self.precision, "threads": self.threads, "method": self.method,
+                "macs": self.macs}
+
+
+@lru_cache(maxsize=4)
+def _load_table(path: str, mtime: float) -> dict:
+    with open(path, encoding="utf-8") as fh:
+        return json.load(fh)
+
+
+def efficiencies(path=None) -> dict:
+    """The tuned efficiency table (``{}`` before any tuning)."""
+    p = Path(path) if path is not None else EFFICIENCIES
+    if not p.is_file():
+        return {}
+    return _load_table(str(p), p.stat().st_mtime)
+
+
+def params_for(table: dict, dep: _rt.Deployment) -> dict:
+    """The efficiencies for one deployment: the target's figures (tuned, else the prior)
+    with the group's ``scale`` (tuned for this runtime/target/precision, else the median of
+    the same runtime and target at other precisions, else the target's median, else 1), and
+    the dispatch cost times the runtime/target's tuned ``dispatch`` factor (else 1)."""
+    tgt = {**PRIOR_TARGET[dep.target], **table.get("targets", {}).get(dep.target, {})}
+    groups = table.get("groups", {})
+    g = groups.get(dep.key)
+    if g is None:          # the same runtime on this target at other precisions, else the target
+        rt = [v["scale"] for k, v in groups.items()
+              if k.split("/")[:2] == [dep.runtime, dep.target]]
+        same = rt or [v["scale"] for k, v in groups.items() if k.split("/")[1] == dep.target]
+        scale = float(np.median(same)) if same else 1.0
+    else:
+        scale = float(g["scale"])
+    d = table.get("dispatch", {}).get(f"{dep.runtime}/{dep.target}")
+    if d is not None:
+        tgt["dispatch_s"] = tgt["dispatch_s"] * float(d["factor"])
+    return {**tgt, "scale": scale, "tuned": g is not None}
+
+
+def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
+    """(seconds, per-node timings) of a network cost on a deployment with efficiencies."""
+    unit = dev.unit(dep.target)
+    peak = _rt.peak_macs(dep, unit)
+    bw = dev.bandwidth_gbs * 1e9 * prm["mem"]
+    nbytes = _rt.compute_precision(dep, unit)[1]
+    clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
+    dispatch = prm["dispatch_s"] / clock
+    total, per = prm["overhead_s"] / clock, []
+    for n in cost.nodes:
+        if getattr(n, "fused_into", None):
+            continue
+        eff = min(1.0, prm[n.kind] * (prm["scale"] if n.kind in ("conv", "dwconv", "matmul")
+                                      else 1.0))
+        tc = n.macs / (peak * eff) if n.macs else 0.0
+        tm = (n.weight_elems + n.in_elems + n.out_elems) * nbytes / bw if bw > 0 else 0.0
+        t = max(tc, tm) + dispatch
+        total += t
+        per.append((n.name, n.kind, t, "compute" if tc >= tm else "memory"))
+    return total, tuple(per)
+
+
+def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tuple[float, float]:
+    bands = table.get("bands", {})
+    b = bands.get(f"{dev.name}/{dep.runtime}")
+    if not b or b.get("n", 0) < MIN_BAND_ROWS:      # too few rows: the target's held-out range
+        b = bands.get(f"*/{dep.target}")
+    if not b:
+        return (seconds / 2.0, seconds * 2.0)       # untuned: the issue's 2x bound
+    return (seconds * float(b["min"]), seconds * float(b["max"]))
+
+
+def _cost(model, input_shape):
+    """A network cost (nodes) from a NetworkCost, an OnnxModel, a path, bytes or a proto."""
+    if hasattr(model, "nodes"):
+        return model
+    if hasattr(model, "_proto") and hasattr(model, "input_name"):        # an OnnxModel
+        proto = model._proto if model._proto is not None else model._load_proto(model.path)
+        return analyze(proto, input_shape)
+    if isinstance(model, (str, os.PathLike)):
+        return _cached_analyze(os.fspath(model), os.stat(model).st_mtime, input_shape)
+    return analyze(model, input_shape)
+
+
+@lru_cache(maxsize=32)
+def _cached_analyze(path: str, mtime: float, input_shape):
+    return analyze(path, input_shape)
+
+
+def _resolve_dev(dev):
+    if isinstance(dev, str):
+        return _device(dev)
+    return dev
+
+
+def predict_latency(model, device, *, runtime=None, precision=None, target=None, threads=None,
+                    input_shape=None, efficiencies_path=None) -> LatencyPrediction:
+    """Seconds (and band, energy) of one batch-1 inference of ``model`` on ``device``.
+
+    ``model``: an ONNX path, bytes or ModelProto, an ``OnnxModel``, a ``NetworkCost`` or a
+    MAC count (the fallback rule, with a warning). ``device``: a profile name, a ``Device``
+    or a ``MeasuredDevice``. ``runtime``/``precision``/``target``/``threads``: the
+    deployment (defaults: the computer's first listed runtime and the unit's first
+    precision). ``input_shape``: the full input shape for a graph with dynamic dims."""
+    dev = _resolve_dev(device)
+    if is_measured(dev) or getattr(dev, "measured", None) is not None:   # a measured profile
+        return _measured(model, dev)
+    if not isinstance(dev, Device):
+        raise ConfigError(f"device = {device!r} is not a device; expected a profile name "
+                          f"(fa.devices()), a Device or a MeasuredDevice (fa.compute.profile)")
+    if isinstance(model, (int, float)) and not isinstance(model, bool):
+        return _from_macs(float(model), dev, runtime, precision, target, threads)
+    dep = _rt.resolve(dev, runtime, precision, target, threads, where="predict_latency")
+    cost = _cost(model, tuple(input_shape) if input_shape is not None else None)
+    table = efficiencies(efficiencies_path)
+    secs, per = roofline(cost, dev, dep, params_for(table, dep))
+    macs = float(sum(n.macs for n in cost.nodes))
+    return LatencyPrediction(secs, _band(table, dev, dep, secs), secs * (dev.active_w - dev.idle_w),
+                             dev.name, dep.runtime, dep.target, dep.precision, dep.threads,
+                             "roofline", macs, per)
+
+
+def _from_macs(macs, dev, runtime, precision, target, threads) -> LatencyPrediction:
+    if macs < 0 or not math.isfinite(macs):
+        raise ConfigError(f"model = {macs!r} is not allowed; a MAC count must be a finite "
+                          f"number >= 0")
+    _rt.check_names(runtime, precision, target, threads, where="predict_latency")
+    warnings.warn(f"predict_latency: a bare MAC count ({macs:.3g}) gives the computer's "
+                  f"MAC-count rule (overhead_s + macs / macs_per_s), not the layer model: pass "
+                  f"the ONNX model for a latency that depends on its layers and the runtime",
+                  LatencyFallbackWarning, stacklevel=3)
+    s = mac_rule_seconds(macs, dev)
+    return LatencyPrediction(s, (s / 2.0, s * 2.0), s * (dev.active_w - dev.idle_w), dev.name,
+                             runtime, target, precision, threads, "macs", macs)
+
+
+def mac_rule_seconds(macs: float, dev: Device) -> float:
+    """The MAC-count rule: ``overhead_s + macs / macs_per_s``."""
+    return dev.overhead_s + float(macs) / dev.macs_per_s
+
+
+def _measured(model, dev) -> LatencyPrediction:
+    if not is_measured(dev):
+        dev = dev.measured
+    s = np.asarray(dev.latency_samples(model), dtype=np.float64)
+    p5, p50, p95 = (float(x) for x in np.percentile(s, (5, 50, 95)))
+    busy = getattr(dev, "busy_w", None)
+    idle = getattr(dev, "idle_w", None)
+    e = p50 * (busy - idle) if busy is not None and idle is not None else math.nan
+    return LatencyPrediction(p50, (p5, p95), e, str(getattr(dev, "name", "measured")),
+                             getattr(dev, "runtime", None), None, None, None, "measured",
+                             math.nan)
+
+
+__all__ = ["EFFICIENCIES", "KINDS", "LatencyFallbackWarning", "LatencyPrediction",
+           "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]

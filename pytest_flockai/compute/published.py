@@ -1,0 +1,197 @@
+"""The published batch-1 latency measurements, and how the latency model compares to them.
+
+``data/published_latency.csv`` (one row per measurement: computer, runtime, target,
+precision, network, input, latency_ms, and where it was published) joined with
+``data/latency_sources.csv`` (each source's ``half``: ``tuning`` or ``heldout``, assigned
+by source before any efficiency was chosen) and with the networks' per-node costs
+``data/networks/<network>-<input>.csv`` (``compute.graph``). ``predictions`` runs the
+latency model on every usable row; ``summary`` gives the ratios predicted/published
+per half, computer and runtime (what ``benchmarks/latency_validation.py`` prints).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError
+from . import runtimes as _rt
+from .devices import DEVICES
+from .graph import NetworkCost
+from .predict import params_for, roofline
+
+DATA = Path(__file__).with_name("data")
+TABLE = DATA / "published_latency.csv"
+SOURCES = DATA / "latency_sources.csv"
+NETWORKS = DATA / "networks"
+
+
+@dataclass(frozen=True)
+class Row:
+    """One published measurement, with its source's half and its network's cost."""
+
+    row_id: str
+    source_id: str
+    half: str
+    computer: str
+    runtime: str
+    target: str
+    precision: str
+    network: str
+    input: str
+    latency_s: float
+    cost: object = None          # a NetworkCost (None: no per-node summary for it)
+
+    @property
+    def group(self) -> str:
+        return f"{self.runtime}/{self.target}/{self.precision}"
+
+
+def _read_csv(path: Path) -> list[dict]:
+    with open(path, encoding="utf-8", newline="") as fh:
+        return [r for r in csv.DictReader(line for line in fh if not line.startswith("#"))]
+
+
+def network_cost(network: str, size: str, folder: Path = NETWORKS):
+    """The per-node cost of ``network`` at input ``size`` (None when not summarised)."""
+    p = folder / f"{network}-{size}.csv"
+    if not p.is_file():
+        return None
+    return NetworkCost.from_csv(p)
+
+
+def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NETWORKS
+              ) -> tuple[list[Row], list[str]]:
+    """(usable rows, why each skipped row was skipped)."""
+    if not table.is_file() or not sources.is_file():
+        return [], [f"no published table ({table.name} / {sources.name} absent)"]
+    halves = {s["source_id"]: s["half"].strip() for s in _read_csv(sources)}
+    rows, skipped, costs = [], [], {}
+    for r in _read_csv(table):
+        rid = r.get("row_id", "?")
+        half = halves.get(r["source_id"])
+        if half not in ("tuning", "heldout"):
+            raise ConfigError(f"{table.name}: row {rid}: source_id = {r['source_id']!r} has no "
+                              f"half in {sources.name}; allowed halves: tuning, heldout")
+        if r["computer"] not in DEVICES:
+            skipped.append(f"{rid}: computer {r['computer']!r} has no profile")
+            continue
+        key = (r["network"], r["input"])
+        if key not in costs:
+            costs[key] = network_cost(*key, folder=networks)
+        if costs[key] is None:
+            skipped.append(f"{rid}: no network summary {key[0]}-{key[1]}.csv")
+            continue
+        try:
+            _rt.resolve(DEVICES[r["computer"]], r["runtime"], r["precision"], r["target"] or None)
+        except ConfigError as e:
+            skipped.append(f"{rid}: {e}")
+            continue
+        rows.append(Row(rid, r["source_id"], half, r["computer"], r["runtime"],
+                        r["target"], r["precision"], r["network"], r["input"],
+                        float(r["latency_ms"]) / 1e3, costs[key]))
+    return rows, skipped
+
+
+def predict_row(row: Row, table: dict) -> float:
+    """Predicted seconds of one row with the efficiency table ``table``."""
+    dev = DEVICES[row.computer]
+    dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
+    return roofline(row.cost, dev, dep, params_for(table, dep))[0]
+
+
+def ratios(rows: list[Row], table: dict) -> np.ndarray:
+    """predicted / published per row."""
+    return np.array([predict_row(r, table) / r.latency_s for r in rows])
+
+
+def _stats(r: np.ndarray) -> dict:
+    a = np.abs(np.log(r))
+    worst = r[int(np.argmax(a))]
+    return {"n": int(r.size), "median_ratio": float(np.exp(np.median(np.log(r)))),
+            "median_abs_ln": float(np.median(a)), "worst_ratio": float(worst),
+            "within_2x": int(np.sum(a <= math.log(2.0)))}
+
+
+def summary(rows: list[Row], table: dict) -> dict:
+    """{half: {"all": stats, "computer": {name: stats}, "runtime": {name: stats},
+    "computer/runtime": {...}}} of the ratios predicted/published."""
+    out: dict = {}
+    r = ratios(rows, table) if rows else np.array([])
+    for half in ("tuning", "heldout"):
+        idx = [i for i, x in enumerate(rows) if x.half == half]
+        if not idx:
+            continue
+        h: dict = {"all": _stats(r[idx])}
+        for label, key in (("computer", lambda x: x.computer), ("runtime", lambda x: x.runtime),
+                           ("computer/runtime", lambda x: f"{x.computer}/{x.runtime}")):
+            groups: dict[str, list[int]] = {}
+            for i in idx:
+                groups.setdefault(key(rows[i]), []).append(i)
+            h[label] = {k: _stats(r[v]) for k, v in sorted(groups.items())}
+        out[half] = h
+    return out
+
+
+def bands(rows: list[Row], table: dict) -> dict:
+    """Held-out published/predicted ranges per ``computer/runtime`` and per ``*/target``
+    (what ``LatencyPrediction.band`` scales the prediction by)."""
+    held = [x for x in rows if x.half == "heldout"]
+    if not held:
+        return {}
+    inv = 1.0 / ratios(held, table)
+    out: dict = {}
+    for _label, key in (("cr", lambda x: f"{x.computer}/{x.runtime}"),
+                       ("t", lambda x: f"*/{x.target}")):
+        groups: dict[str, list[float]] = {}
+        for x, v in zip(held, inv):
+            groups.setdefault(key(x), []).append(float(v))
+        for k, v in groups.items():
+            out[k] = {"min": min(v), "max": max(v), "n": len(v)}
+    return out
+
+
+ENERGY = DATA / "energy_published.csv"
+
+
+def energy_check(table: dict, path: Path = ENERGY, networks: Path = NETWORKS) -> list[dict]:
+    """Energy per inference, predicted against the published watt-meter figures.
+
+    Per row of ``energy_published.csv`` whose computer, deployment and network are known:
+    the published energy (``energy_j``, else ``power_w`` x latency) against the predicted
+    latency x the computer's busy power (both whole-board energy per inference), and, where
+    the source gives the idle power too, the above-idle energies."""
+    if not path.is_file():
+        return []
+    out = []
+    for r in _read_csv(path):
+        cost = network_cost(r["network"], r["input"], networks)
+        if r["computer"] not in DEVICES or cost is None:
+            out.append({"id": r["energy_id"], "skipped": "no profile or network summary"})
+            continue
+        dev = DEVICES[r["computer"]]
+        row = Row(r["energy_id"], r["source_id"], "energy", r["computer"], r["runtime"],
+                  r["target"], r["precision"], r["network"], r["input"], 1.0, cost)
+        try:
+            secs = predict_row(row, table)
+        except ConfigError as e:
+            out.append({"id": r["energy_id"], "skipped": str(e)})
+            continue
+        lat = float(r["latency_ms"]) / 1e3
+        pub = float(r["energy_j"]) if r.get("energy_j") else float(r["power_w"]) * lat
+        rec = {"id": r["energy_id"], "computer": r["computer"], "deployment": row.group,
+               "network": f"{r['network']}-{r['input']}", "published_j": pub,
+               "predicted_j": secs * dev.active_w, "ratio": secs * dev.active_w / pub}
+        if r.get("idle_w") and r.get("power_w"):
+            above = (float(r["power_w"]) - float(r["idle_w"])) * lat
+            rec["above_idle_ratio"] = secs * (dev.active_w - dev.idle_w) / above
+        out.append(rec)
+    return out
+
+
+__all__ = ["ENERGY", "NETWORKS", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
+           "predict_row", "ratios", "summary"]

@@ -1,0 +1,178 @@
+"""Runtimes, targets and precisions: what a deployment is, and what a computer can run.
+
+A deployment is a (runtime, target, precision, threads) on a computer (``Device``):
+
+- runtimes: ``onnxruntime``, ``tflite``, ``ncnn``, ``openvino``, ``opencv-dnn``,
+  ``pytorch``, ``tensorrt``, ``edgetpu``;
+- targets: ``cpu``, ``gpu``, ``npu`` (the compute unit the runtime runs the network on);
+- precisions: ``fp32``, ``fp16``, ``int8``.
+
+``RUNTIME_TARGETS`` says on which units each runtime can run at all (TensorRT: NVIDIA
+GPUs only, per NVIDIA's TensorRT support matrix; the Edge TPU runtime: the Edge TPU
+only, int8 only, per Coral's "TensorFlow models on the Edge TPU" page: "the Edge TPU
+supports only 8-bit" quantized models). A computer's datasheet (``Device.deployments``)
+says which of these it has; ``resolve`` checks a request against it and fills the
+defaults (the computer's first listed deployment for a runtime; the unit's first
+precision), raising a ``ConfigError`` that names the field, the value and what is
+allowed, and both the computer and the runtime when the combination is impossible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from numbers import Integral
+
+from ..errors import ConfigError, close_matches
+
+RUNTIMES = ("onnxruntime", "tflite", "ncnn", "openvino", "opencv-dnn", "pytorch", "tensorrt",
+            "edgetpu")
+TARGETS = ("cpu", "gpu", "npu")
+PRECISIONS = ("fp32", "fp16", "int8")
+#: bytes per tensor element at each precision
+BYTES = {"fp32": 4, "fp16": 2, "int8": 1}
+#: the units each runtime can use at all (the computer narrows this down)
+RUNTIME_TARGETS: dict[str, tuple[str, ...]] = {
+    "onnxruntime": ("cpu", "gpu"), "tflite": ("cpu", "gpu", "npu"), "ncnn": ("cpu", "gpu"),
+    "openvino": ("cpu", "gpu", "npu"), "opencv-dnn": ("cpu", "gpu"), "pytorch": ("cpu", "gpu"),
+    "tensorrt": ("gpu",), "edgetpu": ("npu",),
+}
+#: precisions each runtime can execute (Edge TPU: int8 only)
+RUNTIME_PRECISIONS: dict[str, tuple[str, ...]] = {r: PRECISIONS for r in RUNTIMES}
+RUNTIME_PRECISIONS["edgetpu"] = ("int8",)
+
+
+@dataclass(frozen=True)
+class Deployment:
+    """A resolved (runtime, target, precision, threads) on one computer."""
+
+    runtime: str
+    target: str
+    precision: str
+    threads: int | None = None
+
+    @property
+    def key(self) -> str:
+        """``runtime/target/precision``: the key of the tuned efficiencies."""
+        return f"{self.runtime}/{self.target}/{self.precision}"
+
+    def to_dict(self) -> dict:
+        return {"runtime": self.runtime, "target": self.target, "precision": self.precision,
+                "threads": self.threads}
+
+
+#: runtimes whose fp32 convolutions run as TF32 on tensor cores by default (Ampere and
+#: later): TensorRT ("TF32 is enabled by default", TensorRT developer guide, "Reduced
+#: Precision"), PyTorch (``torch.backends.cudnn.allow_tf32`` defaults to True, PyTorch
+#: notes "TensorFloat-32 (TF32) on Ampere devices"), ONNX Runtime's CUDA provider
+#: (``use_tf32`` defaults to 1, CUDA Execution Provider options)
+TF32_BY_DEFAULT = frozenset(("tensorrt", "pytorch", "onnxruntime"))
+
+
+def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
+    """(precision the arithmetic runs at, bytes per stored element) of a deployment.
+
+    - ncnn on a CPU with fp16 arithmetic (Armv8.2: Cortex-A76, A78AE) computes and stores in
+      fp16 when asked for fp32: its defaults ``use_fp16_arithmetic`` / ``use_fp16_storage``
+      are true (ncnn ``src/option.cpp``);
+    - ONNX Runtime's CPU provider runs an fp16 model in fp32: it implements few operators in
+      fp16 and casts to fp32 around the others (ONNX Runtime docs, "Float16 and mixed
+      precision models"; the CPU provider's kernels are fp32);
+    - fp32 on a GPU with tensor cores runs TF32 (half the fp16 tensor rate) with the
+      runtimes of ``TF32_BY_DEFAULT``; element size stays 4 bytes.
+    """
+    p = dep.precision
+    if dep.runtime == "onnxruntime" and dep.target == "cpu" and p == "fp16":
+        return "fp32", float(BYTES["fp32"])
+    if (dep.runtime == "ncnn" and dep.target == "cpu" and p == "fp32"
+            and "fp16" in unit.precisions):
+        return "fp16", float(BYTES["fp16"])
+    if (p == "fp32" and dep.target == "gpu" and dep.runtime in TF32_BY_DEFAULT
+            and getattr(unit, "tensor_cores", 0) > 0 and "fp16" in unit.precisions):
+        return "tf32", float(BYTES["fp32"])
+    return p, float(BYTES[p])
+
+
+def peak_macs(dep: Deployment, unit) -> float:
+    """The unit's peak MAC/s for the deployment (``compute_precision``; threads on a CPU)."""
+    p, _ = compute_precision(dep, unit)
+    threads = dep.threads if dep.target == "cpu" else None
+    if p == "tf32":
+        return max(unit.peak_macs("fp32"), unit.peak_macs("fp16") / 2.0)
+    return unit.peak_macs(p, threads)
+
+
+def _choice(field: str, value, allowed, where: str) -> str:
+    if not isinstance(value, str) or value not in allowed:
+        raise ConfigError(f"{where}{field} = {value!r} is not allowed"
+                          f"{close_matches(value, allowed) if isinstance(value, str) else ''}; "
+                          f"allowed: {', '.join(allowed)}")
+    return value
+
+
+def check_names(runtime=None, precision=None, target=None, threads=None, *,
+                where: str = "") -> None:
+    """Check the names alone (before a computer is known); None passes."""
+    w = f"{where}: " if where else ""
+    if runtime is not None:
+        _choice("runtime", runtime, RUNTIMES, w)
+    if precision is not None:
+        _choice("precision", precision, PRECISIONS, w)
+    if target is not None:
+        _choice("target", target, TARGETS, w)
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, Integral)
+                                or threads < 1):
+        raise ConfigError(f"{w}threads = {threads!r} is not allowed; expected an int >= 1 "
+                          f"(or None: every core of the computer's CPU)")
+
+
+def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
+            where: str = "") -> Deployment:
+    """The deployment on ``device`` (a ``Device``) with the defaults filled in.
+
+    ConfigError for an unknown name, or for what this computer cannot run (naming the
+    computer, the runtime and what it can run)."""
+    check_names(runtime, precision, target, threads, where=where)
+    w = f"{where}: " if where else ""
+    dflt = dict(getattr(device, "defaults", ()))      # a drone's defaults for its tasks
+    if dflt and runtime is None and (target is None or target == dflt.get("target", target)):
+        runtime, target = dflt.get("runtime"), target or dflt.get("target")
+        precision = precision or dflt.get("precision")
+    if threads is None:
+        threads = dflt.get("threads")
+    deps = [tuple(d.split("/")) for d in device.deployments]
+    if not deps:
+        raise ConfigError(f"{w}device {device.name!r} has no datasheet (no runtimes listed): "
+                          f"runtime/precision cannot be chosen for it")
+    rts = list(dict.fromkeys(r for r, _ in deps))
+    if runtime is None:
+        runtime = rts[0] if target is None else next(
+            (r for r, t in deps if t == target), rts[0])
+    if runtime not in rts:
+        why = ("it has no NVIDIA GPU" if runtime == "tensorrt" else
+               "it has no Edge TPU" if runtime == "edgetpu" else "its datasheet does not list it")
+        raise ConfigError(f"{w}runtime = {runtime!r} cannot run on computer {device.name!r} "
+                          f"({why}); runtimes on {device.name}: {', '.join(rts)}")
+    targets = [t for r, t in deps if r == runtime]
+    if target is None:
+        target = targets[0]
+    if target not in targets:
+        raise ConfigError(f"{w}target = {target!r} is not available for runtime {runtime!r} on "
+                          f"computer {device.name!r}; allowed: {', '.join(targets)}")
+    unit = device.unit(target)
+    precs = [p for p in unit.precisions if p in RUNTIME_PRECISIONS[runtime]]
+    if precision is None:       # what the runtime runs by default: fp32 but on TensorRT/Edge TPU
+        precision = ("fp32" if "fp32" in precs and runtime not in ("tensorrt", "edgetpu")
+                     else precs[0] if precs else unit.precisions[0])
+    if precision not in precs:
+        raise ConfigError(f"{w}precision = {precision!r} cannot run with runtime {runtime!r} "
+                          f"on the {target} of computer {device.name!r}; allowed there: "
+                          f"{', '.join(precs) or 'none'}")
+    if threads is not None and target == "cpu" and threads > unit.cores:
+        raise ConfigError(f"{w}threads = {threads!r} is not allowed on computer {device.name!r}: "
+                          f"its CPU has {unit.cores} cores; expected 1..{unit.cores}")
+    return Deployment(runtime, target, precision, None if threads is None else int(threads))
+
+
+__all__ = ["BYTES", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
+           "TF32_BY_DEFAULT", "Deployment", "check_names", "compute_precision", "peak_macs",
+           "resolve"]

@@ -1,0 +1,144 @@
+"""Choosing the latency model's efficiencies on the TUNING half of the published table.
+
+The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
+
+1. Only rows whose source is in the tuning half are read (``Row.half == "tuning"``); the
+   held-out rows are never seen by the fit.
+2. Parameters, few and shared across computers (a computer enters only through its
+   datasheet: peaks, clock, bandwidth):
+
+   - per target (cpu, gpu, npu): depthwise and matrix-product efficiency relative to dense
+     convolution, the memory efficiency (fraction of the DRAM peak), the dispatch cost per
+     node and the per-inference overhead (both at 1 GHz, scaled by the unit's clock);
+   - per runtime/target/precision with tuning rows: one scale of the compute efficiency;
+   - per runtime/target with tuning rows: one factor on the dispatch cost (how much a
+     runtime fuses and how cheaply it launches: TensorRT against eager PyTorch).
+
+   Nothing is per network, per computer or per row. A runtime/target/precision without
+   tuning rows takes the median scale of the same runtime and target at other precisions,
+   else its target's median; a runtime/target without rows, a dispatch factor of 1.
+3. Fit: robust least squares (``scipy.optimize.least_squares``, soft-L1 loss with a 0.3
+   scale) of ln(predicted / published) over the tuning rows, in log-parameters, with a
+   weak pull (weight ``PRIOR_WEIGHT``) toward the untuned priors (``predict.PRIOR_TARGET``)
+   so that a parameter the rows cannot see stays at its prior; bounds keep efficiencies
+   at or below 1.
+4. Written: the parameters, the tuning statistics and, evaluated after the fit and never
+   fed back, the held-out half's ranges per computer/runtime (the prediction's ``band``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from . import runtimes as _rt
+from .devices import DEVICES
+from .predict import PRIOR_TARGET
+
+PRIOR_WEIGHT = 0.1
+TARGET_PARAMS = ("dwconv", "matmul", "mem", "dispatch_s", "overhead_s")
+BOUNDS = {"dwconv": (0.01, 4.0), "matmul": (0.01, 4.0), "mem": (0.02, 1.0),
+          "dispatch_s": (1e-7, 2e-3), "overhead_s": (1e-6, 0.2)}
+_KIND = {"conv": 0, "dwconv": 1, "matmul": 2, "elementwise": 3, "pool": 4, "data": 5}
+
+
+class _Compiled:
+    """One row as arrays, for fast evaluation inside the fit."""
+
+    def __init__(self, row):
+        dev = DEVICES[row.computer]
+        dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
+        unit = dev.unit(dep.target)
+        nodes = [n for n in row.cost.nodes if not getattr(n, "fused_into", None)]
+        self.target, self.group = dep.target, dep.key
+        self.rt = f"{dep.runtime}/{dep.target}"
+        self.peak = _rt.peak_macs(dep, unit)
+        self.bw = dev.bandwidth_gbs * 1e9
+        self.clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
+        self.kind = np.array([_KIND[n.kind] for n in nodes], dtype=int)
+        self.macs = np.array([float(n.macs) for n in nodes])
+        self.bytes = np.array([float(n.weight_elems + n.in_elems + n.out_elems)
+                               for n in nodes]) * _rt.compute_precision(dep, unit)[1]
+        self.n = len(nodes)
+        self.published = row.latency_s
+
+    def seconds(self, tgt: dict, scale: float, dispatch: float = 1.0) -> float:
+        eff = np.array([tgt["conv"] * scale, tgt["dwconv"] * scale, tgt["matmul"] * scale,
+                        tgt["elementwise"], tgt["pool"], tgt["data"]])
+        eff = np.minimum(eff, 1.0)
+        tc = self.macs / (self.peak * eff[self.kind])
+        tm = self.bytes / (self.bw * tgt["mem"]) if self.bw > 0 else 0.0 * self.bytes
+        return float(np.sum(np.maximum(tc, tm)) + (self.n * tgt["dispatch_s"] * dispatch
+                                                   + tgt["overhead_s"]) / self.clock)
+
+
+def _unpack(theta, targets, groups, rts):
+    out_t, out_g, out_d, i = {}, {}, {}, 0
+    for t in targets:
+        p = dict(PRIOR_TARGET[t])
+        conv = p["conv"]
+        for name in TARGET_PARAMS:
+            v = math.exp(theta[i])
+            p[name] = v * conv if name in ("dwconv", "matmul") else v
+            i += 1
+        out_t[t] = p
+    for g in groups:
+        out_g[g] = math.exp(theta[i])
+        i += 1
+    for r in rts:
+        out_d[r] = math.exp(theta[i])
+        i += 1
+    return out_t, out_g, out_d
+
+
+def _prior(targets, groups, rts):
+    th, lo, hi = [], [], []
+    for t in targets:
+        p = PRIOR_TARGET[t]
+        for name in TARGET_PARAMS:
+            rel = p["conv"] if name in ("dwconv", "matmul") else 1.0
+            th.append(math.log(p[name] / rel))
+            lo.append(math.log(BOUNDS[name][0]))
+            hi.append(math.log(BOUNDS[name][1]))
+    for _ in groups:
+        th.append(0.0)
+        lo.append(math.log(0.01))
+        hi.append(math.log(4.0))
+    for _ in rts:
+        th.append(0.0)
+        lo.append(math.log(0.05))
+        hi.append(math.log(20.0))
+    return np.array(th), np.array(lo), np.array(hi)
+
+
+def tune(rows) -> dict:
+    """The efficiency table fitted on the tuning rows of ``rows`` (see the module docstring)."""
+    tuning = [r for r in rows if r.half == "tuning"]
+    comp = [_Compiled(r) for r in tuning]
+    targets = sorted({c.target for c in comp})
+    groups = sorted({c.group for c in comp})
+    rts = sorted({c.rt for c in comp})
+    th0, lo, hi = _prior(targets, groups, rts)
+    th0 = np.clip(th0, lo + 1e-9, hi - 1e-9)
+
+    def resid(theta):
+        tg, gs, ds = _unpack(theta, targets, groups, rts)
+        r = [math.log(c.seconds(tg[c.target], gs[c.group], ds[c.rt]) / c.published)
+             for c in comp]
+        return np.concatenate([r, PRIOR_WEIGHT * (theta - th0)])
+
+    fit = least_squares(resid, th0, bounds=(lo, hi), loss="soft_l1", f_scale=0.3,
+                        x_scale=1.0, max_nfev=4000)
+    tg, gs, ds = _unpack(fit.x, targets, groups, rts)
+    return {"targets": {t: {k: float(v) for k, v in p.items()} for t, p in tg.items()},
+            "dispatch": {r: {"factor": float(v), "rows": sum(c.rt == r for c in comp)}
+                         for r, v in ds.items()},
+            "groups": {g: {"scale": float(v), "rows": sum(c.group == g for c in comp)}
+                       for g, v in gs.items()},
+            "fit": {"rows": len(comp), "cost": float(fit.cost), "nfev": int(fit.nfev),
+                    "success": bool(fit.success), "prior_weight": PRIOR_WEIGHT}}
+
+
+__all__ = ["BOUNDS", "PRIOR_WEIGHT", "TARGET_PARAMS", "tune"]

@@ -1,0 +1,82 @@
+"""Issue 34: a profile written by ``flockai profile-device`` on this machine (ONNX Runtime
+standing in for the drone's computer), used as a task's computer in flight, reproduces its
+measured p50 and p95 within 5 %; the draws are seeded (same seed, same flight)."""
+
+import numpy as np
+import onnx
+import pytest
+from onnx import TensorProto, helper, numpy_helper
+
+import pytest_flockai as fa
+from pytest_flockai.cli import main
+from pytest_flockai.errors import ConfigError
+
+
+def _net(path, width):
+    rng = np.random.default_rng(1)
+    w1 = numpy_helper.from_array(rng.standard_normal((width, 3, 3, 3)).astype(np.float32), "w1")
+    w2 = numpy_helper.from_array(rng.standard_normal((width, width, 3, 3)).astype(np.float32),
+                                 "w2")
+    nodes = [helper.make_node("Conv", ["x", "w1"], ["c1"], pads=[1] * 4),
+             helper.make_node("Relu", ["c1"], ["r1"]),
+             helper.make_node("Conv", ["r1", "w2"], ["c2"], pads=[1] * 4),
+             helper.make_node("GlobalAveragePool", ["c2"], ["y"])]
+    g = helper.make_graph(nodes, "net", [helper.make_tensor_value_info(
+        "x", TensorProto.FLOAT, [1, 3, 48, 48])],
+        [helper.make_tensor_value_info("y", TensorProto.FLOAT, None)], [w1, w2])
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    onnx.save(m, str(path))
+    return path
+
+
+@pytest.fixture(scope="module")
+def profiled(tmp_path_factory):
+    d = tmp_path_factory.mktemp("measured")
+    net, other = _net(d / "net.onnx", 16), _net(d / "other.onnx", 4)
+    out = d / "host.json"
+    assert main(["profile-device", str(net), "--runtime", "onnxruntime", "--threads", "1",
+                 "--runs", "1000", "--warmup", "5", "--out", str(out)]) == 0
+    return out, net, other
+
+
+def _fly(profile_path, net, seed=0, duration=30.0):
+    task = fa.Task(fa.ml.OnnxModel(net), period_s=0.01, alert="result",
+                   device=fa.compute.profile(profile_path))
+    return fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(altitude=3.0,
+                                                                    duration=duration),
+                      tasks=[task], seed=seed).run()
+
+
+def test_a_measured_profile_in_flight_reproduces_its_p50_and_p95(profiled):
+    out, net, _ = profiled
+    dev = fa.compute.profile(out)
+    samples = dev.latency_samples(net)
+    p50, p95 = np.percentile(samples, 50), np.percentile(samples, 95)
+    # in flight: every inference's latency is one of the measured samples, seeded
+    k = _fly(out, net, duration=3.0).kpis
+    assert k["inference_count"] >= 100 and k["frames_dropped"] == 0
+    assert k["inference_latency_max_s"] in set(samples.tolist())
+    assert _fly(out, net, duration=3.0).kpis == k
+    # the flight's runner over many frames (a long flight, without rendering each frame)
+    task = fa.Task(fa.ml.OnnxModel(net), period_s=0.01, alert="result", device=dev)
+    r = fa.ml.TaskRunner(task).bind(np.random.default_rng(0))
+    frame = np.zeros((48, 48, 3), np.uint8)
+    for i in range(4000):
+        r.on_frame(0.01 * i, frame)
+        r.advance(0.01 * i)
+    r.advance(1e9)
+    got = r.kpis()
+    assert got["inference_count"] == 4000 and got["frames_dropped"] == 0
+    assert got["inference_latency_p50_s"] == pytest.approx(p50, rel=0.05)
+    assert got["inference_latency_p95_s"] == pytest.approx(p95, rel=0.05)
+    assert got["inference_latency_p95_s"] > got["inference_latency_p50_s"]
+    # predict_latency answers from the samples too
+    pred = fa.compute.predict_latency(net, dev)
+    assert pred.method == "measured" and pred.seconds == pytest.approx(p50)
+
+
+def test_a_model_the_profile_does_not_have_is_refused(profiled):
+    out, _, other = profiled
+    with pytest.raises(ConfigError, match="was not profiled"):
+        _fly(out, other, duration=1.0)
