@@ -110,6 +110,7 @@ def _base(alt=1.0):
     return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=alt, duration=2.0))
 
 
+@pytest.mark.slow
 def test_a_warm_sweep_reads_every_variant_and_starts_no_worker(tmp_path, monkeypatch):
     cache = FlightCache(tmp_path)
     with caching(cache):

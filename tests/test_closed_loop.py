@@ -149,6 +149,7 @@ def red_tops(frame):
     return np.asarray(rows, float).reshape(-1, 6)
 
 
+@pytest.mark.slow
 def test_a_slow_radio_degrades_the_loop():
     """The frames go to the ground station and the boxes come back: over 802.11n a frame's
     round trip takes 8 ms; over a 64 kbit/s SiK telemetry radio the JPEG takes ~0.7 s,

@@ -98,6 +98,7 @@ def test_strips_split_the_legs_of_one_zigzag():
     assert [sub[0][1] for sub in parts] == [0.0, 75.0, 125.0]           # 7 legs: 3, 2, 2
 
 
+@pytest.mark.slow
 def test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time():
     area = ((0, 0), (300, 375))                                   # 16 legs of 300 m, 25 m apart
 
@@ -281,6 +282,7 @@ def test_two_drones_with_camera_tasks_get_their_own_latency_and_evaluation_kpis(
     assert r.kpis["fleet.inference_latency_p95_s"] > 0
 
 
+@pytest.mark.slow
 def test_remote_task_latency_grows_with_the_fleet_on_a_shared_link():
     """64 kbit/s telemetry radio: a 64 x 48 JPEG takes ~0.3 s of airtime, frames every
     0.5 s, so four drones sharing the channel queue for it; on their own channels they

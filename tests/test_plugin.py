@@ -496,6 +496,7 @@ def test_hover(flight):
 
 
 # -- xdist ---------------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_xdist_reports_equal_the_serial_ones(pytester):
     pytest.importorskip("xdist")
     make(pytester, "".join(f'''
