@@ -322,7 +322,7 @@ def test_a_fleet_of_one_with_a_remote_camera_task_flies_like_the_single_mission(
     world = fa.World.urban(seed=3, size=(160.0, 160.0), people=40, max_building_height=10.0)
     mavic = fa.drone(MAVIC, width=64, height=48)
     pilot = fa.pilots.Waypoints([(0, 0, 15), (20, 0, 15)], speed=5)
-    single = fa.Mission(mavic, pilot, world, tasks=[_task("remote", link="sik-915")], seed=3).run()
+    single = fa.Mission(mavic, pilot, world=world, tasks=[_task("remote", link="sik-915")], seed=3).run()
     fleet = fa.Fleet([fa.FleetDrone("solo", mavic, pilot, pad=(0, 0), seed=3,
                                     tasks=[_task("remote", link="sik-915")])], world=world).run()
     assert single.kpis["cnn.inference_count"] > 20

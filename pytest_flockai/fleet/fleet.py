@@ -137,7 +137,7 @@ class Fleet:
         if (self.area is None) != (self.swath_m is None):
             raise ConfigError(f"Fleet: area = {area!r} and swath_m = {swath_m!r}: give both (for "
                               f"fleet.coverage_fraction) or neither")
-        self.missions = [Mission(fd.drone, fd.pilot, world, tasks=fd.tasks, probes=fd.probes,
+        self.missions = [Mission(fd.drone, fd.pilot, world=world, tasks=fd.tasks, probes=fd.probes,
                                  seed=fd.seed, until=until, max_time_s=max_time_s,
                                  telemetry_hz=telemetry_hz, name=fd.name, policies=fd.policies,
                                  actors=actors) for fd in drones]
