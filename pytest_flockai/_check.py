@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Collection
 from numbers import Real
@@ -100,3 +101,14 @@ def area(value: Any, *, where: str) -> tuple[float, float, float, float]:
         raise ConfigError(f"{_where(where)}area = {value!r} is degenerate; both sides must be "
                           f"longer than 0")
     return x0, y0, x1, y1
+
+
+def replace(spec: Any, where: str, changes: dict) -> Any:
+    """``dataclasses.replace`` of a frozen spec (Mission, Fleet, FleetDrone), so checked
+    again like a new one; an unknown field is a ConfigError naming it and the allowed."""
+    known = [f.name for f in dataclasses.fields(spec) if f.init]
+    for k in changes:
+        if k not in known:
+            raise ConfigError(f"{where}.replace: {k} is not a {where} field"
+                              f"{close_matches(k, known)}; allowed: {', '.join(known)}")
+    return dataclasses.replace(spec, **changes)

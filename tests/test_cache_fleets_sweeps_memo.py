@@ -33,9 +33,9 @@ def fleet(**kw):
     battery = kw.pop("battery_mah", None)
     drones = [fa.FleetDrone(f"d{i}", fa.drone("crazyflie-2-1", **({"battery_mah": battery}
                                                                   if battery and i else {})),
-                            fa.pilots.Hover(altitude=alt, duration=2.0), pad, seed=s)
+                            fa.pilots.Hover(altitude=alt, duration=2.0), pad=pad, seed=s)
               for i, (pad, s) in enumerate(zip(pads, seeds))]
-    return fa.Fleet(drones, kw.pop("world", None), **kw)
+    return fa.Fleet(drones, world=kw.pop("world", None), **kw)
 
 
 def test_a_cached_fleet_equals_the_flown_one_and_is_reported_like_a_flight(tmp_path):

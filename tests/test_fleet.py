@@ -47,7 +47,7 @@ def test_crossing_paths_separated_in_altitude_do_not_collide():
 def small_fleet(seed0: int = 0) -> fa.Fleet:
     area = ((0, 0), (60, 60))
     parts = fa.fleet.survey(area, 2, altitude=12, spacing=20, speed=8)
-    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(MAVIC), p, pad, seed=seed0 + i)
+    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(MAVIC), p, pad=pad, seed=seed0 + i)
                      for i, (p, pad) in enumerate(parts)], area=area, swath_m=20)
 
 
@@ -104,7 +104,7 @@ def test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time():
 
     def fly(n):
         parts = fa.fleet.survey(area, n, altitude=30, spacing=25, speed=8)
-        return fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad, seed=i)
+        return fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad=pad, seed=i)
                          for i, (p, pad) in enumerate(parts)], area=area, swath_m=25).run()
     one, four = fly(1), fly(4)
     assert one.kpis["fleet.coverage_fraction"] > 0.99 and four.kpis["fleet.coverage_fraction"] > 0.99

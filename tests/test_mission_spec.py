@@ -63,3 +63,30 @@ def test_live_subscribers_stay_with_their_mission():
     assert m.replace(seed=2).subscribers == []
     assert pickle.loads(pickle.dumps(m)).subscribers == []
     assert m.subscribers == [q]
+
+
+def _fleet(**kw):
+    pilot = fa.pilots.Hover(2.0, 1.0)
+    drones = [fa.FleetDrone(f"d{i}", fa.drone("crazyflie-2-1"), pilot, pad=(3.0 * i, 0.0))
+              for i in range(2)]
+    return fa.Fleet(drones, **kw)
+
+
+def test_fleet_and_fleet_drone_are_frozen_specs_too():
+    fleet = _fleet(until=2.0)
+    fd = fleet.drones[0]
+    with pytest.raises(dataclasses.FrozenInstanceError, match="'until'"):
+        fleet.until = 3.0
+    with pytest.raises(dataclasses.FrozenInstanceError, match="'seed'"):
+        fd.seed = 2
+    with pytest.raises(ConfigError, match=r"FleetDrone 'd0': seed = -1 is not allowed"):
+        fd.replace(seed=-1)
+    with pytest.raises(ConfigError, match=r"until = 'lnded' is not allowed"):
+        fleet.replace(until="lnded")
+    with pytest.raises(ConfigError, match=r"drones\[1\].pad = \(0.0, 0.0\).*two drones at one pad"):
+        fleet.replace(drones=[fd, fleet.drones[1].replace(pad=(0.0, 0.0))])
+    with pytest.raises(TypeError, match="positional"):
+        fa.FleetDrone("d9", fa.drone("crazyflie-2-1"), fa.pilots.Hover(2.0, 1.0), (0.0, 0.0))
+    later = fleet.replace(drones=[fd.replace(seed=5), fleet.drones[1]])
+    assert later.seed == (5, 0) and later.missions[0].seed == 5 and fleet.seed == (0, 0)
+    assert later.until == 2.0 and later.missions[1].until == 2.0

@@ -15,7 +15,6 @@ partial result).
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import queue
 import time as _time
@@ -28,7 +27,7 @@ from .. import _check, limits
 from .. import cache as _cache
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
-from ..errors import ConfigError, SimulationError, close_matches
+from ..errors import ConfigError, SimulationError
 from ..probes.hub import resolve_probes
 from ..recording import publish
 from ..result import FlightResult
@@ -159,12 +158,7 @@ class Mission:
     def replace(self, **changes) -> Mission:
         """A copy with ``changes`` (field=value), checked again like a new Mission
         (``dataclasses.replace``); live subscribers are not copied."""
-        known = [f.name for f in dataclasses.fields(self) if f.init]
-        for k in changes:
-            if k not in known:
-                raise ConfigError(f"Mission.replace: {k} is not a Mission field"
-                                  f"{close_matches(k, known)}; allowed: {', '.join(known)}")
-        return dataclasses.replace(self, **changes)
+        return _check.replace(self, "Mission", changes)
 
     def subscribe(self, target: Callable[[dict], object] | queue.Queue) -> Mission:
         """Receive probe samples live: ``target`` is a callable ``fn(sample)`` or a
