@@ -95,7 +95,7 @@ def fleet(policies: bool) -> fa.Fleet:
         eye = fa.Task(fa.ml.Oracle(classes=["person"]), period_s=0.2, evaluate="detection",
                       name="eye")
         pol = [fa.policy.SharedSearch("eye", station)] if policies else []
-        drones.append(fa.FleetDrone(f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad,
+        drones.append(fa.FleetDrone(f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad=pad,
                                     tasks=[eye], seed=i, policies=pol))
     return fa.Fleet(drones, world=fa.World.scene(size=(140.0, 140.0)))
 

@@ -36,7 +36,7 @@ def area_for(n: int, minutes: float):
 def fleet(n: int, minutes: float) -> fa.Fleet:
     area = area_for(n, minutes)
     parts = fa.fleet.survey(area, n, altitude=ALT, spacing=SPACING, speed=SPEED)
-    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(BLUEPRINT), p, pad, seed=i)
+    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(BLUEPRINT), p, pad=pad, seed=i)
                      for i, (p, pad) in enumerate(parts)], area=area, swath_m=SPACING)
 
 

@@ -23,7 +23,7 @@ from pytest_flockai.mission.plan import resolve
 
 
 def plan(world):
-    return resolve(fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(2.0), world, until=1.0))
+    return resolve(fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(2.0), world=world, until=1.0))
 
 
 def timed_build(p) -> float:

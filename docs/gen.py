@@ -1,7 +1,7 @@
 """Tables of the docs site generated from the code, so they cannot drift: the
 plugin's options and ini keys, its markers, the KPI registry, the CLI's help,
-the import layers (from tests/test_architecture.py), the blueprints, the
-computers and the resource limits.
+the import layers (from tests/test_architecture.py), a drone's stepping order
+(``mission/steps.py``), the blueprints, the computers and the resource limits.
 
 Used by the mkdocs hook (docs/hooks.py): a page line ``<!-- gen:NAME -->`` is
 replaced by ``TABLES[NAME]()``. Also runnable: ``python docs/gen.py kpis``."""
@@ -107,6 +107,16 @@ def layers() -> str:
     return _md(["layer", "modules and packages (each imports only from its layer or below)"], rows)
 
 
+def step_order() -> str:
+    """The components of one drone in the order the loop steps them (STEP_ORDER)."""
+    from pytest_flockai.mission.steps import STEP_ORDER
+
+    rows = [[str(i), f"`{s.component}`" if " " not in s.component else s.component,
+             f"`{s.module}`" if not s.module.startswith("`") else s.module, s.does, s.clock]
+            for i, s in enumerate(STEP_ORDER, 1)]
+    return _md(["#", "component", "module", "does", "when it is due"], rows)
+
+
 def blueprints() -> str:
     """The built-in blueprints with their mass and battery."""
     import pytest_flockai as fa
@@ -172,7 +182,7 @@ def limits() -> str:
 
 
 TABLES = {"options": options, "markers": markers, "kpis": kpis, "cli": cli, "layers": layers,
-          "blueprints": blueprints, "devices": devices, "limits": limits,
+          "step_order": step_order, "blueprints": blueprints, "devices": devices, "limits": limits,
           "computers": computers, "latency_validation": latency_validation}
 
 

@@ -1,5 +1,5 @@
 """mkdocs hook: replace ``<!-- gen:NAME -->`` lines with tables generated from the
-code (docs/gen.py), so the options, markers, KPIs, CLI, layers, blueprints,
+code (docs/gen.py), so the options, markers, KPIs, CLI, layers, stepping order, blueprints,
 computers and limits in the docs are the code's own."""
 
 from __future__ import annotations

@@ -167,7 +167,7 @@ def search_fleet(n: int) -> fa.Fleet:
                                                      speed=6.0)):
         eye = fa.Task(fa.ml.Oracle(classes=["person"]), period_s=0.5, evaluate="detection",
                       name="eye")
-        drones.append(fa.FleetDrone(f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad,
+        drones.append(fa.FleetDrone(f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad=pad,
                                     tasks=[eye], seed=i,
                                     policies=[fa.policy.SharedSearch("eye", station, orbit_s=10.0)]))
     return fa.Fleet(drones, world=fa.World.scene(size=(140.0, 140.0)), actors=people)

@@ -28,8 +28,8 @@ def fleet(n: int, link: str, city) -> fa.FleetResult:
         off = fa.fleet.Offload(period_s=5.0, frame_bytes=FRAME_BYTES, result_bytes=RESULT_BYTES,
                                macs=CNN_MACS, link=link, ground_station=(-125.0, 0.0, 1.0))
         _RESULTS[key] = fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone("dji-mavic-2-pro"), p,
-                                                pad, seed=i) for i, (p, pad) in enumerate(parts)],
-                                 city, area=AREA, swath_m=12.5, offload=off).run()
+                                                pad=pad, seed=i) for i, (p, pad) in enumerate(parts)],
+                                 world=city, area=AREA, swath_m=12.5, offload=off).run()
     return _RESULTS[key]
 
 

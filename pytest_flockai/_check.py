@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Collection
 from numbers import Real
@@ -108,3 +109,14 @@ def overrides(obj: object, base: type, method: str, hint: str = "") -> None:
     if getattr(type(obj), method, None) is getattr(base, method):
         raise ConfigError(f"{type(obj).__name__}: a {base.__name__} needs a {method}{hint} "
                           f"method; define it in the subclass")
+
+
+def replace(spec: Any, where: str, changes: dict) -> Any:
+    """``dataclasses.replace`` of a frozen spec (Mission, Fleet, FleetDrone), so checked
+    again like a new one; an unknown field is a ConfigError naming it and the allowed."""
+    known = [f.name for f in dataclasses.fields(spec) if f.init]
+    for k in changes:
+        if k not in known:
+            raise ConfigError(f"{where}.replace: {k} is not a {where} field"
+                              f"{close_matches(k, known)}; allowed: {', '.join(known)}")
+    return dataclasses.replace(spec, **changes)

@@ -14,9 +14,13 @@ def pytest_flockai_adjust_mission(mission, item):
     """Adjust the Mission built by the ``mission`` fixture before it is flown.
 
     Called once per test that uses the ``mission`` (or ``flight``) fixture,
-    after the fixtures and the ``flockai`` marker have been applied. Change the
-    mission in place (``mission.seed = ...``, ``mission.until = 60.0``); the
-    return value is ignored.
+    after the fixtures and the ``flockai`` marker have been applied. The mission
+    is a frozen spec: return a changed copy (``mission.replace(seed=42,
+    until=60.0)``, checked like a new Mission), or None to keep it. Several
+    hooks run in pytest's order, each given the spec the one before returned.
+    A hook that assigns fields in place (``mission.seed = 42``) and returns None
+    still works, with a ``DeprecationWarning``: its changes go through
+    ``replace`` and are checked.
 
     :param mission: the ``pytest_flockai.Mission`` about to be returned.
     :param item: the pytest test item.

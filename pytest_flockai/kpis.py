@@ -7,6 +7,7 @@ at run time with ``register``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from .errors import ConfigError
@@ -212,3 +213,53 @@ def register(name: str, unit: str = "1", better: str | None = None, description:
         raise ConfigError(f"KPI {name!r} is built in; choose another name")
     REGISTRY[name] = k
     return k
+
+
+# -- the one regression rule: the plugin's baseline gate and ``flockai compare`` both call it --
+#: a relative change below this is float noise, whatever the KPI
+NOISE_REL = 1e-6
+
+
+def family(kpi: str) -> str:
+    """The KPI with a task's or a drone's prefix taken off (``det.recall`` ->
+    ``recall``, ``drone-2.flight_time_s`` -> ``flight_time_s``); registered names
+    (``fleet.makespan_s``) and family members (``recall.person``) stay."""
+    if kpi in BUILTIN or "." not in kpi:
+        return kpi
+    head, rest = kpi.split(".", 1)
+    if head in FAMILIES:
+        return kpi
+    return family(rest) if get(rest) is not None else kpi
+
+
+def tolerance(kpi: str, abs_tol: dict | None = None) -> float:
+    """The absolute tolerance of ``kpi``: an override (by name or family), else the registry's."""
+    over = abs_tol or {}
+    if kpi in over:
+        return float(over[kpi])
+    if family(kpi) in over:
+        return float(over[family(kpi)])
+    return abs_tolerance(kpi)
+
+
+def classify(kpi: str, base, new, threshold_pct: float,
+             abs_tol: dict | None = None) -> tuple[str | None, str]:
+    """(better direction, status) of one KPI from ``base`` to ``new``: "n/a" (missing or
+    not finite), "same" (within the absolute tolerance or float noise), "changed" (no
+    better direction), "better", "worse" (within ``threshold_pct`` percent of the base)
+    or "regression". The plugin's baseline gate (``report.regressions``) and
+    ``flockai compare`` (``reports.compare``) both decide with this function."""
+    info = get(kpi)
+    better = info.better if info is not None else None
+    if base is None or new is None or not (math.isfinite(base) and math.isfinite(new)):
+        return better, "n/a"
+    noise = max(tolerance(kpi, abs_tol), NOISE_REL * max(abs(base), abs(new)))
+    if abs(new - base) <= noise:
+        return better, "same"
+    if better is None:
+        return better, "changed"
+    worse = new < base if better == "higher" else new > base
+    if not worse:
+        return better, "better"
+    tol = max(abs(base) * threshold_pct / 100.0, noise)
+    return better, "regression" if abs(new - base) > tol else "worse"

@@ -263,7 +263,8 @@ def regressions(flights: dict, base: dict, max_regression_pct: float, *,
     """KPIs of ``flights`` ({flight: kpis}) worse than ``base`` ({flight: kpis}) by
     more than ``max_regression_pct`` percent (or ``per_kpi[kpi]`` percent) and
     more than the KPI's absolute tolerance (``kpis.abs_tolerance``, or
-    ``abs_tol[kpi]``), in each KPI's ``better`` direction.
+    ``abs_tol[kpi]`` by name or family): ``kpis.classify``'s "regression", the
+    rule ``flockai compare`` applies too.
 
     KPIs without a better direction, missing on either side or non-finite are
     not compared."""
@@ -274,21 +275,16 @@ def regressions(flights: dict, base: dict, max_regression_pct: float, *,
         if not bk:
             continue
         for kpi, b in bk.items():
-            info = _kpis.get(kpi)
             a = kp.get(kpi)
-            if info is None or info.better is None or a is None or b is None:
+            if a is None or b is None:
                 continue
             a, b = float(a), float(b)
-            if not (math.isfinite(a) and math.isfinite(b)):
-                continue
-            frac = per_kpi.get(kpi, max_regression_pct) / 100.0
-            atol = (abs_tol or {}).get(kpi, _kpis.abs_tolerance(kpi))
-            tol = max(abs(b) * frac, atol, 1e-6 * max(abs(a), abs(b)))
-            worse = a < b - tol if info.better == "higher" else a > b + tol
-            if worse:
+            better, status = _kpis.classify(kpi, b, a, per_kpi.get(kpi, max_regression_pct),
+                                            abs_tol)
+            if status == "regression":
                 change = (a - b) / abs(b) * 100.0 if b != 0 else math.inf
                 out.append({"flight": fname, "kpi": kpi, "baseline": b, "actual": a,
-                            "change_pct": change, "better": info.better})
+                            "change_pct": change, "better": better})
     return out
 
 

@@ -1,7 +1,9 @@
 """Shared test configuration: pytester, and the test groups.
 
-Groups are markers (registered in pyproject.toml), given here by file or test name
-so the test files stay about what they check:
+Groups are markers (registered in pyproject.toml), set in the test files themselves
+(``pytestmark = pytest.mark.slow`` for a whole file, ``@pytest.mark.slow`` for one test,
+``pytest.param(..., marks=pytest.mark.slow)`` for one parametrization), so a renamed test
+keeps its group:
 
 - ``slow``: more than a few seconds on an idle 2-core machine (hypothesis searches,
   pytester runs under xdist, flights to battery depletion, JIT compiles, packaging);
@@ -35,71 +37,6 @@ for _name in ("numpy", "pandas", "mujoco", "cv2", "onnxruntime", "matplotlib.pyp
         importlib.import_module(_name)
     except ImportError:
         pass
-
-#: whole files whose every test is slow
-SLOW_FILES = {"test_sweep_mjx.py", "test_sweep_batched.py", "test_interrupted_runs.py",
-              "test_packaging.py", "test_baseline_gate.py", "test_fuzz.py",
-              "test_sweep_cluster.py", "test_sweep_failures.py"}
-#: single slow tests, by function name (all their parametrizations)
-SLOW_TESTS = {
-    # real MAVLink apps flying at 1-4x real time (tests/test_app.py)
-    "test_mavsdk_take_off_and_land_within_a_flight_time_budget",
-    "test_mavsdk_offboard_position_setpoints_fly_a_square_with_headings",
-    "test_mavsdk_mission_gives_the_same_kpis_at_speed_1_and_20",
-    "test_mavsdk_orbit_circles_the_point_and_returns",
-    "test_two_apps_at_once_each_fly_only_their_own_drone",
-    "test_app_tests_in_parallel_workers_never_cross",
-    "test_a_hanging_app_fails_in_time_naming_what_it_waited_for_and_leaves_nothing",
-    "test_hypothesis_finds_wind_breaking_a_flight_time_budget",
-    "test_hypothesis_finds_and_shrinks_a_failing_condition",
-    "test_the_robustness_search_finds_the_haze",
-    "test_the_hypothesis_example_shrinks_to_the_boundary",
-    "test_xdist_workers_share_the_cache",
-    "test_xdist_reports_equal_the_serial_ones",
-    "test_every_readme_example_runs",
-    "test_mavic_25kmh_until_depleted_lasts_31_min_and_beats_hover",
-    "test_mavic_hover_until_depleted_lasts_29_min",
-    "test_crazyflie_hover_about_7_min",
-    "test_hypothesis_examples_are_recorded_compactly",
-    "test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time",
-    "test_onboard_costs_processing_energy_and_flight_time",
-    "test_recall_falls_with_haze_and_with_blur",
-    "test_blur_length_is_speed_times_exposure_times_focal_over_altitude",
-    "test_the_tutorial_test_file_passes_under_pytest",
-    "test_the_readme_test_file_passes_under_pytest",
-    "test_modeled_latency_identical_measured_reports_spread",
-    "test_a_warm_sweep_reads_every_variant_and_starts_no_worker",
-    "test_same_dataframe_with_one_or_two_worker_processes",
-    "test_remote_task_latency_grows_with_the_fleet_on_a_shared_link",
-    "test_the_dashboard_in_a_headless_browser",
-    "test_the_example_suite_dashboard_at_1280_px",
-    "test_cruise_beats_hover_on_a_small_folding_drone",
-    "test_the_wheel_carries_the_shipped_models",
-    "test_a_slow_radio_degrades_the_loop",
-    "test_lands_on_the_marker",
-    "test_a_decide_that_sleeps_for_ever_is_stopped_in_the_main_thread",
-    "test_a_verify_fraction_without_the_verify_mode_is_a_usage_error",
-    "test_a_measured_profile_in_flight_reproduces_its_p50_and_p95",
-    "test_the_stored_efficiencies_are_what_the_tuning_procedure_gives",
-}
-JAX_FILES = {"test_sweep_mjx.py"}
-BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",
-                 "test_the_worst_frames_are_in_the_dashboard_with_boxes_on_the_right_objects",
-                 "test_the_example_suite_dashboard_at_1280_px"}
-
-
-def pytest_collection_modifyitems(items):
-    for item in items:
-        fname = item.path.name
-        func = getattr(item, "originalname", item.name)
-        if fname in SLOW_FILES or func in SLOW_TESTS:
-            item.add_marker(pytest.mark.slow)
-        if fname in JAX_FILES:
-            item.add_marker(pytest.mark.jax)
-        if func in BROWSER_TESTS or "headless_browser" in func:
-            item.add_marker(pytest.mark.browser)
-        if func.startswith("test_every_docs_example_runs") and "imaging-conditions" in item.name:
-            item.add_marker(pytest.mark.slow)
 
 
 def pytest_sessionstart(session):

@@ -60,6 +60,7 @@ def test_pymavlink_program_flies_its_commands_and_lands():
     assert abs(tel["y"].iloc[-1] - 10.0) < 1.0 and abs(tel["x"]).max() < 1.0
 
 
+@pytest.mark.slow
 @needs_mavsdk
 @pytest.mark.flockai_app(cmd=app("mavsdk_takeoff_land.py"), timeout_s=90)
 @pytest.mark.kpi(flight_time_s="<= 20 s", **{"app.commands_denied": "== 0"})
@@ -70,6 +71,7 @@ def test_mavsdk_take_off_and_land_within_a_flight_time_budget(flight):
     assert tel["z"].max() - tel["z"].iloc[0] == pytest.approx(5.0, abs=0.4)   # set by the app
 
 
+@pytest.mark.slow
 @needs_mavsdk
 def test_mavsdk_offboard_position_setpoints_fly_a_square_with_headings():
     r = fa.app.run(app("mavsdk_offboard.py"), fa.drone(DRONE), speed=2.0, timeout_s=120)
@@ -84,6 +86,7 @@ def test_mavsdk_offboard_position_setpoints_fly_a_square_with_headings():
         assert np.min(np.abs(np.angle(np.exp(1j * (yaw - want))))) < 0.1, heading
 
 
+@pytest.mark.slow
 @needs_mavsdk
 def test_mavsdk_mission_gives_the_same_kpis_at_speed_1_and_20():
     runs = {}
@@ -104,6 +107,7 @@ def test_mavsdk_mission_gives_the_same_kpis_at_speed_1_and_20():
         assert np.min(np.hypot(xy[:, 0] - east, xy[:, 1] - north)) < 1.0
 
 
+@pytest.mark.slow
 @needs_mavsdk
 def test_mavsdk_orbit_circles_the_point_and_returns():
     r = fa.app.run(app("mavsdk_orbit.py"), fa.drone(DRONE), speed=2.0, timeout_s=120)
@@ -117,6 +121,7 @@ def test_mavsdk_orbit_circles_the_point_and_returns():
     assert ("DO_ORBIT", "ACCEPTED") in [(e["command"], e["result"]) for e in events(res, "app_command")]
 
 
+@pytest.mark.slow
 def test_two_apps_at_once_each_fly_only_their_own_drone():
     out: dict = {}
 
@@ -137,6 +142,7 @@ def test_two_apps_at_once_each_fly_only_their_own_drone():
         assert (y.max() if north > 0 else -y.min()) < abs(north) + 1.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("north", [6.0, -6.0])
 def test_app_tests_in_parallel_workers_never_cross(north):
     """Run with ``-n 2``: both fly at once, each must end where its own app sent it."""
@@ -155,6 +161,7 @@ def _alive(pid: int) -> bool:
         return f.read().split(")")[-1].split()[0] != "Z"
 
 
+@pytest.mark.slow
 def test_a_hanging_app_fails_in_time_naming_what_it_waited_for_and_leaves_nothing():
     t0 = time.monotonic()
     with pytest.raises(fa.app.AppError) as info:

@@ -11,6 +11,8 @@ import json
 
 import pytest
 
+pytestmark = pytest.mark.slow
+
 TEST = '''
 import pytest
 import pytest_flockai as fa

@@ -33,9 +33,9 @@ def fleet(**kw):
     battery = kw.pop("battery_mah", None)
     drones = [fa.FleetDrone(f"d{i}", fa.drone("crazyflie-2-1", **({"battery_mah": battery}
                                                                   if battery and i else {})),
-                            fa.pilots.Hover(altitude=alt, duration=2.0), pad, seed=s)
+                            fa.pilots.Hover(altitude=alt, duration=2.0), pad=pad, seed=s)
               for i, (pad, s) in enumerate(zip(pads, seeds))]
-    return fa.Fleet(drones, kw.pop("world", None), **kw)
+    return fa.Fleet(drones, world=kw.pop("world", None), **kw)
 
 
 def test_a_cached_fleet_equals_the_flown_one_and_is_reported_like_a_flight(tmp_path):
@@ -110,6 +110,7 @@ def _base(alt=1.0):
     return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=alt, duration=2.0))
 
 
+@pytest.mark.slow
 def test_a_warm_sweep_reads_every_variant_and_starts_no_worker(tmp_path, monkeypatch):
     cache = FlightCache(tmp_path)
     with caching(cache):

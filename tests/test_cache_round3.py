@@ -93,6 +93,7 @@ def test_side_files_an_object_lists_are_keyed_by_their_bytes(tmp_path):
 
 
 # -- item 4: a verify fraction without the verify mode ---------------------------------------------
+@pytest.mark.slow
 def test_a_verify_fraction_without_the_verify_mode_is_a_usage_error(pytester):
     pytester.makepyfile("def test_x():\n    pass\n")
     res = pytester.runpytest_subprocess("--flockai-cache-verify=0.5", "-p", "cacheprovider")

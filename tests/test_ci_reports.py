@@ -180,6 +180,8 @@ def _browser(*args, timeout=120):
 
 
 @needs_browser
+@pytest.mark.slow
+@pytest.mark.browser
 def test_the_dashboard_in_a_headless_browser(run_with_baseline, tmp_path):
     """Chromium loads the page and runs its script: the tables are there, sorting by
     a KPI (through the page's own sort, asked for in the URL) orders the rows, and

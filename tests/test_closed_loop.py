@@ -110,8 +110,7 @@ def test_an_oracle_renders_no_frame():
             pass
 
     m = follow_mission(until=20.0)
-    m.components.append(Spy())
-    res = m.run()
+    res = m.replace(components=[*m.components, Spy()]).run()
     assert res.kpis["eye.inference_count"] > 20
     assert seen["camera"].frames == 0
 
@@ -132,9 +131,8 @@ def test_flight_cache_keys_include_policies_and_actors():
     assert flight_key(follow_mission()) == base
     assert flight_key(follow_mission(on_lost="land")) != base
     assert flight_key(follow_mission(delay_s=0.5)) != base
-    other = follow_mission()
-    other.actors = (fa.actors.walk_and_turn(start=(3.0, 0.0), start_s=12.0, turn_deg=-90.0,
-                                            name="alice"),)
+    other = follow_mission().replace(actors=(fa.actors.walk_and_turn(
+        start=(3.0, 0.0), start_s=12.0, turn_deg=-90.0, name="alice"),))
     assert flight_key(other) != base
 
 
@@ -149,6 +147,7 @@ def red_tops(frame):
     return np.asarray(rows, float).reshape(-1, 6)
 
 
+@pytest.mark.slow
 def test_a_slow_radio_degrades_the_loop():
     """The frames go to the ground station and the boxes come back: over 802.11n a frame's
     round trip takes 8 ms; over a 64 kbit/s SiK telemetry radio the JPEG takes ~0.7 s,

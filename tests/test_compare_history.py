@@ -139,3 +139,26 @@ def test_history_of_a_kpi_no_run_has_exits_2_naming_the_close_ones(tmp_path, cap
 def test_history_of_a_missing_directory_exits_2(tmp_path, capsys):
     assert cli.main(["history", str(tmp_path / "none"), "--kpi", "endurance_s"]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_the_gate_and_compare_apply_one_rule():
+    """The plugin's baseline gate (report.regressions) and ``flockai compare`` call one
+    function, so they cannot disagree: a regression in one is one in the other, and a
+    family tolerance (``recall`` for ``det.recall``) counts in the gate as in compare."""
+    from pytest_flockai import kpis, report
+
+    assert cmp.classify is kpis.classify
+    cases = [("energy_total_j", 100.0, v) for v in (100.0, 100.005, 101.0, 104.9, 105.2, 99.0)]
+    cases += [("det.recall", 0.8, v) for v in (0.8, 0.79995, 0.77, 0.75, 0.7, 0.9)]
+    cases += [("crashed", 0.0, 1.0), ("distance_m", 10.0, 20.0), ("endurance_s", 0.0, 0.0)]
+    for pct in (0.0, 5.0):
+        for tol in (None, {"recall": 0.06}, {"energy_total_j": 2.0}):
+            for kpi, base, new in cases:
+                gated = report.regressions({"f": {kpi: new}}, {"f": {kpi: base}}, pct,
+                                           abs_tol=tol)
+                status = cmp.classify(kpi, base, new, pct, tol)[1]
+                assert bool(gated) == (status == "regression"), (kpi, base, new, pct, tol)
+    # the family override: 0.8 -> 0.75 is a 6 % drop, tolerated by recall=0.06 in both
+    assert report.regressions({"f": {"det.recall": 0.75}}, {"f": {"det.recall": 0.8}}, 5.0)
+    assert not report.regressions({"f": {"det.recall": 0.75}}, {"f": {"det.recall": 0.8}}, 5.0,
+                                  abs_tol={"recall": 0.06})

@@ -24,6 +24,7 @@ class _Capture(fa.ml.PythonModel):
         self.cam, self.blur, self.z, self.v = cam, [], [], []
 
 
+@pytest.mark.slow
 def test_blur_length_is_speed_times_exposure_times_focal_over_altitude():
     """A pass at 10 m/s, 30 m up, 1/50 s shutter: 10 * 0.02 * f / 30 px; zero at hover."""
     cam = fa.sensors.Camera(fov_deg=51.0, name="eye", rate_hz=10.0,
@@ -108,6 +109,7 @@ def _recall(scene, cond, velocity=(0.0, 0.0, 0.0)):
     return detection_kpis(recs, ("person", "vehicle"), score_threshold=0.4, min_visible=0.25)["recall"]
 
 
+@pytest.mark.slow
 def test_recall_falls_with_haze_and_with_blur(scene):
     haze = [_recall(scene, fa.Conditions(visibility_m=v, noise=False)) for v in (1e9, 150, 60, 25)]
     blur = [_recall(scene, fa.Conditions(exposure_s=e, noise=False), velocity=(12.0, 0.0, 0.0))
@@ -157,6 +159,7 @@ def test_recall_budget_holds(cond, speed):
 '''
 
 
+@pytest.mark.slow
 def test_hypothesis_finds_and_shrinks_a_failing_condition(pytester):
     """A deliberately tight recall budget: hypothesis finds imaging conditions that
     break it and prints the shrunk, minimal failing example."""

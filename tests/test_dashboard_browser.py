@@ -64,6 +64,8 @@ def console_errors(stderr: str) -> list[str]:
             if "CONSOLE" in line and re.search(r"Uncaught|Error", line)]
 
 
+@pytest.mark.slow
+@pytest.mark.browser
 def test_the_example_suite_dashboard_at_1280_px(tmp_path):
     folder = tmp_path / "suite"
     rc_green, green = make_pictures.run_suite(folder)

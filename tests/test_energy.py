@@ -29,6 +29,7 @@ def mavic_cruise():
     return _cruise_until_empty()
 
 
+@pytest.mark.slow
 def test_mavic_hover_until_depleted_lasts_29_min(mavic_hover):
     r = mavic_hover
     assert r.end_reason == "battery_depleted"
@@ -36,6 +37,7 @@ def test_mavic_hover_until_depleted_lasts_29_min(mavic_hover):
     assert r.kpis["battery_remaining"] == pytest.approx(0.0, abs=1e-3)
 
 
+@pytest.mark.slow
 def test_mavic_25kmh_until_depleted_lasts_31_min_and_beats_hover(mavic_hover, mavic_cruise):
     r = mavic_cruise
     assert r.end_reason == "battery_depleted"
@@ -45,6 +47,7 @@ def test_mavic_25kmh_until_depleted_lasts_31_min_and_beats_hover(mavic_hover, ma
     assert r.kpis["flight_time_s"] > mavic_hover.kpis["flight_time_s"]
 
 
+@pytest.mark.slow
 def test_crazyflie_hover_about_7_min():
     r = _hover_until_empty("crazyflie-2-1")
     assert r.kpis["flight_time_s"] == pytest.approx(7 * MIN, rel=0.15)
@@ -203,6 +206,7 @@ def test_wake_immersion_is_geometry():
     assert list(arr) == pytest.approx(values)
 
 
+@pytest.mark.slow
 def test_cruise_beats_hover_on_a_small_folding_drone():
     """Issue 30: the Mini 3 Pro lasts longer at 21.6 km/h than in hover, as its maker says
     (34 against 30 min): translational lift outweighs the profile and parasite power and the

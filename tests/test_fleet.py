@@ -47,7 +47,7 @@ def test_crossing_paths_separated_in_altitude_do_not_collide():
 def small_fleet(seed0: int = 0) -> fa.Fleet:
     area = ((0, 0), (60, 60))
     parts = fa.fleet.survey(area, 2, altitude=12, spacing=20, speed=8)
-    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(MAVIC), p, pad, seed=seed0 + i)
+    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(MAVIC), p, pad=pad, seed=seed0 + i)
                      for i, (p, pad) in enumerate(parts)], area=area, swath_m=20)
 
 
@@ -98,12 +98,13 @@ def test_strips_split_the_legs_of_one_zigzag():
     assert [sub[0][1] for sub in parts] == [0.0, 75.0, 125.0]           # 7 legs: 3, 2, 2
 
 
+@pytest.mark.slow
 def test_four_drones_cover_an_area_in_a_quarter_of_one_drones_time():
     area = ((0, 0), (300, 375))                                   # 16 legs of 300 m, 25 m apart
 
     def fly(n):
         parts = fa.fleet.survey(area, n, altitude=30, spacing=25, speed=8)
-        return fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad, seed=i)
+        return fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad=pad, seed=i)
                          for i, (p, pad) in enumerate(parts)], area=area, swath_m=25).run()
     one, four = fly(1), fly(4)
     assert one.kpis["fleet.coverage_fraction"] > 0.99 and four.kpis["fleet.coverage_fraction"] > 0.99
@@ -281,6 +282,7 @@ def test_two_drones_with_camera_tasks_get_their_own_latency_and_evaluation_kpis(
     assert r.kpis["fleet.inference_latency_p95_s"] > 0
 
 
+@pytest.mark.slow
 def test_remote_task_latency_grows_with_the_fleet_on_a_shared_link():
     """64 kbit/s telemetry radio: a 64 x 48 JPEG takes ~0.3 s of airtime, frames every
     0.5 s, so four drones sharing the channel queue for it; on their own channels they
@@ -320,7 +322,7 @@ def test_a_fleet_of_one_with_a_remote_camera_task_flies_like_the_single_mission(
     world = fa.World.urban(seed=3, size=(160.0, 160.0), people=40, max_building_height=10.0)
     mavic = fa.drone(MAVIC, width=64, height=48)
     pilot = fa.pilots.Waypoints([(0, 0, 15), (20, 0, 15)], speed=5)
-    single = fa.Mission(mavic, pilot, world, tasks=[_task("remote", link="sik-915")], seed=3).run()
+    single = fa.Mission(mavic, pilot, world=world, tasks=[_task("remote", link="sik-915")], seed=3).run()
     fleet = fa.Fleet([fa.FleetDrone("solo", mavic, pilot, pad=(0, 0), seed=3,
                                     tasks=[_task("remote", link="sik-915")])], world=world).run()
     assert single.kpis["cnn.inference_count"] > 20

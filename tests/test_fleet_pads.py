@@ -23,7 +23,7 @@ def test_the_default_survey_pad_inside_a_building_is_refused_by_name():
     parts = fa.fleet.survey(AREA, 3, spacing=15)
     assert "inside" in pads.problem(pads.obstacles(world), parts[0][1])
     with pytest.raises(fa.ConfigError, match=r"drone 'd0' pad = \(-55, -50\) is inside obstacle"):
-        fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad) for i, (p, pad)
+        fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad=pad) for i, (p, pad)
                   in enumerate(parts)], world=world)
 
 
@@ -35,7 +35,7 @@ def test_survey_with_the_world_puts_every_pad_on_free_ground_and_every_drone_cli
     default = [pad for _, pad in fa.fleet.survey(AREA, 3, spacing=15)]
     assert parts[0][1] != default[0] and [p for _, p in parts[1:]] == default[1:]   # moved if needed
     short = [(fa.pilots.Hover(altitude=40.0, duration=2.0), pad) for _, pad in parts]
-    res = fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad) for i, (p, pad)
+    res = fa.Fleet([fa.FleetDrone(f"d{i}", fa.drone(MAVIC), p, pad=pad) for i, (p, pad)
                     in enumerate(short)], world=world).run()
     for name, r in res.drones.items():
         assert r.end_reason == "landed", name

@@ -21,7 +21,7 @@ def search(n, *, station=None, orbit_s=10.0, people=None):
         eye = fa.Task(fa.ml.Oracle(classes=["person"]), period_s=0.5, evaluate="detection",
                       name="eye")
         drones.append(fa.FleetDrone(
-            f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad, tasks=[eye], seed=i,
+            f"d{i + 1}", fa.drone("dji-mavic-2-pro"), pilot, pad=pad, tasks=[eye], seed=i,
             policies=[fa.policy.SharedSearch("eye", station, orbit_s=orbit_s)]))
     return fa.Fleet(drones, world=fa.World.scene(size=(140.0, 140.0)), actors=people)
 

@@ -104,6 +104,7 @@ def test_an_unwritable_cache_dir_warns_once_and_the_run_goes_on(pytester):
     res.stdout.fnmatch_lines(["flockai cache: 2 flown, not stored"])
 
 
+@pytest.mark.slow
 def test_xdist_workers_share_the_cache(pytester):
     pytest.importorskip("xdist")
     pytester.makepyfile(test_cached=BODY)

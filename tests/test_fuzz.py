@@ -19,6 +19,8 @@ import pytest_flockai as fa
 from pytest_flockai import strategies as fst
 from pytest_flockai.errors import SimulationError
 
+pytestmark = pytest.mark.slow
+
 EXAMPLES = int(os.environ.get("FLOCKAI_FUZZ_EXAMPLES", "12"))
 DRONES = ("crazyflie-2-1", "dji-mavic-2-pro", "generic-hexa-680")
 SCALE = {"crazyflie-2-1": 0.2, "dji-mavic-2-pro": 1.0, "generic-hexa-680": 1.0}  # metres per unit

@@ -12,6 +12,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
+pytestmark = pytest.mark.slow
+
 TESTS = '''
 import os, pathlib
 import pytest

@@ -233,6 +233,7 @@ def test_fleet_offload_times_the_ground_inference_with_the_layer_model(tmp_path)
         fa.fleet.Offload(runtime="trt")
 
 
+@pytest.mark.slow
 def test_the_stored_efficiencies_are_what_the_tuning_procedure_gives():
     """latency_efficiencies.json is the output of benchmarks/latency_tune.py on the data in
     the repository (tuning half only), and the validation runs on every published row."""

@@ -8,7 +8,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai.comm.traffic import Traffic
-from pytest_flockai.control.stages import DONE, LAND, PILOT, RETURN, TAKEOFF, StageMachine
+from pytest_flockai.control.stages import DONE, LANDING, PILOT, RETURN, TAKEOFF, StageMachine
 from pytest_flockai.energy.integrator import EnergyIntegrator
 from pytest_flockai.mission.book import FlightBook
 from pytest_flockai.mission.state import EventLog, VehicleState
@@ -87,13 +87,13 @@ def test_stage_machine_takes_off_flies_returns_and_lands():
     while s.stage != DONE and t < 60:
         s.qc = s.q = [s.sp[0], s.sp[1], s.sp[2], 1, 0, 0, 0]     # a perfect follower
         s.vc = s.v = [s.sp[3], s.sp[4], s.sp[5], 0, 0, 0]
-        if s.stage == LAND and s.sp[2] <= 0.0:
+        if s.stage == LANDING and s.sp[2] <= 0.0:
             data.ncon = 1                                         # touching the ground
         sm.step(t)
         if not seen or seen[-1] != s.stage:
             seen.append(s.stage)
         t += 0.02
-    assert seen == [TAKEOFF, PILOT, RETURN, LAND, DONE]
+    assert seen == [TAKEOFF, PILOT, RETURN, LANDING, DONE]
     assert s.end_reason == "landed" and s.t_land is not None
     assert [e["stage"] for e in ev.items] == ["takeoff", "pilot", "return", "landing", "landed"]
 

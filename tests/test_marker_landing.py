@@ -32,6 +32,7 @@ def modes(res):
 
 
 @pytest.mark.parametrize("wind, budget_m", [(None, 0.3), (8.0, 1.0)], ids=["calm", "wind-8mps"])
+@pytest.mark.slow
 def test_lands_on_the_marker(wind, budget_m):
     res = landing(wind).run()
     assert res.end_reason == "landed"

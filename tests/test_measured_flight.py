@@ -48,6 +48,7 @@ def _fly(profile_path, net, seed=0, duration=30.0):
                       tasks=[task], seed=seed).run()
 
 
+@pytest.mark.slow
 def test_a_measured_profile_in_flight_reproduces_its_p50_and_p95(profiled):
     out, net, _ = profiled
     dev = fa.compute.profile(out)

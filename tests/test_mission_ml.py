@@ -40,6 +40,7 @@ def three_runs(world):
     return none, onboard, remote
 
 
+@pytest.mark.slow
 def test_onboard_costs_processing_energy_and_flight_time(three_runs):
     none, onboard, _ = three_runs
     assert onboard.kpis["energy_proc_j"] > none.kpis["energy_proc_j"]
@@ -78,6 +79,7 @@ def test_raspberry_pi_drops_frames_jetson_does_not(world):
     assert jet.kpis["frames_dropped"] == 0 and jet.kpis["inference_count"] > pi.kpis["inference_count"]
 
 
+@pytest.mark.slow
 def test_modeled_latency_identical_measured_reports_spread(world):
     m = PythonModel(_count_bright, macs=CNN_MACS, name="cnn")
     a = _fly(world, [fa.Task(m, period_s=2.0)], until=60.0)

@@ -49,6 +49,7 @@ def _at(img, x, y):
 
 
 @pytest.mark.skipif(BROWSER is None, reason="no Chromium installed (apt-get install chromium)")
+@pytest.mark.browser
 def test_the_worst_frames_are_in_the_dashboard_with_boxes_on_the_right_objects(pytester, tmp_path):
     (tmp_path / "set").mkdir()
     path, sc = make_set(tmp_path / "set", "yolo-flat", n=8)

@@ -24,7 +24,7 @@ def town(people=120, seed=2):
 
 
 def hover(world, wind=None, blueprint=MAVIC):
-    return fa.Mission(fa.drone(blueprint), fa.pilots.Hover(2.0), world, wind=wind, until=1.5,
+    return fa.Mission(fa.drone(blueprint), fa.pilots.Hover(2.0), world=world, wind=wind, until=1.5,
                       seed=4)
 
 

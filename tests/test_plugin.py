@@ -429,7 +429,7 @@ def test_hooks_adjust_mission_and_derived_kpis(pytester):
     pytester.makeconftest('''
 def pytest_flockai_adjust_mission(mission, item):
     if item.get_closest_marker("slow_seed"):
-        mission.seed = 42
+        return mission.replace(seed=42)
 
 def pytest_flockai_derived_kpis(result, item):
     k = result.kpis
@@ -458,6 +458,42 @@ def test_derived_broken(flight):
     report = load(pytester.path / "report.json")
     assert report["ci"] == {"build": 7}
     assert "probe.hover_share" in by_nodeid(report)["test_derived"]["flights"][0]["kpis"]
+
+
+def test_adjust_hooks_chain_and_old_in_place_hooks_warn(pytester):
+    """Two hooks: the second sees the first's spec; an old hook that assigns in place
+    still works with a DeprecationWarning, and its bad value is a ConfigError naming it."""
+    pytester.makeconftest('''
+import pytest
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_flockai_adjust_mission(mission, item):
+    return mission.replace(until=0.5)
+''')
+    pytester.makepyfile(old_hooks='''
+def pytest_flockai_adjust_mission(mission, item):
+    if item.get_closest_marker("bad_seed"):
+        mission.seed = -1
+    else:
+        mission.seed = mission.seed + 7 if mission.until == 0.5 else 0
+''')
+    pytester.makeini("[pytest]\nmarkers = bad_seed\n")
+    make(pytester, '''
+@cf()
+def test_chained(mission):
+    assert (mission.until, mission.seed) == (0.5, 7)
+
+@cf()
+@pytest.mark.bad_seed
+def test_bad(mission):
+    pass
+''')
+    pytester.syspathinsert()
+    res = run(pytester, "-p", "old_hooks")
+    res.assert_outcomes(passed=1, errors=1)
+    res.stdout.fnmatch_lines(["*ConfigError: Mission: seed = -1 is not allowed*",
+                              "*DeprecationWarning: pytest_flockai_adjust_mission in *assigning "
+                              "mission fields in place (seed) is deprecated*"], consecutive=False)
 
 
 def test_ini_options(pytester):
@@ -496,6 +532,7 @@ def test_hover(flight):
 
 
 # -- xdist ---------------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_xdist_reports_equal_the_serial_ones(pytester):
     pytest.importorskip("xdist")
     make(pytester, "".join(f'''

@@ -12,6 +12,7 @@ TEXT = (ROOT / "README.md").read_text()
 BLOCKS = re.findall(r"```python\n(.*?)```", TEXT, re.S)
 
 
+@pytest.mark.slow
 def test_every_readme_example_runs(monkeypatch):
     monkeypatch.chdir(ROOT)
     ns: dict = {"__name__": "readme"}
@@ -43,6 +44,7 @@ def test_every_link_of_the_readme_and_docs_exists():
     assert missing == []
 
 
+@pytest.mark.slow
 def test_the_readme_test_file_passes_under_pytest(pytester):
     """'A test in 20 lines', saved as a test file: both tests pass with the plugin, the
     marked one included (its budgets are checked against the survey flight)."""

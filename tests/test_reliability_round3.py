@@ -190,6 +190,7 @@ def test_a_decide_that_never_returns_is_stopped_by_max_wall_s_in_a_thread():
     assert time.perf_counter() - t0 < 10.0
 
 
+@pytest.mark.slow
 def test_a_decide_that_sleeps_for_ever_is_stopped_in_the_main_thread():
     code = ("import time, pytest_flockai as fa\n"
             "from test_reliability_round3 import Stuck, CF\n"

@@ -86,6 +86,7 @@ def test_marker_pilot(flight):
     assert "seed=...) on" not in res.stdout.str()       # `mission` is the plugin's: seed is read
 
 
+@pytest.mark.slow
 def test_hypothesis_examples_are_recorded_compactly(pytester):
     """12 examples x 2 flights: a passing test keeps counts and KPI ranges; a failing
     one keeps the shrunk example's flights in full, and one verdict per budget."""

@@ -2,6 +2,7 @@
 
 import math
 
+import pytest
 from hypothesis import given, settings
 
 import pytest_flockai as fa
@@ -38,6 +39,7 @@ def test_check_and_evaluate_without_pytest():
         raise AssertionError("check() did not raise")
 
 
+@pytest.mark.slow
 def test_hypothesis_finds_wind_breaking_a_flight_time_budget(pytester):
     # the Crazyflie's 1 m hover lasts 6.96 min in still air and more up to ~6 m/s (translational
     # lift), then less: 6.10 min at 8 m/s, 4.95 at 10; winds up to 12 m/s put the broken part of

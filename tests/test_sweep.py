@@ -69,6 +69,7 @@ def test_random_and_lhs_samples_are_seeded():
     assert len(r) == 4 and r["payload_kg"].between(0.0, 0.01).all()
 
 
+@pytest.mark.slow
 def test_same_dataframe_with_one_or_two_worker_processes():
     kw = dict(payload_kg=[0.0, 0.006], mission_seed=[0, 1], budgets={"energy_total_j": "<= 25 J"})
     one = fa.sweep(_base(), workers=1, **kw)

@@ -16,6 +16,8 @@ import pytest
 import pytest_flockai as fa
 from pytest_flockai.sweeps import runner
 
+pytestmark = pytest.mark.slow
+
 REL = 0.02
 NEEDS_JAX = "the batched backend needs JAX and MJX: pip install 'pytest-flockai[mjx]'"
 KPIS = ("sim_time_s", "flight_time_s", "energy_total_j", "energy_motors_j", "endurance_s",

@@ -17,6 +17,8 @@ from sweep_faults import ExitOn, MarkAndWait, RaiseOn
 import pytest_flockai as fa
 from pytest_flockai.cache import FlightCache, caching
 
+pytestmark = pytest.mark.slow
+
 distributed = pytest.importorskip("distributed")
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -21,6 +21,8 @@ from pytest_flockai.errors import ConfigError
 from pytest_flockai.sweeps import executors
 from pytest_flockai.sweeps.runner import SweepInterrupted
 
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parent.parent
 PAYLOADS = [0.0, 0.002, 0.004]
 

@@ -19,6 +19,8 @@ import pytest
 
 import pytest_flockai as fa
 
+pytestmark = [pytest.mark.slow, pytest.mark.jax]
+
 REL = 0.01
 KPIS = ("sim_time_s", "flight_time_s", "energy_total_j", "energy_motors_j", "endurance_s",
         "battery_remaining", "distance_m")

@@ -14,8 +14,10 @@ from ..clock import Clocked
 from ..phases import STAGES, Stage  # noqa: F401  (STAGES re-exported)
 from .trajectory import Leg, Path
 
-# plain ints on the hot path (IntEnum comparisons cost more)
-TAKEOFF, PILOT, RETURN, LAND, DONE = (int(s) for s in Stage)
+# the one stage enum (phases.Stage), as plain ints under its member names on the hot path
+# (IntEnum comparisons cost more)
+TAKEOFF, PILOT, RETURN, LANDING, DONE = (int(Stage[n]) for n in ("TAKEOFF", "PILOT", "RETURN",
+                                                                 "LANDING", "DONE"))
 
 #: m/s: a drone on the ground (in contact) descending slower than this has landed
 TOUCHDOWN_SPEED = 0.3
@@ -85,7 +87,7 @@ class StageMachine(Clocked):
                         self._start_pilot(t)
                 elif stage == RETURN:
                     self._land(t)
-        if s.stage == LAND and self.data.ncon > 0 and abs(s.v[2]) < TOUCHDOWN_SPEED:
+        if s.stage == LANDING and self.data.ncon > 0 and abs(s.v[2]) < TOUCHDOWN_SPEED:
             s.stage = DONE
             s.t_land = t
             s.end_reason = "landed"          # the flight ends after this tick
@@ -181,7 +183,7 @@ class StageMachine(Clocked):
         s = self.st
         sp = s.sp
         here = (sp[0], sp[1], sp[2])
-        s.stage, self.t_stage = LAND, t
+        s.stage, self.t_stage = LANDING, t
         self.path = Path([Leg(here, (here[0], here[1], s.home[2] - LANDING_OVERSHOOT),
                               self.descent_speed, self.accel)])
         self.events.add(t, "stage", stage="landing")

@@ -10,9 +10,12 @@ not empty, unique names, one drone per pad.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time as _time
 from collections.abc import Iterable, Sequence
+from dataclasses import KW_ONLY, dataclass
+from numbers import Integral
 from typing import Any, cast
 
 from .. import _check
@@ -37,14 +40,25 @@ MAX_DRONES = 64
 RESERVED_NAMES = ("fleet", "ground", "link")
 
 
+@dataclass(frozen=True, eq=False, repr=False)
 class FleetDrone:
     """One drone of a fleet: ``name`` prefixes its KPIs (``drone-2.flight_time_s``)
     and names its rows in the telemetry's ``drone`` column; ``pad`` = (x, y) is
-    where it stands on the ground, takes off and lands."""
+    where it stands on the ground, takes off and lands. A frozen spec like
+    ``Mission``: keyword-only after the pilot, changed by ``replace`` (checked)."""
 
-    def __init__(self, name: str, drone: Drone, pilot: Pilot,
-                 pad: Sequence[float] = (0.0, 0.0), *, tasks: Iterable = (), seed: int = 0,
-                 probes: Iterable | None = None, policies: Iterable = ()) -> None:
+    name: str
+    drone: Drone
+    pilot: Pilot
+    _: KW_ONLY
+    pad: Sequence[float] = (0.0, 0.0)
+    tasks: Iterable = ()                 # stored as a tuple of fa.Task
+    seed: int = 0
+    probes: Iterable | None = None
+    policies: Iterable = ()              # stored as a tuple; checked by the drone's Mission
+
+    def __post_init__(self) -> None:
+        name, drone, pilot, put = self.name, self.drone, self.pilot, object.__setattr__
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "./ "):
             raise ConfigError(f"FleetDrone: name = {name!r} is not allowed; expected a non-empty "
                               f"str without '.', '/' or spaces (it prefixes the drone's KPIs)")
@@ -61,8 +75,12 @@ class FleetDrone:
             raise ConfigError(f"FleetDrone {name!r}: drone.add_sensor(...) sensors "
                               f"({', '.join(s.name for s in drone.extra_sensors)}) are not "
                               f"supported in a fleet yet; allowed: the blueprint's own sensors")
+        seed = self.seed
+        if isinstance(seed, bool) or not isinstance(seed, Integral) or seed < 0:
+            raise ConfigError(f"FleetDrone {name!r}: seed = {seed!r} is not allowed; expected "
+                              f"an integer >= 0")
         try:
-            tasks = check_tasks(tasks, drone, ())      # the single Mission's checks
+            tasks = check_tasks(self.tasks, drone, ())      # the single Mission's checks
         except ConfigError as e:
             raise ConfigError(f"FleetDrone {name!r}: {e}") from None
         for tk in tasks:
@@ -70,10 +88,18 @@ class FleetDrone:
                 raise ConfigError(f"FleetDrone {name!r}: task {tk.name!r} reads sensor = "
                                   f"{tk.sensor!r}; in a fleet a task reads the drone's camera "
                                   f"only; allowed: sensor='camera'")
-        self.name, self.drone, self.pilot = name, drone, pilot
-        self.pad = _check.vector("pad", pad, 2, where=f"FleetDrone {name!r}")
-        self.tasks, self.seed, self.probes = tuple(tasks or ()), seed, probes
-        self.policies = tuple(policies or ())       # checked by the drone's Mission
+        put(self, "pad", _check.vector("pad", self.pad, 2, where=f"FleetDrone {name!r}"))
+        put(self, "tasks", tuple(tasks or ()))
+        put(self, "seed", int(seed))
+        try:
+            put(self, "policies", tuple(self.policies or ()))
+        except TypeError:
+            raise ConfigError(f"FleetDrone {name!r}: policies = {self.policies!r} is not a list "
+                              f"of fa.Policy") from None
+
+    def replace(self, **changes) -> FleetDrone:
+        """A copy with ``changes`` (field=value), checked again like a new FleetDrone."""
+        return _check.replace(self, "FleetDrone", changes)
 
     def to_dict(self) -> dict:
         """JSON-ready description of this drone's part of the fleet."""
@@ -86,9 +112,11 @@ class FleetDrone:
         return f"FleetDrone({self.name!r}, {self.drone.name!r}, pad={self.pad})"
 
 
+@dataclass(frozen=True, eq=False, repr=False)
 class Fleet:
-    """Several drones flown together: ``Fleet(drones, world=None, until="landed",
-    area=None, swath_m=None, ...).run() -> FleetResult``.
+    """Several drones flown together: ``Fleet(drones, *, world=None, until="landed",
+    area=None, swath_m=None, ...).run() -> FleetResult``. A frozen spec like
+    ``Mission``: keyword-only after the drones, changed by ``replace`` (checked).
 
     ``offload``: remote inference of every drone on one ground station over a
     shared (or per-drone) channel (``fa.fleet.Offload``). The drones' remote
@@ -100,11 +128,28 @@ class Fleet:
     world, seen by every drone; each drone's ``policies`` are its own (a
     ``fa.policy.SharedSearch`` per drone with one ``GroundStation``: a search together)."""
 
-    def __init__(self, drones: Iterable[FleetDrone], world: World | None = None, *,
-                 until: str | float = "landed", max_time_s: float = 4 * 3600.0,
-                 telemetry_hz: float = 10.0, area: Any = None, swath_m: float | None = None,
-                 name: str | None = None, offload: Offload | None = None,
-                 shared_link: bool = True, actors: Iterable = ()) -> None:
+    drones: Iterable[FleetDrone]         # stored as a tuple
+    _: KW_ONLY
+    world: World | None = None
+    until: str | float = "landed"
+    max_time_s: float = 4 * 3600.0
+    telemetry_hz: float = 10.0
+    area: Any = None                     # stored as ((x0, y0), (x1, y1)), sorted
+    swath_m: float | None = None
+    name: str | None = None
+    offload: Offload | None = None
+    shared_link: bool = True
+    actors: Iterable = ()
+    #: derived at construction: each drone's Mission, the seeds, the remote tasks
+    missions: tuple = dataclasses.field(init=False, default=(), repr=False)
+    seed: tuple = dataclasses.field(init=False, default=())
+    remote: list = dataclasses.field(init=False, default_factory=list, repr=False)
+
+    def __post_init__(self) -> None:
+        put, drones, world = object.__setattr__, self.drones, self.world
+        until, max_time_s, telemetry_hz = self.until, self.max_time_s, self.telemetry_hz
+        area, swath_m, offload = self.area, self.swath_m, self.offload
+        shared_link, actors = self.shared_link, self.actors
         try:
             drones = list(drones)
         except TypeError:
@@ -126,23 +171,28 @@ class Fleet:
         if offload is not None and not isinstance(offload, Offload):
             raise ConfigError(f"Fleet: offload = {offload!r} is not allowed; expected None or "
                               f"fa.fleet.Offload(...)")
-        self.drones, self.world, self.name, self.offload = drones, world, name, offload
+        put(self, "drones", tuple(drones))
         if not isinstance(shared_link, bool):
             raise ConfigError(f"Fleet: shared_link = {shared_link!r} is not allowed; expected "
                               f"True or False")
-        self.shared_link = shared_link
-        self.remote = _check_remote(drones, offload)
-        self.area = _check_area(area)
-        self.swath_m = None if swath_m is None else _check.positive("swath_m", swath_m, where="Fleet")
+        put(self, "remote", _check_remote(drones, offload))
+        put(self, "area", _check_area(area))
+        put(self, "swath_m", None if swath_m is None
+            else _check.positive("swath_m", swath_m, where="Fleet"))
         if (self.area is None) != (self.swath_m is None):
             raise ConfigError(f"Fleet: area = {area!r} and swath_m = {swath_m!r}: give both (for "
                               f"fleet.coverage_fraction) or neither")
-        self.missions = [Mission(fd.drone, fd.pilot, world, tasks=fd.tasks, probes=fd.probes,
-                                 seed=fd.seed, until=until, max_time_s=max_time_s,
-                                 telemetry_hz=telemetry_hz, name=fd.name, policies=fd.policies,
-                                 actors=actors) for fd in drones]
-        self.seed = tuple(fd.seed for fd in drones)
+        put(self, "missions", tuple(
+            Mission(fd.drone, fd.pilot, world=world, tasks=fd.tasks, probes=fd.probes,
+                    seed=fd.seed, until=until, max_time_s=max_time_s, telemetry_hz=telemetry_hz,
+                    name=fd.name, policies=fd.policies, actors=actors) for fd in drones))
+        put(self, "actors", self.missions[0].actors)
+        put(self, "seed", tuple(fd.seed for fd in drones))
         self._plans()
+
+    def replace(self, **changes) -> Fleet:
+        """A copy with ``changes`` (field=value), checked again like a new Fleet."""
+        return _check.replace(self, "Fleet", changes)
 
     def _plans(self) -> list:
         plans = [resolve(m) for m in self.missions]

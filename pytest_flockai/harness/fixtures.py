@@ -4,7 +4,10 @@ indirect parametrization, else the closest ``flockai`` marker, else a default),
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import os
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -93,8 +96,7 @@ def mission(request: pytest.FixtureRequest, drone: Drone, pilot: Pilot, world: W
     m = _built(request, Mission, drone, pilot, world=world, tasks=tasks, probes=probes,
                wind=setting(request, "wind", None), seed=setting(request, "seed", 0),
                until=setting(request, "until", "landed"), name=setting(request, "name", None))
-    request.config.hook.pytest_flockai_adjust_mission(mission=m, item=request.node)
-    return m
+    return adjusted(request.config, m, request.node)
 
 
 @pytest.fixture
@@ -107,3 +109,44 @@ def flight(request: pytest.FixtureRequest, mission: Mission) -> FlightResult:
         return mission.run()
     from ..app.runner import marker_flight
     return marker_flight(request, mission, mark)
+
+
+def adjusted(config: pytest.Config, m: Mission, item: pytest.Item) -> Mission:
+    """``m`` after each ``pytest_flockai_adjust_mission`` hook, in pytest's call order,
+    each given the spec the one before returned. A hook returns a new spec or None; an
+    old hook that assigns fields in place edits a draft copy whose changes are applied
+    through ``Mission.replace`` (checked) with a DeprecationWarning."""
+    from ..mission import Mission  # lazy: the core loads on first use
+    caller = config.hook.pytest_flockai_adjust_mission
+    for impl in reversed(caller.get_hookimpls()):
+        if getattr(impl, "hookwrapper", False) or getattr(impl, "wrapper", False):
+            continue
+        cls = _draft_class(Mission)
+        draft: Any = object.__new__(cls)   # a copy of m whose fields may be assigned
+        draft.__dict__.update(m.__dict__)
+        kwargs = {"mission": draft, "item": item}
+        out = impl.function(*[kwargs[a] for a in impl.argnames])
+        fields = [f.name for f in dataclasses.fields(Mission) if f.init]
+        if out is None:
+            edits = {f: getattr(draft, f) for f in fields if getattr(draft, f) is not getattr(m, f)}
+            if edits:
+                warnings.warn(f"pytest_flockai_adjust_mission in {impl.plugin_name}: assigning "
+                              f"mission fields in place ({', '.join(edits)}) is deprecated; "
+                              f"return mission.replace({', '.join(f'{k}=...' for k in edits)})",
+                              DeprecationWarning, stacklevel=1)
+                m = m.replace(**edits)
+        elif isinstance(out, Mission):
+            m = dataclasses.replace(m, **{f: getattr(out, f) for f in fields})
+        else:
+            raise ConfigError(f"pytest_flockai_adjust_mission in {impl.plugin_name} returned "
+                              f"{out!r}; allowed: a Mission (mission.replace(...)) or None")
+    return m
+
+
+@functools.cache
+def _draft_class(mission_cls: type) -> type:
+    """A Mission subclass whose fields may be assigned (for the deprecated in-place hooks)."""
+    def __setattr__(self, name, value):
+        object.__setattr__(self, name, value)
+    return type("MissionDraft", (mission_cls,), {"__setattr__": __setattr__})
+

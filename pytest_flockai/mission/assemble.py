@@ -1,7 +1,7 @@
 """Build a flight of 1..N drones from their plans: ONE MuJoCo model holding the
 world and every drone, one MjData (one simulated clock), and per drone a
 ``Run``: its vehicle state, event log and clocked components, in the order the
-loop steps them each tick.
+loop steps them each tick (``steps.STEP_ORDER``).
 
 A single Mission is a flight of one drone (named ``drone``, nothing prefixed:
 its body is ``drone``, its rotors ``rotor0``...); the drones of a fleet are
@@ -34,7 +34,7 @@ from ..sensors import GPS, IMU, Barometer, BatterySensor, Camera, Compass, Range
 from ..sensors.base import Sensing
 from ..world.actors import ActorSet
 from ..world.wind import WindStep
-from . import parts
+from . import parts, steps
 from .book import FlightBook
 from .ending import EndConditions, WallClockGuard
 from .plan import FlightPlan, seed_sequence
@@ -227,38 +227,39 @@ class Run:
         rows = int(plan.t_end * plan.telemetry_hz) + 16     # the first chunk at most this big
         estimator = NavEstimator() if plan.fly_on == "estimate" else None
         self.telemetry = TelemetryRecorder(rows, n_rot, self.meter, d, self.suite, estimator)
-        comps: list[Clocked] = [Sensing(self.suite, d)]
+        slots: dict[str, list[Clocked]] = {"sensing": [Sensing(self.suite, d)]}
         if self.scheduler.consumers:
-            comps.append(self.scheduler)
+            slots["tasks"] = [self.scheduler]
         if estimator is not None:
-            comps.append(Navigation(st, estimator, self.suite))
-        comps += [self.stages, Control(st, self.controller, d, n_rot)]
+            slots["navigation"] = [Navigation(st, estimator, self.suite)]
+        slots["stages"], slots["control"] = [self.stages], [Control(st, self.controller, d, n_rot)]
         if plan.wind is not None:
             rng = seed_sequence(plan.seed, "wind")
-            comps.append(WindStep(plan.wind, st, self.model, np.random.default_rng(rng), plan.ctrl_dt))
-        if drone.rotor.blade_drag > 0.0:              # after the wind: this tick's air
-            comps.append(RotorDrag(drone, st, *self.rotor_views, plan.atmosphere.density))
-        comps += [Heartbeats(self.traffic, drone.radio),
-                  EnergyIntegrator(st, self.meter, d, self.traffic, tasks,
-                                   energy_hz=plan.energy_hz, n_rotors=n_rot),
-                  self.book, self.probing,
-                  TelemetryStep(self.telemetry, st, d, plan.telemetry_hz)]
+            slots["wind"] = [WindStep(plan.wind, st, self.model, np.random.default_rng(rng),
+                                      plan.ctrl_dt)]
+        if drone.rotor.blade_drag > 0.0:
+            slots["rotor_drag"] = [RotorDrag(drone, st, *self.rotor_views, plan.atmosphere.density)]
+        slots["heartbeats"] = [Heartbeats(self.traffic, drone.radio)]
+        slots["energy"] = [EnergyIntegrator(st, self.meter, d, self.traffic, tasks,
+                                            energy_hz=plan.energy_hz, n_rotors=n_rot)]
+        slots["book"], slots["probes"] = [self.book], [self.probing]
+        slots["telemetry"] = [TelemetryStep(self.telemetry, st, d, plan.telemetry_hz)]
         for c in plan.components:
             c.bind(self)
-            comps.append(c)
+        slots["components"] = list(plan.components)
         self.policies = [copy.copy(p) for p in plan.policies]   # per-flight state on the copy
         for p in self.policies:
             p.bind(self)
-            comps.append(p)
+        slots["policies"] = list(self.policies)
         if plan.max_wall_s is not None:
             guard = WallClockGuard(plan.max_wall_s)
             guard.bind(self)
-            comps.append(guard)
-        comps.append(EndConditions(
+            slots["wall_clock"] = [guard]
+        slots["end"] = [EndConditions(
             st, self.events, self.stages, t_end=plan.t_end, dt=plan.ctrl_dt,
             timed=not isinstance(plan.until, str), use_reserve=plan.use_reserve,
-            reserve_j=drone.battery.reserve_fraction * st.e_usable, energy_hz=plan.energy_hz))
-        return comps
+            reserve_j=drone.battery.reserve_fraction * st.e_usable, energy_hz=plan.energy_hz)]
+        return steps.ordered(slots)          # the stepping order: mission/steps.py STEP_ORDER
 
     # -- for user components ---------------------------------------------------
     def event(self, t: float, kind: str, **info) -> None:

@@ -12,7 +12,7 @@ import math
 from math import sqrt
 
 from ..clock import CLOCK_EPS, Clocked
-from ..control.stages import LAND, PILOT, TAKEOFF
+from ..control.stages import LANDING, PILOT, TAKEOFF
 from ..phases import PHASES, Phase
 
 # plain ints on the hot path (IntEnum lookups cost more)
@@ -68,7 +68,7 @@ class FlightBook(Clocked):
             stage = s.stage
             if stage == TAKEOFF:
                 phase = _TAKEOFF
-            elif stage == LAND:
+            elif stage == LANDING:
                 phase = _LANDING
             elif speed < HOVER_SPEED:
                 phase = _HOVER

@@ -4,10 +4,9 @@ fleet flies N in the same loop.
 
 Each control tick: for every drone still flying, read its state from its slice
 of the MjData (``t q v speed``) and step its components that are due, in the
-order ``assemble.Run`` built them (sensors, tasks, navigation, stages, control,
-wind, rotor drag, radio, energy, book, probes, telemetry, user components, end
-conditions); a drone whose flight ended (landed, battery, time, stopped) is
-finished at that time and its motors stay off. Then the flight-wide steps that
+order ``assemble.Run`` built them from the one table ``steps.STEP_ORDER``; a
+drone whose flight ended (landed, battery, time, stopped) is finished at that
+time and its motors stay off. Then the flight-wide steps that
 are due (a fleet's offload and separation: ``step(t, drones)``), then MuJoCo
 advances ``substeps`` physics steps in one C call, and the contacts are checked:
 a drone touching another drone has crashed (both have); a drone flipped over, or

@@ -5,8 +5,11 @@ the physics and control rates, the tasks against the drone's sensors and
 computer, the user's components) and derives what the loop needs: time
 steps, the end time, the on-board computer. A bad input raises a
 ``ConfigError`` naming the field, the value and what is allowed, when the
-Mission is built; ``Mission.run()`` resolves again, so a drone edited in
-between flies as edited.
+Mission is built. The Mission's own fields are frozen and checked once (in
+``Mission.__post_init__``, with the ``check_*`` functions here); the drone is
+an object of its own that may be edited after, so ``Mission.run()`` resolves
+again and the checks that read the drone (its blueprint, rates, camera, the
+tasks' sensors and computer, the time limits) run again then.
 """
 
 from __future__ import annotations
@@ -231,7 +234,8 @@ def computers(tasks, drone) -> list[dict]:
 
 
 def resolve(m) -> FlightPlan:
-    """The flight plan of Mission ``m`` (raises ConfigError on bad input)."""
+    """The flight plan of the (checked, frozen) Mission ``m``; ConfigError where the
+    drone, as it is now, does not fit the mission."""
     drone = m.drone
     atmosphere = Atmosphere.coerce(getattr(m, "atmosphere", None))
     drone.check(rho=atmosphere.density)
@@ -241,19 +245,18 @@ def resolve(m) -> FlightPlan:
                           f"control_hz = {sim.control_hz:g}")
     substeps = max(1, int(round(sim.physics_hz / sim.control_hz)))
     physics_dt = 1.0 / sim.physics_hz
-    tasks = check_tasks(m.tasks, drone, m.sensors)
-    until = check_until(m.until)
+    tasks = check_tasks(m.tasks, drone, m.sensors)     # against the drone as it is now
+    until = m.until
     t_end = check_time_limits(until, m.max_time_s, m.telemetry_hz, m.probes)
     if m.dataset_dir is not None and drone.camera is None:
         raise ConfigError(f"Mission: dataset_dir = {str(m.dataset_dir)!r} needs a camera, and "
                           f"{drone.name} has no [camera] section")
     return FlightPlan(
-        drone=drone, pilot=m.pilot, world=m.world, tasks=tasks, sensors=check_sensors(m.sensors),
-        components=check_components(m.components), wind=Wind.coerce(m.wind), seed=m.seed,
+        drone=drone, pilot=m.pilot, world=m.world, tasks=tasks, sensors=tuple(m.sensors),
+        components=tuple(m.components), wind=m.wind, seed=m.seed,
         until=until, t_end=t_end, physics_dt=physics_dt, substeps=substeps,
         ctrl_dt=physics_dt * substeps, telemetry_hz=m.telemetry_hz, energy_hz=m.energy_hz,
         climb_speed=m.climb_speed, descent_speed=m.descent_speed, return_home=m.return_home,
         fly_on=m.fly_on, dataset_dir=m.dataset_dir, dataset_period_s=m.dataset_period_s,
         onboard_device=onboard_device(tasks, drone), conditions=m.conditions, atmosphere=atmosphere,
-        max_wall_s=getattr(m, "max_wall_s", None), policies=tuple(getattr(m, "policies", ())),
-        actors=tuple(getattr(m, "actors", ())))
+        max_wall_s=m.max_wall_s, policies=tuple(m.policies), actors=tuple(m.actors))

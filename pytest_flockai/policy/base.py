@@ -30,7 +30,7 @@ from .. import kpis as _kpis
 from ..clock import Clocked
 from ..control.follow import Goto, Resume, yaw_of
 from ..control.pilots import Hover, Orbit, Pilot, Waypoints
-from ..control.stages import LAND, PILOT, RETURN, STAGES, TAKEOFF
+from ..control.stages import LANDING, PILOT, RETURN, STAGES, TAKEOFF
 from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
@@ -295,7 +295,7 @@ class Cockpit:
 
     def land(self) -> bool:
         """Land where the drone is; False when refused (already landing)."""
-        if self._st.stage >= LAND:
+        if self._st.stage >= LANDING:
             return self._refuse("land")
         self._stages.land_here(self.t)
         self._log("land")

@@ -26,10 +26,11 @@ from pathlib import Path
 from .. import kpis as _kpis
 from .. import report as _report
 from ..errors import close_matches
+from ..kpis import NOISE_REL as NOISE_REL  # the one regression rule, the gate's too
+from ..kpis import classify as classify
+from ..kpis import family as family
+from ..kpis import tolerance as tolerance
 from . import scenario as _scenario
-
-#: a relative change below this is float noise, whatever the KPI
-NOISE_REL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -125,18 +126,6 @@ def parse_abs_tol(items) -> dict:
     return out
 
 
-def family(kpi: str) -> str:
-    """The KPI with a task's or a drone's prefix taken off (``det.recall`` ->
-    ``recall``, ``drone-2.flight_time_s`` -> ``flight_time_s``); registered names
-    (``fleet.makespan_s``) and family members (``recall.person``) stay."""
-    if kpi in _kpis.BUILTIN or "." not in kpi:
-        return kpi
-    head, rest = kpi.split(".", 1)
-    if head in _kpis.FAMILIES:
-        return kpi
-    return family(rest) if _kpis.get(rest) is not None else kpi
-
-
 def _num(v):
     if v is None or isinstance(v, bool):
         return None
@@ -144,36 +133,6 @@ def _num(v):
         return float(v)
     except (TypeError, ValueError):
         return None
-
-
-def tolerance(kpi: str, abs_tol: dict | None = None) -> float:
-    """The absolute tolerance of ``kpi``: an override (by name or family), else the registry's."""
-    over = abs_tol or {}
-    if kpi in over:
-        return float(over[kpi])
-    if family(kpi) in over:
-        return float(over[family(kpi)])
-    return _kpis.abs_tolerance(kpi)
-
-
-def classify(kpi: str, base, new, threshold_pct: float,
-             abs_tol: dict | None = None) -> tuple[str | None, str]:
-    """(better direction, status) of one KPI; the tolerance matches the plugin's
-    baseline gate (``report.regressions``)."""
-    info = _kpis.get(kpi)
-    better = info.better if info is not None else None
-    if base is None or new is None or not (math.isfinite(base) and math.isfinite(new)):
-        return better, "n/a"
-    noise = max(tolerance(kpi, abs_tol), NOISE_REL * max(abs(base), abs(new)))
-    if abs(new - base) <= noise:
-        return better, "same"
-    if better is None:
-        return better, "changed"
-    worse = new < base if better == "higher" else new > base
-    if not worse:
-        return better, "better"
-    tol = max(abs(base) * threshold_pct / 100.0, noise)
-    return better, "regression" if abs(new - base) > tol else "worse"
 
 
 def compare(base: dict, new: dict, threshold_pct: float = 5.0, *, abs_tol: dict | None = None,

@@ -82,36 +82,39 @@ def resolved(base, values: dict, share: bool = False, check_only: bool = False):
     """
     drone_axes = [name for name in values if name not in MISSION_AXES]
     if share or check_only:
-        m = copy.copy(base)
+        m, drone = base, base.drone
         if drone_axes:
-            m.drone = _shallow(base.drone, drone_axes) if check_only else _copy(base.drone)
+            drone = _shallow(base.drone, drone_axes) if check_only else _copy(base.drone)
     else:
         m = _copy(base)
-    m.subscribers = []                  # live subscribers stay with the base mission
+        drone = m.drone
+    changes: dict = {}                  # the mission's own fields, set through replace below
     for name, value in values.items():
         if name == "mission_seed":
             if isinstance(value, bool) or not isinstance(value, Integral) or value < 0:
                 raise ConfigError(f"mission_seed = {value!r} is not allowed; expected an "
                                   f"integer >= 0")
-            m.seed = int(value)
+            changes["seed"] = int(value)
         elif name == "until":
-            m.until = check_until(value)
+            changes["until"] = check_until(value)
         elif name in ("wind_mps", "wind_dir_deg"):
             _number(name, value)
-        elif m.drone.datasheet is not None and derived_from_datasheet(name):
-            raise ConfigError(f"{name} = {value!r}: {m.drone.source} derives its rotors, motors "
+        elif drone.datasheet is not None and derived_from_datasheet(name):
+            raise ConfigError(f"{name} = {value!r}: {drone.source} derives its rotors, motors "
                               f"and drag from [datasheet] values, and setting {name} on the built "
                               f"drone would not derive them again; allowed: sweep it as "
                               f"separate bases, fa.drone(..., {name}=...) each")
         else:
             section, field = resolve_override(name)
-            target = m.drone if section is None else getattr(m.drone, section)
+            target = drone if section is None else getattr(drone, section)
             if target is None:
                 raise ConfigError(f"{name} = {value!r}: this blueprint has no [{section}] table")
             setattr(target, field, value)
     if "wind_mps" in values or "wind_dir_deg" in values:
-        m.wind = _wind(m.wind, values.get("wind_mps"), values.get("wind_dir_deg"))
-    m.drone.check(f"sweep variant {values}")
+        changes["wind"] = _wind(m.wind, values.get("wind_mps"), values.get("wind_dir_deg"))
+    drone.check(f"sweep variant {values}")
+    # the variant: a checked copy of the spec (live subscribers stay with the base mission)
+    m = m.replace(drone=drone, **changes)
     return m, resolve(m)
 
 

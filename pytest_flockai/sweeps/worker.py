@@ -87,9 +87,8 @@ class _MainFinder(pickle.Pickler):
 
 def pickled(base) -> tuple[bytes, tuple]:
     """The base mission pickled for other processes (its live subscribers stay
-    here) and the names it refers to in ``__main__``; ConfigError if it cannot
-    be pickled."""
-    subscribers, base.subscribers = base.subscribers, []
+    here: ``Mission.__getstate__`` leaves them out) and the names it refers to in
+    ``__main__``; ConfigError if it cannot be pickled."""
     buf = io.BytesIO()
     finder = _MainFinder(buf)
     try:
@@ -100,8 +99,6 @@ def pickled(base) -> tuple[bytes, tuple]:
                           f"it cannot be pickled ({type(exc).__name__}: {exc}); define your "
                           f"components, probes and pilots at module level, or use "
                           f"workers=1") from None
-    finally:
-        base.subscribers = subscribers
     return buf.getvalue(), tuple(sorted(finder.main_names))
 
 

@@ -27,7 +27,7 @@ MAVIC = "dji-mavic-2-pro"
 def _survey(n: int, offload=None, until="landed") -> fa.Fleet:
     area = ((0, 0), (80, 100))
     parts = fa.fleet.survey(area, n, altitude=15, spacing=20, speed=8)
-    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(MAVIC), p, pad, seed=10 + i)
+    return fa.Fleet([fa.FleetDrone(f"drone-{i + 1}", fa.drone(MAVIC), p, pad=pad, seed=10 + i)
                      for i, (p, pad) in enumerate(parts)], area=area, swath_m=20,
                     offload=offload, until=until)
 

@@ -12,7 +12,15 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from ...control.stages import DONE, LAND, LANDING_OVERSHOOT, PILOT, RETURN, TAKEOFF, TOUCHDOWN_SPEED
+from ...control.stages import (
+    DONE,
+    LANDING,
+    LANDING_OVERSHOOT,
+    PILOT,
+    RETURN,
+    TAKEOFF,
+    TOUCHDOWN_SPEED,
+)
 from ...control.trajectory import leg_timing
 from ...physics import G
 
@@ -90,7 +98,7 @@ def after_pilot(p, s, here, force):
     ret = (p.mission.return_home | force) & away
     home_air = jnp.stack([home[0], home[1], here[2]])
     land_to = jnp.stack([here[0], here[1], home[2] - LANDING_OVERSHOOT])
-    return (jnp.where(ret, RETURN, LAND), here, jnp.where(ret, home_air, land_to),
+    return (jnp.where(ret, RETURN, LANDING), here, jnp.where(ret, home_air, land_to),
             jnp.where(ret, p.pilot.return_speed, p.mission.descent_speed))
 
 
@@ -137,7 +145,7 @@ def combine(p, s, t, v, contact, pil, lg, take, aft):
     after = is_p & pdone
     sp9 = jnp.where(is_p, psp, jnp.where(to_pilot, ssp, jnp.where(is_leg, lsp, sp[:9])))
     yaw = jnp.where(is_p | to_pilot, p.pilot.yaw, sp[9])
-    new_stage = jnp.where(after, a_stage, jnp.where(to_pilot, PILOT, jnp.where(to_land, LAND, stage)))
+    new_stage = jnp.where(after, a_stage, jnp.where(to_pilot, PILOT, jnp.where(to_land, LANDING, stage)))
     out = {**s, "sp": jnp.concatenate([sp9, yaw[None]]), "stage": new_stage,
            "pilot_t0": jnp.where(to_pilot, st0, jnp.where(is_p, pt0, s["pilot_t0"])),
            "pilot_start": jnp.where(to_pilot, sstart, jnp.where(is_p, pstart, s["pilot_start"])),
@@ -146,7 +154,7 @@ def combine(p, s, t, v, contact, pil, lg, take, aft):
            "leg_p1": jnp.where(after, a_p1, jnp.where(to_land, l_p1, s["leg_p1"])),
            "leg_speed": jnp.where(after, a_spd, jnp.where(to_land, p.mission.descent_speed,
                                                           s["leg_speed"]))}
-    landed = (new_stage == LAND) & contact & (jnp.abs(v[2]) < TOUCHDOWN_SPEED)
+    landed = (new_stage == LANDING) & contact & (jnp.abs(v[2]) < TOUCHDOWN_SPEED)
     out["stage"] = jnp.where(landed, DONE, out["stage"])
     out["t_land"] = jnp.where(landed, t, s["t_land"])
     return out, landed

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 
 from ...clock import CLOCK_EPS
 from ...comm.traffic import ACK_BYTES
-from ...control.stages import LAND, PILOT, TAKEOFF
+from ...control.stages import LANDING, PILOT, TAKEOFF
 from ...energy.battery import CUTOFF_HOLD_S, ocv_liion, ocv_lipo, resistance_shape, terminal_current
 from ...energy.rotors import VRS_K, wake_immersion
 from ...mission.book import ACCEL_SMOOTHING_S, ACCEL_THRESHOLD, HOVER_SPEED
@@ -205,7 +205,7 @@ def book(p, s, t, q, v, speed, period, every_tick):
     acc = jnp.where(bdt > 0.0, a * s["acc"] + (1.0 - a) * jnp.sqrt(jnp.sum(dv * dv))
                     / jnp.where(bdt > 0.0, bdt, 1.0), s["acc"])
     stage, air = s["stage"], s["airborne"]
-    phase = jnp.where(stage == TAKEOFF, 0, jnp.where(stage == LAND, 4, jnp.where(
+    phase = jnp.where(stage == TAKEOFF, 0, jnp.where(stage == LANDING, 4, jnp.where(
         speed < HOVER_SPEED, 1, jnp.where(acc > ACCEL_THRESHOLD, 3, 2))))
     err = jnp.sqrt(jnp.sum((q[:3] - s["sp"][:3]) ** 2))
     out = {"t_book": t, "pv": v[:3], "acc": jnp.where(air, acc, s["acc"]),
