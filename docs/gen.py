@@ -117,6 +117,23 @@ def step_order() -> str:
     return _md(["#", "component", "module", "does", "when it is due"], rows)
 
 
+def public_api() -> str:
+    """The public modules of ``pytest_flockai.__all__`` and the names each makes public."""
+    import types
+
+    import pytest_flockai as fa
+
+    rows = []
+    for name in sorted(fa.__all__):
+        mod = getattr(fa, name) if name != "__version__" else None
+        if isinstance(mod, types.ModuleType):
+            names = getattr(mod, "__all__", None)
+            shown = ", ".join(f"`{n}`" for n in sorted(names)) if names is not None \
+                else "its names without a leading underscore"
+            rows.append([f"`fa.{name}`", shown])
+    return _md(["module", "public names"], rows)
+
+
 def blueprints() -> str:
     """The built-in blueprints with their mass and battery."""
     import pytest_flockai as fa
@@ -148,7 +165,7 @@ def limits() -> str:
 
 
 TABLES = {"options": options, "markers": markers, "kpis": kpis, "cli": cli, "layers": layers,
-          "step_order": step_order, "blueprints": blueprints, "devices": devices, "limits": limits}
+          "step_order": step_order, "public_api": public_api, "blueprints": blueprints, "devices": devices, "limits": limits}
 
 if __name__ == "__main__":
     for name in sys.argv[1:] or list(TABLES):

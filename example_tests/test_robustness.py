@@ -10,11 +10,12 @@ import scenarios
 from hypothesis import Phase, given, settings
 
 import pytest_flockai as fa
-from pytest_flockai import plots, report
+from pytest_flockai import plots
 from pytest_flockai import strategies as fst
 from pytest_flockai.budgets import check
-from pytest_flockai.ml.envelope import altitude_band, envelope
-from pytest_flockai.ml.evaluation import FrameRecord, detection_kpis
+from pytest_flockai.ml import FrameRecord, altitude_band, detection_kpis
+from pytest_flockai.ml.envelope import envelope
+from pytest_flockai.reports.compare import compare
 
 
 @pytest.fixture(scope="session")
@@ -100,7 +101,7 @@ def test_the_haze_augmented_detector_holds_in_haze_and_the_gate_shows_its_cost(
     check(_kpis(haze_model, hazy), recall=">= 0.5")
     clear = {"flight": _kpis(haze_model, fixed_views.ideal())}
     shipped = {"flight": _kpis(det_model, fixed_views.ideal())}
-    regressed = {r["kpi"] for r in report.regressions(clear, shipped, 5.0)}
+    regressed = {d.kpi for d in compare({"t": shipped}, {"t": clear}, 5.0).regressions}
     assert "recall" in regressed
 
 

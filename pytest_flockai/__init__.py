@@ -1,7 +1,8 @@
 """pytest-flockai: test ML-driven drone applications with pytest.
 
-The public API (see README.md): ``blueprints``, ``drone``, ``pilots``,
-``Mission``, ``FlightResult``, ``World``, ``Wind``, ``devices`` and the errors.
+The public API is ``__all__`` (see README.md and docs/reference/api.md):
+``blueprints``, ``drone``, ``pilots``, ``Mission``, ``FlightResult``, ``World``,
+``Wind``, ``devices``, the errors, and the public modules listed there.
 
 Importing the package is cheap: the pytest plugin is loaded in every pytest run
 of a project that installs it, also in runs that fly nothing. Only the errors,
@@ -53,11 +54,17 @@ _LAZY = {
     "Policy": (".policy", "Policy"), "actors": (".world.actors", None),
 }
 
+#: the public face: these names, and in each public module listed here the names of its own
+#: ``__all__`` (a module without one: its names without a leading underscore; a module there
+#: is public in turn); everything else is internal and may move.
+#: tests/test_public_api.py holds the docs, the examples and the API reference to it.
 __all__ = ["Atmosphere", "Clocked", "Conditions", "ConfigError", "Drone", "EnergyModel", "Fleet",
            "FleetDrone", "FleetResult", "FlightResult", "FlockAIError", "Mission", "Policy",
            "actors", "policy",
            "SimulationError", "Task", "Wind", "World", "blueprints", "comm", "devices", "drone",
            "fleet", "kpis", "limits", "ml", "pilots", "probes", "recording", "sensors", "sweep",
+           "budgets", "cache", "cli", "compute", "energy", "errors", "plots", "reports",
+           "strategies", "sweeps", "world",
            "__version__"]
 
 

@@ -17,11 +17,13 @@
   several models on the same frames, accuracy next to latency, energy, endurance.
 """
 
+from . import envelope
 from .analysis import analyse, write_coco_pair
 from .compare import compare_models
 from .dataset_eval import DatasetEvaluation, evaluate_dataset
 from .detections import Detections, parse_detections
-from .evaluation import FrameRecord
+from .envelope import altitude_band
+from .evaluation import FrameRecord, detection_kpis
 from .fiducial import MarkerDetector
 from .jpeg import decode_jpeg, encode_jpeg
 from .macs import MacReport, count_macs
@@ -39,4 +41,5 @@ __all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detection
            "FrameRecord", "InferenceEvent", "MacReport", "MarkerDetector", "Model", "OnnxModel",
            "OpenCVModel", "Oracle", "OracleFrame",
            "PythonModel", "Regressor", "Task", "TaskRunner", "Template", "count_macs", "count_of",
-           "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections"]
+           "crowd_metrics", "decode_jpeg", "encode_jpeg", "parse_detections",
+           "altitude_band", "detection_kpis", "envelope"]

@@ -14,3 +14,6 @@
 Everything here reads the plain data of the JSON report (``report.py``); none
 of it needs pytest.
 """
+
+#: the public modules (``summary``, ``markdown`` and ``html`` are the plugin's own)
+__all__ = ["compare", "history", "scenario"]

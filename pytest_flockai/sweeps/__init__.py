@@ -9,6 +9,6 @@ sweep inside a test.
 
 from .axes import MISSION_AXES
 from .design import METHODS
-from .runner import BACKENDS, default_workers, sweep
+from .runner import BACKENDS, choose_backend, default_workers, sweep
 
-__all__ = ["BACKENDS", "METHODS", "MISSION_AXES", "default_workers", "sweep"]
+__all__ = ["BACKENDS", "METHODS", "MISSION_AXES", "choose_backend", "default_workers", "sweep"]
