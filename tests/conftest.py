@@ -69,6 +69,7 @@ SLOW_TESTS = {
     "test_the_wheel_carries_the_shipped_models",
     "test_a_slow_radio_degrades_the_loop",
     "test_lands_on_the_marker",
+    "test_resume_after_any_detours_returns_where_the_plan_was_left",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",

@@ -196,4 +196,16 @@ class Resume(Pilot):
         return {"type": "Resume", "plan": self.plan.to_dict()}
 
 
-__all__ = ["Goto", "Resume", "Track", "Tracker", "ground_point", "yaw_of"]
+def plan_left(pilot: Pilot, t: float, sp) -> tuple:
+    """(the plan, the time it was left, its setpoint then) for a detour starting at
+    ``t`` from ``pilot`` with setpoint ``sp``. A ``Resume`` is unwrapped: back on its
+    plan, the plan is left now (its clock was shifted on the way back); still on its way
+    back, the plan stays left where and when it was first left."""
+    if isinstance(pilot, Resume):
+        if getattr(pilot, "_back", False):
+            return pilot.plan, t, list(sp)
+        return pilot.plan, pilot.t_paused, list(pilot.at)
+    return pilot, t, list(sp)
+
+
+__all__ = ["Goto", "Resume", "Track", "Tracker", "ground_point", "plan_left", "yaw_of"]

@@ -28,7 +28,7 @@ import math
 from .. import _check
 from .. import kpis as _kpis
 from ..clock import Clocked
-from ..control.follow import Goto, Resume, yaw_of
+from ..control.follow import Goto, Resume, plan_left, yaw_of
 from ..control.pilots import Hover, Orbit, Pilot, Waypoints
 from ..control.stages import LAND, PILOT, RETURN, STAGES, TAKEOFF
 from ..errors import ConfigError, close_matches
@@ -215,7 +215,7 @@ class Cockpit:
         if self._st.stage not in (PILOT, RETURN):
             return self._refuse(action)
         if self._survey is None:
-            self._survey = (self._stages.pilot, self.t, list(self._st.sp))
+            self._survey = plan_left(self._stages.pilot, self.t, self._st.sp)
         self._stages.replace_pilot(self.t, pilot)
         self._log(action, **info)
         return True
