@@ -70,6 +70,7 @@ SLOW_TESTS = {
     "test_a_slow_radio_degrades_the_loop",
     "test_lands_on_the_marker",
     "test_resume_after_any_detours_returns_where_the_plan_was_left",
+    "test_a_box_stuck_at_one_pixel_no_longer_flies_the_drone_out_of_the_world",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",

@@ -35,40 +35,10 @@ from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
+from .views import Delivered, Link
 
 #: built-in probes scored against the simulator's truth: no policy reads them
 TRUTH_PROBES = ("flight", "ml")
-
-
-class Delivered:
-    """One task result as the drone receives it: ``task``, ``t_capture``,
-    ``t_delivered``, ``ok``, ``detections`` (``ml.detections.Detections`` above the
-    task's score threshold, or None for outputs that are not boxes), ``count``
-    (the task's count of the prediction), ``nav`` (x, y, z, qw, qx, qy, qz) the
-    drone believed at capture, ``prediction`` (the model's raw output)."""
-
-    __slots__ = ("task", "t_capture", "t_delivered", "ok", "detections", "count", "nav",
-                 "prediction")
-
-    def __init__(self, **kw):
-        for k in self.__slots__:
-            setattr(self, k, kw.get(k))
-
-    def __repr__(self):
-        n = None if self.detections is None else len(self.detections)
-        return (f"Delivered({self.task!r}, captured {self.t_capture:.2f} s, delivered "
-                f"{self.t_delivered:.2f} s, detections={n})")
-
-
-class Link:
-    """The radio as the drone sees it: ``distance_m`` to the ground station,
-    ``range_m`` of the link, ``in_range``."""
-
-    __slots__ = ("distance_m", "range_m", "in_range")
-
-    def __init__(self, distance_m, range_m):
-        self.distance_m, self.range_m = distance_m, range_m
-        self.in_range = distance_m <= range_m
 
 
 class Cockpit:
@@ -224,15 +194,18 @@ class Cockpit:
         """Fly to (x, y, z) (z: the current altitude when None) and hover there; False
         when refused (not in the pilot stage)."""
         z = self.position[2] if z is None else z
-        return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y), z=float(z))
+        why = _geofence().refusal(self, x, y, z)            # outside the world or a geofence
+        return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y),
+                        z=float(z)) if why is None else self._refuse("goto", reason=why)
 
     def orbit(self, x: float, y: float, radius: float = 10.0, speed: float = 3.0,
               altitude: float | None = None) -> bool:
         """Circle (x, y) at ``radius`` m (altitude: the current one when None); False
         when refused."""
         alt = self.position[2] if altitude is None else altitude
+        why = _geofence().refusal(self, x, y, alt, radius)
         return self.fly(Orbit((x, y), radius, alt, speed), action="orbit", x=float(x), y=float(y),
-                        radius=float(radius))
+                        radius=float(radius)) if why is None else self._refuse("orbit", reason=why)
 
     def hold(self) -> bool:
         """Hover where the drone is; False when refused."""
@@ -310,12 +283,12 @@ class Cockpit:
         self._policy.triggers += 1
         self._run.event(self.t, "policy", policy=self._policy.name, action=action, **info)
 
-    def _refuse(self, action: str) -> bool:
-        key = (action, self._st.stage)
+    def _refuse(self, action: str, **info) -> bool:
+        key = (action, self._st.stage, info.get("reason"))
         if key != self._refused_key:          # once per action and stage, not every period
             self._refused_key = key
             self._run.event(self.t, "policy_refused", policy=self._policy.name, action=action,
-                            stage=self.stage)
+                            stage=self.stage, **info)
         return False
 
 
@@ -384,6 +357,11 @@ class Policy(Clocked):
 
     def to_dict(self) -> dict:
         return {"type": type(self).__name__, "name": self.name, "period_s": self.period_s}
+
+
+def _geofence():
+    from . import geofence  # it imports Policy from here
+    return geofence
 
 
 def register_kpis(name: str, modes=()) -> None:
