@@ -2,7 +2,6 @@
 a PX4-like breach action; goto/orbit targets outside the world refused; a false
 positive stuck at one pixel no longer flies the drone out of the world."""
 
-import math
 
 import numpy as np
 import pytest
