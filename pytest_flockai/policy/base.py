@@ -35,6 +35,7 @@ from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
+from . import reserved as _reserved
 from .views import Delivered, Link
 
 #: built-in probes scored against the simulator's truth: no policy reads them
@@ -299,6 +300,15 @@ class Policy(Clocked):
     #: mode names whose time is always reported (0 when never entered)
     modes: tuple = ()
 
+    def __init_subclass__(cls, **kw) -> None:
+        super().__init_subclass__(**kw)
+        _reserved.check_class(cls, RESERVED)
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in RESERVED:        # self.step = 0 would make the loop call a number
+            _reserved.check_attr(self, name, value, RESERVED)
+        super().__setattr__(name, value)
+
     def __init__(self, name: str | None = None, period_s: float = 0.1) -> None:
         nm = name if name is not None else type(self).__name__.lower()
         if not isinstance(nm, str) or not nm or "." in nm:
@@ -359,6 +369,10 @@ class Policy(Clocked):
         return {"type": type(self).__name__, "name": self.name, "period_s": self.period_s}
 
 
+#: the methods the flight loop calls on a policy: never data (policy/reserved.py)
+RESERVED = _reserved.reserved(Policy)
+
+
 def _geofence():
     from . import geofence  # it imports Policy from here
     return geofence
@@ -372,4 +386,4 @@ def register_kpis(name: str, modes=()) -> None:
                        f"policy {name!r}: time spent in mode {m!r}")
 
 
-__all__ = ["Cockpit", "Delivered", "Link", "Policy", "TRUTH_PROBES", "register_kpis"]
+__all__ = ["Cockpit", "Delivered", "Link", "Policy", "RESERVED", "TRUTH_PROBES", "register_kpis"]
