@@ -222,19 +222,57 @@ def tests(page: Page) -> str:
                            "cached", "message"], rows)
 
 
+#: KPI columns of the per-flight table (the headline KPIs, then the budgeted ones): the
+#: table reads at 1280 px; every KPI is in "Every KPI", one row each (issue 35)
+KPI_COLUMNS = 8
+
+
+def _headline_cell(kpis: dict, k: str) -> tuple:
+    """The flight's ``k``, or for a fleet its drones' ``<drone>.k`` as a range."""
+    v = kpis.get(k)
+    if v is not None:
+        return _cell(_s.fmt(k, v), _num(v))
+    per = sorted(x for kk, x in kpis.items() if "." in kk and family(kk) == k
+                 and isinstance(x, (int, float)) and not math.isnan(x))
+    if not per:
+        return _cell(_s.fmt(k, None), None)
+    text = _s.fmt(k, per[0]) if per[0] == per[-1] else \
+        f"{_s.fmt(k, per[0])} to {_s.fmt(k, per[-1])} ({len(per)} drones)"
+    return _cell(text, _num(per[-1]))
+
+
 def kpi_table(page: Page) -> str:
     flights = _s.flights(page.doc)
     if not flights:
         return _muted("No flights.")
-    cols = _s.kpi_columns(page.doc)
+    cols = _s.kpi_columns(page.doc, limit=KPI_COLUMNS)
     rows = []
     for r in flights:
         o = r["outcome"]
         cells = [_cell(o, None, f"v s-{o}"), _cell(r["test"], None, "id"), _cell(r["flight"]),
                  _cell("cache" if r["cache"] == "hit" else "flown")]
-        cells += [_cell(_s.fmt(k, r["kpis"].get(k)), _num(r["kpis"].get(k))) for k in cols]
+        cells += [_headline_cell(r["kpis"], k) for k in cols]
         rows.append((cells, "bad" if o in _s.FAILING else "", o))
-    return table("kpis", ["outcome", "test", "flight", "source"] + cols, rows)
+    more = len(_s.kpi_columns(page.doc)) - len(cols)
+    note = _muted(f"{more} more KPI(s) per flight in Every KPI, one row each.") if more > 0 else ""
+    return table("kpis", ["outcome", "test", "flight", "source"] + cols, rows) + note
+
+
+def every_kpi(page: Page) -> str:
+    """Every KPI of every flight, one row each (group: its task, drone or family)."""
+    rows = []
+    for r in _s.flights(page.doc):
+        o = r["outcome"]
+        for k, v in sorted(r["kpis"].items()):
+            group = k.split(".", 1)[0] if "." in k else "flight"
+            rows.append(([_cell(o, None, f"v s-{o}"), _cell(r["test"], None, "id"),
+                          _cell(r["flight"]), _cell(group), _cell(k, None, "wrap"),
+                          _cell(_s.fmt(k, v), _num(v))], "bad" if o in _s.FAILING else "", o))
+    if not rows:
+        return ""
+    return (f"<details><summary>{len(rows)} values: open to read, sort or filter</summary>"
+            + table("every-kpi", ["outcome", "test", "flight", "group", "KPI", "value"], rows)
+            + "</details>")
 
 
 def all_budgets(page: Page) -> str:
@@ -308,6 +346,7 @@ SECTIONS: list = [
     ("Regressions against the baseline", regressions),
     ("Tests", tests),
     ("KPIs", kpi_table),
+    ("Every KPI", every_kpi),
     ("Every budget", all_budgets),
     ("Every KPI change against the baseline", deltas),
     ("Detail per test", details),
