@@ -45,3 +45,27 @@ def test_a_fleet_flights_headline_cells_show_its_drones():
     fleet_row = fleet_row[:fleet_row.index("</tr>")]
     assert "(2 drones)" in fleet_row and "n/a" not in fleet_row.split("flown", 1)[1].split(
         "</td>")[1]
+
+
+def test_the_dashboard_says_why_pictures_are_missing_without_matplotlib(pytester):
+    pytester.makeconftest('''
+import sys
+sys.modules["matplotlib"] = None          # as if matplotlib were not installed
+''')
+    pytester.makepyfile(test_fly='''
+import pytest
+import pytest_flockai as fa
+
+@pytest.mark.flockai(drone="crazyflie-2-1", pilot=fa.pilots.Hover(altitude=1.0, duration=0.5))
+def test_hover(flight):
+    pass
+''')
+    res = pytester.runpytest_subprocess("-p", "no:cacheprovider", "--flockai-html", "d.html")
+    res.assert_outcomes(passed=1)
+    page = (pytester.path / "d.html").read_text()
+    assert 'id="pictures-missing"' in page and "matplotlib is not installed" in page
+    assert "data:image/png" not in page
+
+
+def test_the_note_is_absent_when_pictures_are_drawn():
+    assert 'id="pictures-missing"' not in html.dashboard(doc())

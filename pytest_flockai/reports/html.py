@@ -46,6 +46,7 @@ class Page:
     threshold_pct: float = 5.0
     base_scenarios: dict | None = None
     abs_tol: dict | None = None
+    pictures_missing: str | None = None              # why the flights have no pictures
 
 
 def _e(x) -> str:
@@ -336,7 +337,9 @@ def details(page: Page) -> str:
                    f'{_e(o)}</span> {_e(t["nodeid"])}</h3><p class="muted">{_e(summary)}</p>'
                    + (f"<pre>{_e(msg)}</pre>" if msg else "")
                    + (f'<div class="pics">{"".join(figs)}</div>' if figs else "") + "</section>")
-    return "".join(out) or _muted("No test ran.")
+    note = (f'<p class="muted" id="pictures-missing">{_e(page.pictures_missing)}</p>'
+            if page.pictures_missing else "")
+    return note + "".join(out) if out else _muted("No test ran.")
 
 
 #: the page's sections, top down: (title, render(page) -> html); "" renders nothing
@@ -366,13 +369,16 @@ def add_section(title: str, render, *, before: str = "Detail per test") -> None:
 
 def dashboard(doc: dict, *, pictures: dict | None = None, baseline: dict | None = None,
               threshold_pct: float = 5.0, title: str = "pytest-flockai",
-              base_scenarios: dict | None = None, abs_tol: dict | None = None) -> str:
+              base_scenarios: dict | None = None, abs_tol: dict | None = None,
+              pictures_missing: str | None = None) -> str:
     """The dashboard of a ``pytest-flockai/1`` report as one HTML string.
 
     pictures: ``{nodeid: [{"title": str, "data": base64 PNG}]}``; baseline:
     ``{nodeid: {flight: {kpi: value}}}`` (``report.load_baseline``); base_scenarios:
-    its scenario summaries (``compare.load_scenarios``)."""
-    page = Page(doc, pictures or {}, baseline, threshold_pct, base_scenarios, abs_tol)
+    its scenario summaries (``compare.load_scenarios``); pictures_missing: why the
+    flights have no pictures (shown above the detail per test)."""
+    page = Page(doc, pictures or {}, baseline, threshold_pct, base_scenarios, abs_tol,
+                pictures_missing)
     parts = ["<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">",
              '<meta name="viewport" content="width=device-width, initial-scale=1">',
              f"<title>{_e(title)}</title><style>{CSS}</style></head><body>", header(page, title)]
