@@ -69,3 +69,44 @@ def test_hover(flight):
 
 def test_the_note_is_absent_when_pictures_are_drawn():
     assert 'id="pictures-missing"' not in html.dashboard(doc())
+
+
+def test_a_failing_hypothesis_tests_kept_flight_has_a_name_of_its_own(pytester):
+    """Its kept (shrunk) example's flight is not named "flight", the name its first
+    example's budget check row carries; the headline counts each budget of a test once."""
+    pytester.makepyfile(test_h='''
+import pytest
+import pytest_flockai as fa
+from hypothesis import given, settings, strategies as st, Phase
+
+@settings(max_examples=6, deadline=None, derandomize=True, database=None,
+          phases=[Phase.generate, Phase.shrink])
+@given(d=st.floats(1.0, 4.0))
+def test_fails(d):
+    r = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=d)).run()
+    fa.budgets.check(r, flight_time_s="<= 5 s")
+''')
+    res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--flockai-json", "r.json")
+    res.assert_outcomes(failed=1)
+    import json
+    (t,) = json.loads((pytester.path / "r.json").read_text())["tests"]
+    names = [f["name"] for f in t["flights"]]
+    assert len(names) == 1 and names[0].startswith("flight-example-"), names
+    rows = [b["flight"] for b in t["budgets"]]
+    assert len(rows) == len(set(rows))                      # no two rows for one name
+    assert names[0] in rows and not [b for b in t["budgets"]
+                                     if b["flight"] == names[0] and b["verdict"] == "pass"]
+    from pytest_flockai.reports import summary
+    doc = json.loads((pytester.path / "r.json").read_text())
+    assert "1 budget(s) broken" in summary.headline(doc)
+
+
+def test_the_headline_counts_a_budget_broken_by_several_flights_of_a_test_once():
+    from pytest_flockai.reports import summary
+    row = {"kpi": "endurance_s", "budget": ">= 20 min", "verdict": "broken"}
+    d = {"summary": {"failed": 2}, "tests": [
+        {"nodeid": f"t.py::test_{k}", "outcome": "failed",
+         "flights": [{"name": f"f{i}", "kpis": {}} for i in range(3)],
+         "budgets": [{**row, "flight": f"f{i}"} for i in range(3)]} for k in "ab"]}
+    assert "2 budget(s) broken" in summary.headline(d)
+    assert 'data-card="budgets broken"><b>2</b>' in html.dashboard(d)

@@ -130,8 +130,11 @@ class TestState:
                     w.passed == v.passed and v.margin < w.margin):
                 worst[key] = v
         self.verdicts = list(worst.values())
+        before = {f.name: f for f in kept}
         self.flights = kept
-        self._name()
+        self._name()                     # kept flights: "<name>-example-<n>", never "flight"
+        renamed = {old: f.name for old, f in before.items()}
+        self.checks = {(renamed.get(k[0], k[0]), *k[1:]): v for k, v in self.checks.items()}
 
     def _add(self, flight: Flight) -> None:
         """A flight of this test; the derived-KPI hooks run on it now, so the test
@@ -161,6 +164,8 @@ class TestState:
         taken: set = set()
         for f in self.flights:
             base = str(f.explicit or f.fixture or "flight")
+            if self.hypothesis is not None and f.example:    # a kept hypothesis example's
+                base = f"{base}-example-{f.example}"
             name, k = base, 1
             while name in taken:
                 k += 1

@@ -111,7 +111,7 @@ def _band(page: Page) -> str:
     doc = page.doc
     s = doc.get("summary", {})
     groups, _ = _s.regression_groups(doc, page.base_scenarios)
-    broken, expected = _s.broken_budgets(doc), _s.expected_broken(doc)
+    broken, expected = _s.per_test(_s.broken_budgets(doc)), _s.per_test(_s.expected_broken(doc))
     listed = _s.flights(doc)
     distinct = _s.distinct_flights(listed)
     hits = sum(r["cache"] == "hit" for r in distinct)

@@ -57,6 +57,15 @@ def broken_budgets(doc: dict) -> list[dict]:
     return [b for b in budgets(doc) if b["state"] == "broken"]
 
 
+def per_test(rows: list[dict]) -> list[dict]:
+    """Budget rows counted once per test: a budget broken by several flights of a test
+    (or by every hypothesis example, or by the marker and a check) is one (issue 35)."""
+    seen: dict = {}
+    for b in rows:
+        seen.setdefault((b["test"], b.get("kpi"), b.get("budget")), b)
+    return list(seen.values())
+
+
 def expected_broken(doc: dict) -> list[dict]:
     """Budgets broken where pytest expected it (xfail tests, ``pytest.raises`` around check)."""
     return [b for b in budgets(doc) if b["state"] in ("xfail", "caught")]
@@ -164,7 +173,7 @@ def _expected_why(expected: list[dict]) -> str:
 
 def headline(doc: dict) -> str:
     """The one line of a run: pytest's counts, then the budgets and regressions."""
-    broken, expected = broken_budgets(doc), expected_broken(doc)
+    broken, expected = per_test(broken_budgets(doc)), per_test(expected_broken(doc))
     regs, _ = regression_groups(doc)
     cached = cache_hits(doc)
     why = _expected_why(expected)
