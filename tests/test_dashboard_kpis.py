@@ -110,3 +110,32 @@ def test_the_headline_counts_a_budget_broken_by_several_flights_of_a_test_once()
          "budgets": [{**row, "flight": f"f{i}"} for i in range(3)]} for k in "ab"]}
     assert "2 budget(s) broken" in summary.headline(d)
     assert 'data-card="budgets broken"><b>2</b>' in html.dashboard(d)
+
+
+def test_policy_events_are_in_the_reports_without_artifacts(pytester):
+    pytester.makepyfile(test_p='''
+import pytest_flockai as fa
+
+class Hold(fa.Policy):
+    def start(self, run):
+        self.held = False
+
+    def decide(self, t, drone):
+        if t >= 12.0 and not self.held:
+            self.held = drone.hold()
+            drone.mode("held")
+
+def test_hold():
+    fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=20.0),
+               policies=[Hold(name="h", period_s=1.0)], until=16.0).run()
+''')
+    res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "--flockai-json", "r.json",
+                                       "--flockai-html", "d.html")
+    res.assert_outcomes(passed=1)
+    import json
+    (t,) = json.loads((pytester.path / "r.json").read_text())["tests"]
+    evs = t["flights"][0]["policy_events"]
+    assert [e["kind"] for e in evs][:2] == ["policy", "policy_mode"]
+    assert evs[0]["action"] == "hold" and evs[0]["t"] == 12.0
+    page = (pytester.path / "d.html").read_text()
+    assert "policies: flight: 12.0 s hold, 12.0 s held" in page

@@ -333,8 +333,10 @@ def details(page: Page) -> str:
         summary = (f'{len(t.get("flights") or ())} flight(s), '
                    f'{sum(b.get("verdict") != "pass" for b in bs)} of {len(bs)} budget(s) broken')
         msg = t.get("message") or t.get("error")
+        summary += "".join(f"\npolicies: {line}" for line in _s.decisions(t))
         out.append(f'<section class="test" data-outcome="{_e(o)}"><h3><span class="s-{_e(o)}">'
-                   f'{_e(o)}</span> {_e(t["nodeid"])}</h3><p class="muted">{_e(summary)}</p>'
+                   f'{_e(o)}</span> {_e(t["nodeid"])}</h3><p class="muted">'
+                   f'{_e(summary).replace(chr(10), "<br>")}</p>'
                    + (f"<pre>{_e(msg)}</pre>" if msg else "")
                    + (f'<div class="pics">{"".join(figs)}</div>' if figs else "") + "</section>")
     note = (f'<p class="muted" id="pictures-missing">{_e(page.pictures_missing)}</p>'

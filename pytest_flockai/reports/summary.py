@@ -192,3 +192,16 @@ def slowest(doc: dict, n: int = 3) -> list[dict]:
     """The ``n`` flights that took the most wall time to fly (cache hits cost nothing)."""
     rows = [r for r in flights(doc) if r["cache"] != "hit" and r.get("wall_time_s")]
     return sorted(rows, key=lambda r: -r["wall_time_s"])[:n]
+
+
+def decisions(test: dict) -> list[str]:
+    """One line per flight of ``test`` with policy events: what its policies did, when."""
+    out = []
+    for f in test.get("flights") or ():
+        evs = f.get("policy_events") or []
+        if evs:
+            words = [f"{e.get('t', 0):.1f} s {e.get('action') or e.get('mode') or e['kind']}"
+                     + (f" ({e['reason']})" if e.get("reason") else "") for e in evs[:30]]
+            more = len(evs) - 30 + f.get("policy_events_dropped", 0)
+            out.append(f"{f['name']}: " + ", ".join(words) + (f", and {more} more" if more > 0 else ""))
+    return out
