@@ -35,6 +35,7 @@ from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
+from . import fence as _fence
 from . import reserved as _reserved
 from .views import Delivered, Link
 
@@ -195,7 +196,7 @@ class Cockpit:
         """Fly to (x, y, z) (z: the current altitude when None) and hover there; False
         when refused (not in the pilot stage)."""
         z = self.position[2] if z is None else z
-        why = _geofence().refusal(self, x, y, z)            # outside the world or a geofence
+        why = _fence.refusal(self, x, y, z)            # outside the world or a geofence
         return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y),
                         z=float(z)) if why is None else self._refuse("goto", reason=why)
 
@@ -204,7 +205,7 @@ class Cockpit:
         """Circle (x, y) at ``radius`` m (altitude: the current one when None); False
         when refused."""
         alt = self.position[2] if altitude is None else altitude
-        why = _geofence().refusal(self, x, y, alt, radius)
+        why = _fence.refusal(self, x, y, alt, radius)
         return self.fly(Orbit((x, y), radius, alt, speed), action="orbit", x=float(x), y=float(y),
                         radius=float(radius)) if why is None else self._refuse("orbit", reason=why)
 
@@ -371,11 +372,6 @@ class Policy(Clocked):
 
 #: the methods the flight loop calls on a policy: never data (policy/reserved.py)
 RESERVED = _reserved.reserved(Policy)
-
-
-def _geofence():
-    from . import geofence  # it imports Policy from here
-    return geofence
 
 
 def register_kpis(name: str, modes=()) -> None:
