@@ -23,7 +23,8 @@ the lost timer counts from its delivery; an older one cannot hold a track and is
 (an event ``track_rejected`` with ``reason="stale"``, the KPI ``track_rejected_stale``). A
 track whose estimated speed exceeds what its class can move at (``MAX_SPEED_MPS``: a false
 positive stuck in the image moves with the drone) is dropped (``reason="implausible"``,
-``track_rejected_implausible``).
+``track_rejected_implausible``; judged from the third hit, so it matters for Follow: the
+searches act on a track at its confirmation).
 
 Closed-loop KPIs (``policy/scoring.py``, from the truth after the flight, never
 in a decision): ``time_to_detect_s``, ``track_error_p95_m``, ``track_lost_count``,
