@@ -7,7 +7,9 @@ variant until the battery is empty would take about 25 simulated minutes each;
 the projection keeps the 3 x 3 grid under a minute on 2 cores.
 
     pytest example_tests/test_sweep_envelope.py --flockai-artifacts artifacts
-writes the envelope as ``sweep.csv`` and ``sweep.png`` under ``artifacts/``.
+writes the envelope as ``sweep.csv`` and ``sweep.png`` under
+``artifacts/example_tests_test_sweep_envelope.py_test_mavic_endurance_envelope-185f6bfb42/``
+(the test id as a folder name).
 """
 
 import pytest

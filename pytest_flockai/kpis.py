@@ -90,6 +90,10 @@ _ROWS = [
      "while following"),
     ("track_lost_count", "count", "lower", "times the followed target's track was lost"),
     ("track_lost_s", "s", "lower", "time spent with the target's track lost"),
+    ("track_rejected_stale", "count", "lower", "results older than the policy's max_age_s "
+     "(Follow: lost_after_s) at delivery, refused by a perception policy"),
+    ("track_rejected_implausible", "count", "lower", "tracks dropped for moving faster than "
+     "their class can (a false positive)"),
     ("landing_error_m", "m", "lower", "horizontal distance from the touchdown point to the "
      "landing marker's centre"),
     ("targets_found", "count", "higher", "distinct targets a search confirmed"),

@@ -56,6 +56,7 @@ from .harness import ci_reports as _ci_reports
 from .harness import examples as _examples
 from .harness import flightcache as _flightcache
 from .harness import markers as _markers
+from .harness import misspelt as _misspelt
 from .harness import options as _options
 from .harness import rootdir as _rootdir
 from .harness import sweeps as _sweeps
@@ -108,6 +109,7 @@ def pytest_configure(config):
     config.pluginmanager.register(_flightcache.CachePlugin(config), "flockai-cache")
     config.pluginmanager.register(_ci_reports.ReportsPlugin(config), "flockai-reports")
     config.pluginmanager.register(_tracebacks.RepairPlugin(), "flockai-tracebacks")
+    config.pluginmanager.register(_misspelt.MisspeltMarks(config), "flockai-misspelt")
 
 
 def pytest_unconfigure(config):
@@ -116,7 +118,7 @@ def pytest_unconfigure(config):
         session.close()
         config.pluginmanager.unregister(session)
         del config.stash[SESSION]
-    for name in ("flockai-cache", "flockai-reports", "flockai-tracebacks"):
+    for name in ("flockai-cache", "flockai-reports", "flockai-tracebacks", "flockai-misspelt"):
         extra = config.pluginmanager.get_plugin(name)
         if extra is not None:
             config.pluginmanager.unregister(extra)

@@ -19,7 +19,9 @@ import math
 import os
 import re
 import time
+from collections.abc import Mapping
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import pandas as pd
@@ -56,6 +58,9 @@ class FlightResult:
     - ``probe_samples``: one DataFrame per probe, at the probe's own period
     - ``probe_errors``: failures of probes or subscribers (the flight went on)
     - ``cache``: where the flight cache got it (``pytest_flockai.cache``), or None
+    - ``policies``: the policies as flown, by name (each is a copy of the one passed to the
+      ``Mission``, which stays as it was); empty on a result read from the flight cache or
+      sent back from a worker process
     """
     # Set after the flight (absent on a result built by hand: readers use getattr).
     #: (n, 3) positions of the world's people
@@ -66,6 +71,7 @@ class FlightResult:
     ml_coco: dict
 
     cache: dict | None = None
+    policies: Mapping = MappingProxyType({})      # set after a flown flight (docstring)
     verdicts: tuple = ()     # the budgets last checked against it (budgets.check/evaluate)
 
     def __init__(self, kpis: dict, telemetry: pd.DataFrame, events: list, scenario: dict,
@@ -81,6 +87,12 @@ class FlightResult:
         self.wall_time_s = wall_time_s   # host time, never part of the KPIs
         self.probe_samples = dict(probe_samples or {})
         self.probe_errors = list(probe_errors or [])
+
+    def __getstate__(self) -> dict:
+        """Pickled (a sweep's worker, a copy) without ``policies``: they hold the flight."""
+        state = dict(self.__dict__)
+        state.pop("policies", None)
+        return state
 
     def _repr_html_(self) -> str:
         """In a notebook: the headline KPIs, the budgets checked and the path (SVG)."""

@@ -3,8 +3,10 @@ namespace per page, as a reader would paste them; a page's plain test functions
 (named test_*, without marks or hypothesis) are called too. Pages whose examples
 make a claim in prose have that claim checked below, on the same namespace.
 
-A block fenced as ```python is executed; a block that is not meant to run (an
-output listing, a shell command) uses another fence (```text, ```bash)."""
+A block fenced as ```python is executed as written, with no name injected (issue 35); a
+block that is not meant to run (an output listing, a shell command, or a fragment whose
+names come from elsewhere, which the sentence before it says) uses another fence
+(```text, ```bash) and is skipped."""
 
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ def page_namespace(rel: str, tmp_path: Path) -> dict:
     page = ROOT / rel
     cwd = os.getcwd()
     os.chdir(ROOT)                       # examples use paths relative to the repository
-    ns: dict = {"__name__": f"docs:{page.name}", "TMP": tmp_path}
+    ns: dict = {"__name__": f"docs:{page.name}"}      # nothing injected: blocks run as written
     try:
         for i, block in enumerate(_blocks(page)):
             try:
@@ -108,3 +110,18 @@ def test_the_robustness_search_finds_the_haze(tmp_path):
     ns = page_namespace("docs/how-to/imaging-conditions.md", tmp_path)
     with pytest.raises(AssertionError, match="recall"):
         ns["test_detector_recall_holds"]()
+
+
+def test_the_sweeps_page_prints_what_its_example_computes(tmp_path):
+    """docs/how-to/sweeps.md shows the first example's DataFrame as printed: its figures
+    are the run's (issue 35: they had drifted by up to 2.3 %)."""
+    ns = page_namespace("docs/how-to/sweeps.md", tmp_path)
+    text = (ROOT / "docs" / "how-to" / "sweeps.md").read_text()
+    shown = re.search(r"prints \(this machine.*?\n```\n(.*?)```", text, re.S).group(1)
+    rows = [line.split() for line in shown.splitlines()[1:]]
+    env = ns["env"]
+    assert len(rows) == len(env)
+    for row, (_, got) in zip(rows, env.iterrows()):
+        assert float(row[4]) == pytest.approx(got["flight_time_s"], abs=0.006)
+        assert float(row[5]) == pytest.approx(got["energy_total_j"], rel=2e-3), row
+        assert row[6] == str(bool(got["ok"]))

@@ -31,10 +31,14 @@ def two():
     return search(2).run()
 
 
-def test_two_drones_find_all_five_and_share_the_work(two):
+# Issue 35: resume() after a second detour used to skip plan legs; these figures were first
+# recorded with that bug (5 of 5 found, the skipped legs flown by luck at the right time).
+# Flying every leg, two drones find 4 of the 5 walkers (one walks where the strips were
+# already flown), four drones too, and sharing the diverted drone's tail finds all five.
+def test_two_drones_find_four_of_five_and_share_the_work(two):
     k = two.kpis
-    assert k["fleet.targets_found"] == 5
-    assert k["fleet.time_to_find_all_s"] < k["fleet.makespan_s"]
+    assert k["fleet.targets_found"] == 4
+    assert k["fleet.coverage_time_s"] < k["fleet.makespan_s"]
     assert k["fleet.assignments"] >= 5
     # both drones were sent to confirm, each after a report reached the station
     confirm = {e["drone"] for e in two.events if e["kind"] == "policy_mode"
@@ -54,10 +58,10 @@ def test_an_assignment_reaches_the_drone_after_the_radio():
     assert first["t"] > plan
 
 
-def test_more_drones_find_everyone_sooner(two):
+def test_more_drones_find_as_many_sooner(two):
     four = search(4).run().kpis
-    assert four["fleet.targets_found"] == 5
-    assert four["fleet.time_to_find_all_s"] < two.kpis["fleet.time_to_find_all_s"]
+    assert four["fleet.targets_found"] >= two.kpis["fleet.targets_found"]
+    assert four["fleet.coverage_time_s"] < 0.7 * two.kpis["fleet.coverage_time_s"]
 
 
 def test_a_shared_search_needs_a_ground_station():
@@ -114,10 +118,9 @@ def test_free_drones_replan_to_cover_a_diverted_drones_legs(two):
                    e["drone"] == c["cover"] and e["t"] < c["t"] for e in ev)
     kept = [e for e in ev if e["kind"] == "policy" and e["action"] == "replan" and "kept" in e]
     assert {e["drone"] for e in kept} <= {c["cover"] for c in covers}
-    # with two drones sharing the legs, everyone is found sooner than without (171 s)
+    # with two drones sharing the legs, everyone is found (without: 4 of 5)
     k = res.kpis
-    assert k["fleet.targets_found"] == 5
-    assert k["fleet.time_to_find_all_s"] < two.kpis["fleet.time_to_find_all_s"]
+    assert k["fleet.targets_found"] == 5 > two.kpis["fleet.targets_found"]
 
 
 def test_a_ground_station_refuses_an_unknown_share():
@@ -126,6 +129,6 @@ def test_a_ground_station_refuses_an_unknown_share():
 
 
 @pytest.mark.kpi({"d1.policy.team.time_confirm_s": "<= 2 min", "d2.policy.team.triggers": ">= 1",
-                  "fleet.targets_found": ">= 5"})
+                  "fleet.targets_found": ">= 4"})
 def test_budgets_on_a_drones_policy_kpis_parse_and_are_checked():
     search(2).run()

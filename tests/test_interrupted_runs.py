@@ -19,9 +19,9 @@ import os, pathlib
 import pytest
 import pytest_flockai as fa
 
-def fly(duration):
+def fly(duration, seed=0):
     return fa.Mission(fa.drone("crazyflie-2-1"),
-                      fa.pilots.Hover(altitude=1.0, duration=duration)).run()
+                      fa.pilots.Hover(altitude=1.0, duration=duration), seed=seed).run()
 
 @pytest.mark.kpi(flight_time_s=">= 1 s")
 def test_a_done():
@@ -32,7 +32,13 @@ def test_b_long():
     fly(2.0)
     pathlib.Path("started-" + os.environ.get("PYTEST_XDIST_WORKER", "main")).write_text(
         str(os.getpid()))
-    fly(100000.0)        # hours of simulated hover: cut off by the signal
+    # flights until the signal comes: one hover ends at battery depletion (about 400 s
+    # simulated, seconds of wall time), so one alone could end before a loaded machine
+    # sends the signal; each flight has its own seed (never a cache hit)
+    seed = 1
+    while True:
+        fly(100000.0, seed=seed)
+        seed += 1
 '''
 
 

@@ -11,6 +11,10 @@ from pytest_flockai.airframe import model_cache
 
 MAVIC = "dji-mavic-2-pro"
 
+# these tests count model builds, so every flight must be flown: a flight served from
+# the flight cache (on by default, under pytest's cache directory) builds nothing
+pytestmark = pytest.mark.flockai_cache("off")
+
 
 @pytest.fixture(autouse=True)
 def empty_cache():

@@ -119,7 +119,9 @@ def test_fails(d):
     assert ok["flights"] == [] and len(ok["budgets"]) == 1 and ok["budgets"][0]["verdict"] == "pass"
     lo, hi = ok["hypothesis"]["kpi_ranges"]["flight_time_s"]
     assert 1.0 <= lo < hi
-    assert [f["name"] for f in bad["flights"]] == ["a", "b"]     # the shrunk example, in full
+    # the shrunk example, in full, named apart from the earlier examples (issue 35)
+    n = bad["flights"][0]["name"].rsplit("-", 1)[1]
+    assert [f["name"] for f in bad["flights"]] == [f"a-example-{n}", f"b-example-{n}"]
     assert bad["hypothesis"]["kept"] == 2 and bad["hypothesis"]["examples"] > 2
     assert bad["flights"][0]["kpis"]["flight_time_s"] >= 4.5
     assert (pytester.path / "j.xml").stat().st_size < 20_000

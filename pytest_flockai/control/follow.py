@@ -59,6 +59,7 @@ class Tracker:
         self.t = -math.inf            # time of the state (the last measurement's capture)
         self.hits = 0
         self.last_hit = -math.inf     # capture time of the last measurement used
+        self.last_delivered = -math.inf   # when that measurement was delivered
 
     @property
     def confirmed(self) -> bool:
@@ -73,13 +74,15 @@ class Tracker:
         dt = t - self.t
         return x[0] + x[2] * dt, x[1] + x[3] * dt, x[2], x[3]
 
-    def update(self, t: float, px: float, py: float) -> bool:
-        """Fuse a measurement captured at t; False when it fails the gate or is stale."""
+    def update(self, t: float, px: float, py: float, t_delivered: float | None = None) -> bool:
+        """Fuse a measurement captured at t (delivered at ``t_delivered``, default t);
+        False when it fails the gate or is older than the state."""
         x0, P0 = self.x, self.P
         if x0 is None or P0 is None:              # both None until the first measurement
             self.x = np.array([px, py, 0.0, 0.0])
             self.P = np.diag([self.r, self.r, 4.0, 4.0])
             self.t, self.hits, self.last_hit = t, 1, t
+            self.last_delivered = t if t_delivered is None else t_delivered
             return True
         if t <= self.t:
             return False
@@ -96,6 +99,7 @@ class Tracker:
         self.x = x + K @ y
         self.P = (np.eye(4) - K[:, :2] @ np.eye(2, 4)) @ P
         self.t, self.last_hit = t, t
+        self.last_delivered = t if t_delivered is None else max(t_delivered, self.last_delivered)
         self.hits += 1
         return True
 
@@ -196,4 +200,16 @@ class Resume(Pilot):
         return {"type": "Resume", "plan": self.plan.to_dict()}
 
 
-__all__ = ["Goto", "Resume", "Track", "Tracker", "ground_point", "yaw_of"]
+def plan_left(pilot: Pilot, t: float, sp) -> tuple:
+    """(the plan, the time it was left, its setpoint then) for a detour starting at
+    ``t`` from ``pilot`` with setpoint ``sp``. A ``Resume`` is unwrapped: back on its
+    plan, the plan is left now (its clock was shifted on the way back); still on its way
+    back, the plan stays left where and when it was first left."""
+    if isinstance(pilot, Resume):
+        if getattr(pilot, "_back", False):
+            return pilot.plan, t, list(sp)
+        return pilot.plan, pilot.t_paused, list(pilot.at)
+    return pilot, t, list(sp)
+
+
+__all__ = ["Goto", "Resume", "Track", "Tracker", "ground_point", "plan_left", "yaw_of"]

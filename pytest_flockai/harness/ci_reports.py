@@ -151,7 +151,8 @@ class ReportsPlugin:
             self._write("HTML dashboard", self.html, lambda p: _html.write(
                 p, doc, pictures=self.pictures, baseline=flock.baseline if flock else None,
                 threshold_pct=flock.max_regression if flock else 5.0,
-                base_scenarios=base_scen, abs_tol=flock.abs_tol if flock else None))
+                base_scenarios=base_scen, abs_tol=flock.abs_tol if flock else None,
+                pictures_missing=_pictures_missing()))
         if self.history is not None:
             try:
                 p = _history.record(self.history, entries, self.config.invocation_params.dir)
@@ -176,3 +177,12 @@ class ReportsPlugin:
         for line in self.written:
             warn = line.startswith("WARNING")
             terminalreporter.write_line(f"flockai: {line}", yellow=warn, bold=warn)
+
+
+def _pictures_missing() -> str | None:
+    """Why the dashboard has no flight pictures (matplotlib missing), or None."""
+    from .. import plots  # lazy (tests/test_architecture.py)
+    if plots.available():
+        return None
+    return ("No flight-path or energy pictures: matplotlib is not installed "
+            "(pip install 'pytest-flockai[plots]'); detection galleries need only OpenCV.")

@@ -130,8 +130,11 @@ class TestState:
                     w.passed == v.passed and v.margin < w.margin):
                 worst[key] = v
         self.verdicts = list(worst.values())
+        before = {f.name: f for f in kept}
         self.flights = kept
-        self._name()
+        self._name()                     # kept flights: "<name>-example-<n>", never "flight"
+        renamed = {old: f.name for old, f in before.items()}
+        self.checks = {(renamed.get(k[0], k[0]), *k[1:]): v for k, v in self.checks.items()}
 
     def _add(self, flight: Flight) -> None:
         """A flight of this test; the derived-KPI hooks run on it now, so the test
@@ -161,6 +164,8 @@ class TestState:
         taken: set = set()
         for f in self.flights:
             base = str(f.explicit or f.fixture or "flight")
+            if self.hypothesis is not None and f.example:    # a kept hypothesis example's
+                base = f"{base}-example-{f.example}"
             name, k = base, 1
             while name in taken:
                 k += 1
@@ -189,7 +194,8 @@ class TestState:
                     "sim_time_s": f.result.scenario.get("sim_time_s"),
                     "wall_time_s": getattr(f.result, "wall_time_s", None),
                     "scenario": f.result.scenario, "kpis": f.result.kpis,
-                    "cache": getattr(f.result, "cache", None)} for f in self.flights]
+                    "cache": getattr(f.result, "cache", None),
+                    **_decisions(f.result)} for f in self.flights]
         error = self.markers.error or ("\n".join(self.problems) or None)
         checks = [{**v.to_dict(), "flight": v.flight or k[0], "source": "check", "checked": n}
                   for k, (v, n) in self.checks.items()]
@@ -225,3 +231,22 @@ def _is_flight_result(value) -> bool:
     the module was never imported, no value can be one."""
     mod = sys.modules.get("pytest_flockai.result")
     return mod is not None and isinstance(value, mod.FlightResult)
+
+
+#: the events of a flight's policies that go in the reports (issue 35: without
+#: --flockai-artifacts they were nowhere): actions, modes, refusals, rejected tracks
+DECISION_KINDS = ("policy", "policy_mode", "policy_refused", "track_rejected",
+                  "geofence_breach")
+#: at most this many per flight in the report (the artifacts keep every event)
+MAX_DECISIONS = 200
+
+
+def _decisions(result) -> dict:
+    """``{"policy_events": [...]}`` for a flight with policy events, else {}."""
+    evs = [e for e in (getattr(result, "events", None) or ()) if e.get("kind") in DECISION_KINDS]
+    if not evs:
+        return {}
+    out: dict = {"policy_events": evs[:MAX_DECISIONS]}
+    if len(evs) > MAX_DECISIONS:
+        out["policy_events_dropped"] = len(evs) - MAX_DECISIONS
+    return out

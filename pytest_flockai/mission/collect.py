@@ -45,6 +45,7 @@ def flight_result(run, mission, wall_s: float, t_final: float, end_reason: str) 
                        probe_samples=frames, probe_errors=list(run.hub.errors))
     res.ml_gallery = sched.galleries()          # the detection tasks' worst frames, drawn
     res.ml_coco = sched.coco_pairs()            # and their truth and predictions (COCO)
+    res.policies = {p.name: p for p in getattr(run, "policies", ())}   # the flown copies
     w = plan.world
     res.people = np.asarray(w.people) if w is not None and hasattr(w, "people") else np.zeros((0, 3))
     return res

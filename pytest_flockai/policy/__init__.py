@@ -8,6 +8,7 @@ the actions it can take, and docs/how-to/policies.md.
 
 from .base import Cockpit, Delivered, Link, Policy, register_kpis
 from .follow import ON_LOST, Follow, SearchThenOrbit
+from .geofence import Geofence
 from .landing import MarkerLanding
 from .rules import (
                     Action,
@@ -25,6 +26,6 @@ from .rules import (
 )
 from .together import GroundStation, SharedSearch
 
-__all__ = ["Action", "Cockpit", "Delivered", "DisableTask", "EnableTask", "Follow", "GoTo", "GroundStation", "Hold",
+__all__ = ["Action", "Cockpit", "Delivered", "DisableTask", "EnableTask", "Follow", "Geofence", "GoTo", "GroundStation", "Hold",
            "Land", "Link", "MarkerLanding", "ON_LOST", "Policy", "ResumePlan", "ReturnHome", "Rule",
            "SearchThenOrbit", "SetExecution", "SharedSearch", "SetModel", "SetPeriod", "register_kpis"]

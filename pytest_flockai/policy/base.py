@@ -28,47 +28,19 @@ import math
 from .. import _check
 from .. import kpis as _kpis
 from ..clock import Clocked
-from ..control.follow import Goto, Resume, yaw_of
+from ..control.follow import Goto, Resume, plan_left, yaw_of
 from ..control.pilots import Hover, Orbit, Pilot, Waypoints
 from ..control.stages import LANDING, PILOT, RETURN, STAGES, TAKEOFF
 from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
+from . import fence as _fence
+from . import reserved as _reserved
+from .views import Delivered, Link
 
 #: built-in probes scored against the simulator's truth: no policy reads them
 TRUTH_PROBES = ("flight", "ml")
-
-
-class Delivered:
-    """One task result as the drone receives it: ``task``, ``t_capture``,
-    ``t_delivered``, ``ok``, ``detections`` (``ml.detections.Detections`` above the
-    task's score threshold, or None for outputs that are not boxes), ``count``
-    (the task's count of the prediction), ``nav`` (x, y, z, qw, qx, qy, qz) the
-    drone believed at capture, ``prediction`` (the model's raw output)."""
-
-    __slots__ = ("task", "t_capture", "t_delivered", "ok", "detections", "count", "nav",
-                 "prediction")
-
-    def __init__(self, **kw):
-        for k in self.__slots__:
-            setattr(self, k, kw.get(k))
-
-    def __repr__(self):
-        n = None if self.detections is None else len(self.detections)
-        return (f"Delivered({self.task!r}, captured {self.t_capture:.2f} s, delivered "
-                f"{self.t_delivered:.2f} s, detections={n})")
-
-
-class Link:
-    """The radio as the drone sees it: ``distance_m`` to the ground station,
-    ``range_m`` of the link, ``in_range``."""
-
-    __slots__ = ("distance_m", "range_m", "in_range")
-
-    def __init__(self, distance_m, range_m):
-        self.distance_m, self.range_m = distance_m, range_m
-        self.in_range = distance_m <= range_m
 
 
 class Cockpit:
@@ -215,7 +187,7 @@ class Cockpit:
         if self._st.stage not in (PILOT, RETURN):
             return self._refuse(action)
         if self._survey is None:
-            self._survey = (self._stages.pilot, self.t, list(self._st.sp))
+            self._survey = plan_left(self._stages.pilot, self.t, self._st.sp)
         self._stages.replace_pilot(self.t, pilot)
         self._log(action, **info)
         return True
@@ -224,15 +196,18 @@ class Cockpit:
         """Fly to (x, y, z) (z: the current altitude when None) and hover there; False
         when refused (not in the pilot stage)."""
         z = self.position[2] if z is None else z
-        return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y), z=float(z))
+        why = _fence.refusal(self, x, y, z)            # outside the world or a geofence
+        return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y),
+                        z=float(z)) if why is None else self._refuse("goto", reason=why)
 
     def orbit(self, x: float, y: float, radius: float = 10.0, speed: float = 3.0,
               altitude: float | None = None) -> bool:
         """Circle (x, y) at ``radius`` m (altitude: the current one when None); False
         when refused."""
         alt = self.position[2] if altitude is None else altitude
+        why = _fence.refusal(self, x, y, alt, radius)
         return self.fly(Orbit((x, y), radius, alt, speed), action="orbit", x=float(x), y=float(y),
-                        radius=float(radius))
+                        radius=float(radius)) if why is None else self._refuse("orbit", reason=why)
 
     def hold(self) -> bool:
         """Hover where the drone is; False when refused."""
@@ -310,12 +285,12 @@ class Cockpit:
         self._policy.triggers += 1
         self._run.event(self.t, "policy", policy=self._policy.name, action=action, **info)
 
-    def _refuse(self, action: str) -> bool:
-        key = (action, self._st.stage)
-        if key not in self._refused:          # once per action and stage, also when two alternate
+    def _refuse(self, action: str, **info) -> bool:
+        key = (action, self._st.stage, info.get("reason"))
+        if key not in self._refused:    # once per action, stage and reason, also when alternating
             self._refused.add(key)
             self._run.event(self.t, "policy_refused", policy=self._policy.name, action=action,
-                            stage=self.stage)
+                            stage=self.stage, **info)
         return False
 
 
@@ -325,6 +300,15 @@ class Policy(Clocked):
 
     #: mode names whose time is always reported (0 when never entered)
     modes: tuple = ()
+
+    def __init_subclass__(cls, **kw) -> None:
+        super().__init_subclass__(**kw)
+        _reserved.check_class(cls, RESERVED)
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in RESERVED:        # self.step = 0 would make the loop call a number
+            _reserved.check_attr(self, name, value, RESERVED)
+        super().__setattr__(name, value)
 
     def __init__(self, name: str | None = None, period_s: float = 0.1) -> None:
         _check.overrides(self, Policy, "decide", "(t, drone)")
@@ -387,6 +371,10 @@ class Policy(Clocked):
         return {"type": type(self).__name__, "name": self.name, "period_s": self.period_s}
 
 
+#: the methods the flight loop calls on a policy: never data (policy/reserved.py)
+RESERVED = _reserved.reserved(Policy)
+
+
 def register_kpis(name: str, modes=()) -> None:
     """Register a policy's KPI names (so budgets and reports know their units)."""
     _kpis.register(f"policy.{name}.triggers", "count", None, f"policy {name!r}: actions taken")
@@ -395,4 +383,4 @@ def register_kpis(name: str, modes=()) -> None:
                        f"policy {name!r}: time spent in mode {m!r}")
 
 
-__all__ = ["Cockpit", "Delivered", "Link", "Policy", "TRUTH_PROBES", "register_kpis"]
+__all__ = ["Cockpit", "Delivered", "Link", "Policy", "RESERVED", "TRUTH_PROBES", "register_kpis"]

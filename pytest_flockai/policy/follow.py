@@ -6,7 +6,7 @@ the ``target`` class, then flies above the track (``follow``). A detection
 becomes a ground point through the camera model and the pose the drone believed
 it had when the frame was captured; results arrive when delivered (latency and
 link included), are fused at their capture time and predicted to now. With no
-detection for ``lost_after_s`` the track is lost (``lost``): ``on_lost`` says
+result delivered for ``lost_after_s`` the track is lost (``lost``): ``on_lost`` says
 what the drone does: ``"search"`` (resume the plan where it was left and look
 again), ``"hold"``, ``"return_home"`` or ``"land"``.
 
@@ -15,6 +15,16 @@ then orbit it at ``radius`` for ``orbit_s``; with ``find`` > 1 it resumes the
 search to look for the next target (a new target is one farther than ``gate_m``
 from every target found). Once ``find`` targets are found: ``after="return_home"``
 (go home and land) or ``"orbit"`` (keep orbiting the last one).
+
+Old and implausible results (issue 35). A result's age (delivery minus capture: inference,
+queueing, the link) is known: one up to ``max_age_s`` old (Follow: ``lost_after_s``; the
+searches: 3 s) is fused at its capture time and predicted to now at constant velocity, and
+the lost timer counts from its delivery; an older one cannot hold a track and is rejected
+(an event ``track_rejected`` with ``reason="stale"``, the KPI ``track_rejected_stale``). A
+track whose estimated speed exceeds what its class can move at (``MAX_SPEED_MPS``: a false
+positive stuck in the image moves with the drone) is dropped (``reason="implausible"``,
+``track_rejected_implausible``; judged from the third hit, so it matters for Follow: the
+searches act on a track at its confirmation).
 
 Closed-loop KPIs (``policy/scoring.py``, from the truth after the flight, never
 in a decision): ``time_to_detect_s``, ``track_error_p95_m``, ``track_lost_count``,
@@ -37,6 +47,15 @@ from .base import Policy
 ON_LOST = ("search", "hold", "return_home", "land")
 #: what SearchThenOrbit does once it found ``find`` targets and orbited the last
 AFTER = ("return_home", "orbit")
+#: m/s: the fastest a target of each class is taken to move; a track estimated faster is a false
+#: positive. person: the men's 100 m world record, 100 m in 9.58 s (Berlin, 2009), 10.4 m/s on
+#: average over the race; vehicle: 250 km/h, the top speed German carmakers limit their cars
+#: to by voluntary agreement
+MAX_SPEED_MPS = {"person": 100.0 / 9.58, "vehicle": 250.0 / 3.6}
+#: hits before a track's speed is judged (its velocity needs a few measurements)
+SPEED_HITS = 3
+#: s: the age of a result the searches (SearchThenOrbit, SharedSearch) still use
+SEARCH_MAX_AGE_S = 3.0
 #: m: the height of an object's centre, where a box's centre ray meets it
 CENTRE_Z = {"person": PERSON_HEIGHT / 2, "vehicle": CAR_HEIGHT / 2}
 
@@ -70,6 +89,7 @@ class _Perceiving(Policy):
         if score is not None and not isinstance(score, str):
             raise ConfigError(f"{where}: score = {score!r} is not allowed; expected an actor's name")
         self.score = score
+        self.max_age_s = SEARCH_MAX_AGE_S
 
     def check(self, mission) -> None:
         where = f"policy {self.name!r}"
@@ -94,9 +114,13 @@ class _Perceiving(Policy):
         self._cls = tk.classes.index(self.target)
         self._z = CENTRE_Z.get(self.target, 0.0)
         self.log = scoring.Log(run)       # for the KPIs only: never read by decide()
+        self.rejected = {"stale": 0, "implausible": 0}
+        self._last_reject: str | None = None
+        self._max_speed = MAX_SPEED_MPS.get(self.target, math.inf)
 
     def measurements(self, drone) -> list:
-        """[(t_capture, [(x, y), ...])] of the newly delivered results, in capture order."""
+        """[(t_capture, [(x, y), ...], t_delivered)] of the newly delivered results, in
+        capture order."""
         out = []
         for r in drone.results(self.task):
             if not r.ok or r.detections is None or r.nav is None or self._lens is None:
@@ -108,19 +132,41 @@ class _Perceiving(Policy):
                     p = ground_point(0.5 * (x0 + x1), 0.5 * (y0 + y1), r.nav, self._lens, self._z)
                     if p is not None:
                         pts.append(p)
-            out.append((r.t_capture, pts))
+            out.append((r.t_capture, pts, r.t_delivered))
         out.sort(key=lambda m: m[0])
         return out
 
-    def fuse(self, t_cap, pts, drone) -> None:
+    def fuse(self, t_cap, pts, drone, t_del=None) -> None:
         """Update the tracker with the point nearest its prediction (or, with no track
-        yet, nearest the drone)."""
+        yet, nearest the drone); a result older than ``max_age_s`` or a track faster than
+        its class can move is rejected (module docstring)."""
         if not pts:
+            return
+        age = 0.0 if t_del is None else float(t_del) - float(t_cap)
+        if age > self.max_age_s:
+            self._reject(drone, "stale", age_s=round(age, 3), max_age_s=self.max_age_s,
+                         why=f"a result delivered {age:.2f} s after capture is older than "
+                             f"max_age_s = {self.max_age_s:g} s: it cannot hold a track; use "
+                             f"a faster link or task, or a longer lost_after_s")
             return
         tr = self.tracker
         ref = tr.predict(t_cap)[:2] if tr.x is not None else drone.position[:2]
         best = min(pts, key=lambda p: math.dist(p, ref))
-        tr.update(t_cap, *best)
+        if tr.update(t_cap, best[0], best[1], t_delivered=t_del) and tr.hits >= SPEED_HITS \
+                and tr.x is not None and math.hypot(tr.x[2], tr.x[3]) > self._max_speed:
+            v = math.hypot(tr.x[2], tr.x[3])
+            self._reject(drone, "implausible", speed_mps=round(v, 2),
+                         max_speed_mps=round(self._max_speed, 2),
+                         why=f"the track moves at {v:.1f} m/s, faster than a {self.target} "
+                             f"can ({self._max_speed:.1f} m/s): a false positive")
+            tr.reset()
+
+    def _reject(self, drone, reason: str, **info) -> None:
+        """Count a rejection; an event for the first of each reason in a row."""
+        self.rejected[reason] += 1
+        if self._last_reject != reason:
+            self._last_reject = reason
+            drone._run.event(drone.t, "track_rejected", policy=self.name, reason=reason, **info)
 
     def step(self, t: float) -> None:
         super().step(t)
@@ -129,6 +175,8 @@ class _Perceiving(Policy):
     def kpis(self, run) -> dict:
         out = super().kpis(run)
         out.update(self.log.kpis(self, run))
+        out["track_rejected_stale"] = float(self.rejected["stale"])
+        out["track_rejected_implausible"] = float(self.rejected["implausible"])
         return out
 
 
@@ -146,6 +194,7 @@ class Follow(_Perceiving):
         self.altitude = None if altitude is None else _check.positive("altitude", altitude, where=where)
         self.speed = _check.positive("speed", speed, where=where)
         self.lost_after_s = _check.positive("lost_after_s", lost_after_s, where=where)
+        self.max_age_s = self.lost_after_s
         self.on_lost = _check.choice("on_lost", on_lost, ON_LOST, where=where)
 
     def start(self, run) -> None:
@@ -153,22 +202,23 @@ class Follow(_Perceiving):
         self.lost_count = 0
 
     def decide(self, t, drone) -> None:
-        for t_cap, pts in self.measurements(drone):
-            self.fuse(t_cap, pts, drone)
+        for t_cap, pts, t_del in self.measurements(drone):
+            self.fuse(t_cap, pts, drone, t_del)
         tr, mode = self.tracker, self._mode
         if mode is None:
             drone.mode("search")
         if mode in (None, "search", "lost"):
-            if tr.x is not None and not tr.confirmed and t - tr.last_hit > self.lost_after_s:
+            if tr.x is not None and not tr.confirmed and t - tr.last_delivered > self.lost_after_s:
                 tr.reset()                         # a start that was never confirmed
             if tr.confirmed and drone._st.stage == PILOT:
                 alt = self.altitude if self.altitude is not None else drone.position[2]
                 if drone.fly(Track(tr, alt, self.speed), action="follow"):
                     self.log.found(t, tr.predict(t)[:2])
                     drone.mode("follow")
-        elif mode == "follow" and t - tr.last_hit > self.lost_after_s:
+        elif mode == "follow" and t - tr.last_delivered > self.lost_after_s:
             self.lost_count += 1
-            drone._log("track_lost", since_s=round(t - tr.last_hit, 3), fallback=self.on_lost)
+            drone._log("track_lost", since_s=round(t - tr.last_delivered, 3),
+                       fallback=self.on_lost)
             drone.mode("lost")
             tr.reset()
             {"search": drone.resume, "hold": drone.hold, "return_home": drone.return_home,
@@ -205,14 +255,14 @@ class SearchThenOrbit(_Perceiving):
         self._orbit_t = 0.0
 
     def decide(self, t, drone) -> None:
-        for t_cap, pts in self.measurements(drone):
+        for t_cap, pts, t_del in self.measurements(drone):
             new = [p for p in pts if all(math.dist(p, f) > self.gate_m for f in self.found)]
-            self.fuse(t_cap, new, drone)
+            self.fuse(t_cap, new, drone, t_del)
         tr = self.tracker
         if self._mode is None:
             drone.mode("search")
         if self._mode == "search":
-            if tr.x is not None and not tr.confirmed and t - tr.last_hit > 3.0:
+            if tr.x is not None and not tr.confirmed and t - tr.last_delivered > self.max_age_s:
                 tr.reset()
             if tr.confirmed and len(self.found) < self.find:
                 x, y = tr.predict(t)[:2]
@@ -235,4 +285,4 @@ class SearchThenOrbit(_Perceiving):
                 "after": self.after}
 
 
-__all__ = ["AFTER", "Follow", "ON_LOST", "SearchThenOrbit"]
+__all__ = ["AFTER", "Follow", "MAX_SPEED_MPS", "ON_LOST", "SearchThenOrbit"]

@@ -287,8 +287,8 @@ class SharedSearch(_Perceiving):
         s.where[self.me] = drone.position[:2]
         for kind, payload in s.deliver(t, self.me):
             self._receive(t, drone, kind, payload)
-        for t_cap, pts in self.measurements(drone):
-            self.fuse(t_cap, pts, drone)
+        for t_cap, pts, t_del in self.measurements(drone):
+            self.fuse(t_cap, pts, drone, t_del)
         if self._mode is None:
             drone.mode("search")
         tr = self.tracker
@@ -302,7 +302,7 @@ class SharedSearch(_Perceiving):
             elif all(math.dist(xy, p) > s.gate_m for p in self._sent):
                 self._sent.append(xy)
                 s.post(t, self.me, "report", xy, (vx, vy) if s.predict else (0.0, 0.0))
-        elif tr.x is not None and t - tr.last_hit > 3.0:
+        elif tr.x is not None and t - tr.last_delivered > self.max_age_s:
             tr.reset()
         job = self._todo.pop(0) if self._job is None and self._todo else None
         if job is not None:

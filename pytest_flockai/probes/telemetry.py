@@ -77,6 +77,12 @@ class TelemetryRecorder:
         self._i = i + 1
         self.n += 1
 
+    def last_t(self) -> float:
+        """The time of the last row recorded (-inf before the first)."""
+        if self._i:
+            return float(self._t[self._i - 1])
+        return float(self._full[-1][1][-1]) if self._full else -math.inf
+
     def frame(self) -> pd.DataFrame:
         """The DataFrame (index: simulated time ``t``), built once."""
         n, i = self.n, self._i
@@ -128,6 +134,8 @@ class TelemetryStep(Clocked):
         self.rec.record(t, s.q, s.v, s.sp, s.w, s.phase, s.stage, s.power, s.energy_j, s.e_usable)
 
     def finish(self, t: float) -> None:
+        if t <= self.rec.last_t():          # a row at this time already (until=<seconds>)
+            return
         s, d = self.st, self.data
         self.rec.record(t, d.qpos.tolist(), d.qvel.tolist(), s.sp, s.w,
                         s.phase if s.airborne else LANDED, s.stage, self.rec.meter.last_power,

@@ -46,6 +46,7 @@ class Page:
     threshold_pct: float = 5.0
     base_scenarios: dict | None = None
     abs_tol: dict | None = None
+    pictures_missing: str | None = None              # why the flights have no pictures
 
 
 def _e(x) -> str:
@@ -110,7 +111,7 @@ def _band(page: Page) -> str:
     doc = page.doc
     s = doc.get("summary", {})
     groups, _ = _s.regression_groups(doc, page.base_scenarios)
-    broken, expected = _s.broken_budgets(doc), _s.expected_broken(doc)
+    broken, expected = _s.per_test(_s.broken_budgets(doc)), _s.per_test(_s.expected_broken(doc))
     listed = _s.flights(doc)
     distinct = _s.distinct_flights(listed)
     hits = sum(r["cache"] == "hit" for r in distinct)
@@ -222,19 +223,57 @@ def tests(page: Page) -> str:
                            "cached", "message"], rows)
 
 
+#: KPI columns of the per-flight table (the headline KPIs, then the budgeted ones): the
+#: table reads at 1280 px; every KPI is in "Every KPI", one row each (issue 35)
+KPI_COLUMNS = 8
+
+
+def _headline_cell(kpis: dict, k: str) -> tuple:
+    """The flight's ``k``, or for a fleet its drones' ``<drone>.k`` as a range."""
+    v = kpis.get(k)
+    if v is not None:
+        return _cell(_s.fmt(k, v), _num(v))
+    per = sorted(x for kk, x in kpis.items() if "." in kk and family(kk) == k
+                 and isinstance(x, (int, float)) and not math.isnan(x))
+    if not per:
+        return _cell(_s.fmt(k, None), None)
+    text = _s.fmt(k, per[0]) if per[0] == per[-1] else \
+        f"{_s.fmt(k, per[0])} to {_s.fmt(k, per[-1])} ({len(per)} drones)"
+    return _cell(text, _num(per[-1]))
+
+
 def kpi_table(page: Page) -> str:
     flights = _s.flights(page.doc)
     if not flights:
         return _muted("No flights.")
-    cols = _s.kpi_columns(page.doc)
+    cols = _s.kpi_columns(page.doc, limit=KPI_COLUMNS)
     rows = []
     for r in flights:
         o = r["outcome"]
         cells = [_cell(o, None, f"v s-{o}"), _cell(r["test"], None, "id"), _cell(r["flight"]),
                  _cell("cache" if r["cache"] == "hit" else "flown")]
-        cells += [_cell(_s.fmt(k, r["kpis"].get(k)), _num(r["kpis"].get(k))) for k in cols]
+        cells += [_headline_cell(r["kpis"], k) for k in cols]
         rows.append((cells, "bad" if o in _s.FAILING else "", o))
-    return table("kpis", ["outcome", "test", "flight", "source"] + cols, rows)
+    more = len(_s.kpi_columns(page.doc)) - len(cols)
+    note = _muted(f"{more} more KPI(s) per flight in Every KPI, one row each.") if more > 0 else ""
+    return table("kpis", ["outcome", "test", "flight", "source"] + cols, rows) + note
+
+
+def every_kpi(page: Page) -> str:
+    """Every KPI of every flight, one row each (group: its task, drone or family)."""
+    rows = []
+    for r in _s.flights(page.doc):
+        o = r["outcome"]
+        for k, v in sorted(r["kpis"].items()):
+            group = k.split(".", 1)[0] if "." in k else "flight"
+            rows.append(([_cell(o, None, f"v s-{o}"), _cell(r["test"], None, "id"),
+                          _cell(r["flight"]), _cell(group), _cell(k, None, "wrap"),
+                          _cell(_s.fmt(k, v), _num(v))], "bad" if o in _s.FAILING else "", o))
+    if not rows:
+        return ""
+    return (f"<details><summary>{len(rows)} values: open to read, sort or filter</summary>"
+            + table("every-kpi", ["outcome", "test", "flight", "group", "KPI", "value"], rows)
+            + "</details>")
 
 
 def all_budgets(page: Page) -> str:
@@ -294,11 +333,15 @@ def details(page: Page) -> str:
         summary = (f'{len(t.get("flights") or ())} flight(s), '
                    f'{sum(b.get("verdict") != "pass" for b in bs)} of {len(bs)} budget(s) broken')
         msg = t.get("message") or t.get("error")
+        summary += "".join(f"\npolicies: {line}" for line in _s.decisions(t))
         out.append(f'<section class="test" data-outcome="{_e(o)}"><h3><span class="s-{_e(o)}">'
-                   f'{_e(o)}</span> {_e(t["nodeid"])}</h3><p class="muted">{_e(summary)}</p>'
+                   f'{_e(o)}</span> {_e(t["nodeid"])}</h3><p class="muted">'
+                   f'{_e(summary).replace(chr(10), "<br>")}</p>'
                    + (f"<pre>{_e(msg)}</pre>" if msg else "")
                    + (f'<div class="pics">{"".join(figs)}</div>' if figs else "") + "</section>")
-    return "".join(out) or _muted("No test ran.")
+    note = (f'<p class="muted" id="pictures-missing">{_e(page.pictures_missing)}</p>'
+            if page.pictures_missing else "")
+    return note + "".join(out) if out else _muted("No test ran.")
 
 
 #: the page's sections, top down: (title, render(page) -> html); "" renders nothing
@@ -308,6 +351,7 @@ SECTIONS: list = [
     ("Regressions against the baseline", regressions),
     ("Tests", tests),
     ("KPIs", kpi_table),
+    ("Every KPI", every_kpi),
     ("Every budget", all_budgets),
     ("Every KPI change against the baseline", deltas),
     ("Detail per test", details),
@@ -327,13 +371,16 @@ def add_section(title: str, render, *, before: str = "Detail per test") -> None:
 
 def dashboard(doc: dict, *, pictures: dict | None = None, baseline: dict | None = None,
               threshold_pct: float = 5.0, title: str = "pytest-flockai",
-              base_scenarios: dict | None = None, abs_tol: dict | None = None) -> str:
+              base_scenarios: dict | None = None, abs_tol: dict | None = None,
+              pictures_missing: str | None = None) -> str:
     """The dashboard of a ``pytest-flockai/1`` report as one HTML string.
 
     pictures: ``{nodeid: [{"title": str, "data": base64 PNG}]}``; baseline:
     ``{nodeid: {flight: {kpi: value}}}`` (``report.load_baseline``); base_scenarios:
-    its scenario summaries (``compare.load_scenarios``)."""
-    page = Page(doc, pictures or {}, baseline, threshold_pct, base_scenarios, abs_tol)
+    its scenario summaries (``compare.load_scenarios``); pictures_missing: why the
+    flights have no pictures (shown above the detail per test)."""
+    page = Page(doc, pictures or {}, baseline, threshold_pct, base_scenarios, abs_tol,
+                pictures_missing)
     parts = ["<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">",
              '<meta name="viewport" content="width=device-width, initial-scale=1">',
              f"<title>{_e(title)}</title><style>{CSS}</style></head><body>", header(page, title)]

@@ -57,6 +57,15 @@ def broken_budgets(doc: dict) -> list[dict]:
     return [b for b in budgets(doc) if b["state"] == "broken"]
 
 
+def per_test(rows: list[dict]) -> list[dict]:
+    """Budget rows counted once per test: a budget broken by several flights of a test
+    (or by every hypothesis example, or by the marker and a check) is one (issue 35)."""
+    seen: dict = {}
+    for b in rows:
+        seen.setdefault((b["test"], b.get("kpi"), b.get("budget")), b)
+    return list(seen.values())
+
+
 def expected_broken(doc: dict) -> list[dict]:
     """Budgets broken where pytest expected it (xfail tests, ``pytest.raises`` around check)."""
     return [b for b in budgets(doc) if b["state"] in ("xfail", "caught")]
@@ -164,7 +173,7 @@ def _expected_why(expected: list[dict]) -> str:
 
 def headline(doc: dict) -> str:
     """The one line of a run: pytest's counts, then the budgets and regressions."""
-    broken, expected = broken_budgets(doc), expected_broken(doc)
+    broken, expected = per_test(broken_budgets(doc)), per_test(expected_broken(doc))
     regs, _ = regression_groups(doc)
     cached = cache_hits(doc)
     why = _expected_why(expected)
@@ -183,3 +192,16 @@ def slowest(doc: dict, n: int = 3) -> list[dict]:
     """The ``n`` flights that took the most wall time to fly (cache hits cost nothing)."""
     rows = [r for r in flights(doc) if r["cache"] != "hit" and r.get("wall_time_s")]
     return sorted(rows, key=lambda r: -r["wall_time_s"])[:n]
+
+
+def decisions(test: dict) -> list[str]:
+    """One line per flight of ``test`` with policy events: what its policies did, when."""
+    out = []
+    for f in test.get("flights") or ():
+        evs = f.get("policy_events") or []
+        if evs:
+            words = [f"{e.get('t', 0):.1f} s {e.get('action') or e.get('mode') or e['kind']}"
+                     + (f" ({e['reason']})" if e.get("reason") else "") for e in evs[:30]]
+            more = len(evs) - 30 + f.get("policy_events_dropped", 0)
+            out.append(f"{f['name']}: " + ", ".join(words) + (f", and {more} more" if more > 0 else ""))
+    return out

@@ -234,6 +234,12 @@ def check_actors(actors, world, where: str = "Mission") -> tuple:
             raise ConfigError(f"{where}: actors[{i}] = {a!r} is not an actor; use "
                               f"fa.actors.Person(path) or fa.actors.Car(path)")
         a.check_inside(hx, hy, f"{where}: actors[{i}]")
+    seen: dict = {}
+    for i, a in enumerate(actors):         # a name picks one actor (Follow(score=...))
+        if a.name and a.name in seen:
+            raise ConfigError(f"{where}: actors[{i}].name = {a.name!r} is not allowed: "
+                              f"actors[{seen[a.name]}] has that name; names must be unique")
+        seen.setdefault(a.name, i)
     return actors
 
 
