@@ -253,3 +253,60 @@ def test_a_malformed_report_is_one_line_naming_file_and_entry(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "flights[0]" in err and "name" in err and "KeyError" not in err, err
 
+
+
+RAISE_IN_TRACE = '''
+import sys, threading, time
+from pytest_flockai.mission.watchdog import Overrun, watching
+
+def busy():
+    try:
+        with watching(time.perf_counter() + 0.2):
+            while True:
+                pass
+    except Overrun:
+        pass
+
+th = threading.Thread(target=busy)
+th.start()
+th.join()
+
+class Stop(Exception):
+    pass
+
+def loop():
+    n = 0
+    for x in (1, 1):
+        for y in (1, 1):
+            n += x * y
+    return n
+
+def tracer(frame, event, arg):
+    if frame.f_code is loop.__code__:
+        frame.f_trace_opcodes = True
+        if event == "opcode" and frame.f_lasti > 20:
+            raise Stop
+    return tracer
+
+sys.settrace(tracer)
+try:
+    loop()
+except Stop:
+    pass
+finally:
+    sys.settrace(None)
+print("done")
+'''
+
+
+def test_a_watchdog_that_fired_leaves_nothing_pending_behind():
+    # A pending asynchronous exception dropped with SetAsyncExc(tid, NULL) left CPython's
+    # flag raised, and a later traced frame (hypothesis' explain phase, a tracer raising
+    # at a backward jump) spun for ever in the same process.
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    try:
+        done = subprocess.run([sys.executable, "-c", RAISE_IN_TRACE], capture_output=True,
+                              text=True, timeout=60, env=env)
+    except subprocess.TimeoutExpired:
+        pytest.fail("a traced frame hangs after the watchdog fired")
+    assert done.stdout.strip() == "done", done.stdout + done.stderr

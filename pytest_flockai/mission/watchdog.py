@@ -129,9 +129,30 @@ def _by_thread(deadline: float) -> Iterator[None]:
     finally:
         with lock:
             done.set()
-            if fired[0]:          # one still pending must not land after the flight
-                ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(tid), None)
         t.join()
+        if fired[0]:
+            _settle(tid)
+
+
+class _Settled(BaseException):
+    """Replaces an ``Overrun`` that may still be pending, and lands at once, here."""
+
+
+def _settle(tid: int) -> None:
+    """Make sure no asynchronous exception is left pending on this thread.
+
+    ``PyThreadState_SetAsyncExc(tid, NULL)`` would drop a pending one but leaves the
+    interpreter's "async exception" flag raised (CPython only lowers it when an exception
+    actually lands), and with that flag stuck a traced frame (``sys.settrace`` with opcode
+    events: hypothesis' explain phase, coverage tools) could spin for ever. So a harmless
+    exception replaces whatever is pending and is caught on the next backward jump."""
+    try:      # it may land right after the call (CPython checks after calls) or in the loop
+        ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(tid),
+                                                   ctypes.py_object(_Settled))
+        for _ in range(1_000_000):
+            pass
+    except _Settled:
+        pass
 
 
 __all__ = ["Overrun", "RETRY_S", "watching"]
