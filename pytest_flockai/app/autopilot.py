@@ -19,7 +19,8 @@ import time
 
 from .. import limits
 from ..control.follow import yaw_of
-from ..control.stages import DONE, LAND, PILOT, RETURN, TAKEOFF
+from ..control.stages import DONE, PILOT, RETURN, TAKEOFF
+from ..control.stages import LANDING as LAND
 from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames

@@ -13,7 +13,8 @@ from collections.abc import Callable
 from typing import Any
 
 from ..control.pilots import Orbit, Waypoints
-from ..control.stages import DONE, LAND, TAKEOFF
+from ..control.stages import DONE, TAKEOFF
+from ..control.stages import LANDING as LAND
 from . import frames
 from .link import RATES, name_of
 from .link import mavlink as M
