@@ -248,3 +248,47 @@ def test_a_flight_can_wait_on_its_pad_until_a_take_off():
     assert len(before) and (before["thrust_0"] == 0.0).all()     # motors off on the pad
     assert (before["z"] - tel["z"].iloc[0]).abs().max() < 0.01
     assert tel["z"].max() - tel["z"].iloc[0] == pytest.approx(3.0, abs=0.3)   # set at run time
+
+
+def _turn_and_faces(tel, cx, cy, r):
+    """(signed turn about (cx, cy), rad, counter-clockwise positive; headings on the
+    circle; headings toward the centre; headings along the velocity) from telemetry."""
+    x, y = tel["x"].to_numpy(), tel["y"].to_numpy()
+    on = np.abs(np.hypot(x - cx, y - cy) - r) < 1.0
+    ang = np.unwrap(np.arctan2(y[on] - cy, x[on] - cx))
+    yaw = tel["yaw"].to_numpy()[on]
+    center = np.arctan2(cy - y[on], cx - x[on])
+    along = np.arctan2(tel["vy"].to_numpy()[on], tel["vx"].to_numpy()[on])
+    return ang[-1] - ang[0], yaw, center, along
+
+
+def _off(a, b):
+    return np.abs(np.remainder(a - b + np.pi, 2 * np.pi) - np.pi)
+
+
+@pytest.mark.parametrize("radius, yaw_mode", [(6.0, 0), (-6.0, 3), (6.0, 1)])
+def test_orbit_pilot_turns_as_the_radius_sign_says_and_heads_as_asked(radius, yaw_mode):
+    from pytest_flockai.app.pilots import AppOrbit
+    pilot = AppOrbit((10.0, 0.0), radius, 5.0, 2.0, yaw_mode, yaw0=0.3)
+    res = fa.Mission(fa.drone(DRONE), pilot, until=35.0).run()
+    turn, yaw, center, along = _turn_and_faces(res.telemetry, 10.0, 0.0, 6.0)
+    assert abs(turn) > math.pi / 2
+    assert math.copysign(1.0, turn) == (-1.0 if radius > 0 else 1.0)   # > 0: clockwise
+    # the yaw loop trails a heading that turns at speed / radius (0.33 rad/s): ~0.2 rad
+    heads = {0: center, 3: along, 1: np.full_like(yaw, 0.3)}
+    for mode, want in heads.items():
+        off = np.median(_off(yaw, want))
+        assert off < math.radians(15) if mode == yaw_mode else off > math.radians(30), mode
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("radius, yaw_mode", [(6.0, 0), (-6.0, 3)])
+def test_do_orbit_from_pymavlink_sets_direction_and_yaw_behaviour(radius, yaw_mode):
+    r = fa.app.run(app("pymavlink_orbit.py"), fa.drone(DRONE), speed=4.0, timeout_s=90,
+                   env={"ORBIT_RADIUS": str(radius), "ORBIT_YAW": str(yaw_mode)})
+    assert r.exit_code == 0, r.output
+    cmds = [(e["command"], e["result"]) for e in events(r.result, "app_command")]
+    assert ("DO_ORBIT", "UNSUPPORTED") in cmds and ("DO_ORBIT", "ACCEPTED") in cmds
+    turn, yaw, center, along = _turn_and_faces(r.result.telemetry, 10.0, 0.0, 6.0)
+    assert math.copysign(1.0, turn) == (-1.0 if radius > 0 else 1.0)
+    assert np.median(_off(yaw, center if yaw_mode == 0 else along)) < math.radians(15)
