@@ -59,8 +59,9 @@ while abs(turned) < math.pi:
     if abs(math.hypot(p.x, p.y - 10.0) - abs(radius)) > 1.0:
         continue
     a = math.atan2(p.y - 10.0, p.x)          # from north, toward east: clockwise seen from above
-    if last is not None:
-        turned += math.remainder(a - last, 2 * math.pi)
+    step = 0.0 if last is None else math.remainder(a - last, 2 * math.pi)
+    if abs(step) < 0.3:                      # along the circle, not across it (the entry)
+        turned += step
     last = a
 print("turned", round(math.degrees(turned)), "deg clockwise", flush=True)
 command(M.MAV_CMD_NAV_RETURN_TO_LAUNCH)
