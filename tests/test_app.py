@@ -292,4 +292,34 @@ def test_do_orbit_from_pymavlink_sets_direction_and_yaw_behaviour(radius, yaw_mo
     assert ("DO_ORBIT", "UNSUPPORTED") in cmds and ("DO_ORBIT", "ACCEPTED") in cmds
     turn, yaw, center, along = _turn_and_faces(r.result.telemetry, 10.0, 0.0, 6.0)
     assert turn == (-1.0 if radius > 0 else 1.0)
+    hz = float(r.output.split("attitude_hz ")[1].split()[0])   # in simulated time
+    assert 9.5 < hz < 10.5                  # the 10 Hz stream at 10 Hz on the 25 Hz step
     assert np.median(_off(yaw, center if yaw_mode == 0 else along)) < math.radians(15)
+
+
+def test_queued_telemetry_goes_out_in_order_in_datagrams_an_app_can_read():
+    from pymavlink.dialects.v20 import common as M
+
+    from pytest_flockai.app.link import MAX_DATAGRAM, Link
+
+    rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    rx.bind(("127.0.0.1", 0))
+    rx.settimeout(2.0)
+    link = Link(rx.getsockname()[1], ap=None)
+    try:
+        link.queue([M.MAVLink_attitude_message(i, 0.1, 0.2, 0.3, 0.0, 0.0, 0.0)
+                    for i in range(60)])
+        assert link.pending
+        link.send(M.MAVLink_command_ack_message(M.MAV_CMD_NAV_LAND, 0, 0, 0, 1, 1))
+        assert not link.pending
+        parser, got, sizes = M.MAVLink(None), [], []
+        while len(got) < 61:
+            data = rx.recv(65535)
+            sizes.append(len(data))
+            got += parser.parse_buffer(data) or []
+    finally:
+        link.sock.close()
+        rx.close()
+    assert max(sizes) <= MAX_DATAGRAM and len(sizes) < 61      # batched, within the MTU
+    assert [g.time_boot_ms for g in got[:60]] == list(range(60))
+    assert got[60].get_type() == "COMMAND_ACK"                # after what was queued

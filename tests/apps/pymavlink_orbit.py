@@ -19,10 +19,15 @@ radius = float(os.environ.get("ORBIT_RADIUS", "6"))
 yaw_mode = float(os.environ.get("ORBIT_YAW", "0"))
 
 
+attitude_ms = []                             # time_boot_ms of every ATTITUDE received
+
+
 def wait(cond, what, timeout=120):
     t0 = time.time()
     while time.time() - t0 < timeout:
         msg = m.recv_match(blocking=True, timeout=1)
+        if msg is not None and msg.get_type() == "ATTITUDE":
+            attitude_ms.append(msg.time_boot_ms)
         if msg is not None and cond(msg):
             return msg
     sys.exit(f"timed out waiting for {what}")
@@ -64,6 +69,8 @@ while abs(turned) < math.pi:
         turned += step
     last = a
 print("turned", round(math.degrees(turned)), "deg clockwise", flush=True)
+span = (attitude_ms[-1] - attitude_ms[0]) / 1000.0
+print(f"attitude_hz {(len(attitude_ms) - 1) / span:.2f} over {span:.1f} s", flush=True)
 command(M.MAV_CMD_NAV_RETURN_TO_LAUNCH)
 wait(lambda x: x.get_type() == "EXTENDED_SYS_STATE"
      and x.landed_state == M.MAV_LANDED_STATE_ON_GROUND, "on the ground")
