@@ -164,7 +164,8 @@ class Autopilot(Policy, Commands):
             snap = self.snapshot(t)
             for n in due:
                 r = self.rates[n]
-                self._due[n] = max(self._due[n] + 1.0 / r, clock) if r > 0 else math.inf
+                nxt = self._due[n] + 1.0 / r if r > 0 else math.inf
+                self._due[n] = nxt if nxt > clock else clock + 1.0 / r    # fell behind: resync
             self.link.queue([self.link.message(n, snap) for n in due])
         self._next_tel = min(self._due.values())
 
