@@ -248,3 +248,78 @@ def test_a_flight_can_wait_on_its_pad_until_a_take_off():
     assert len(before) and (before["thrust_0"] == 0.0).all()     # motors off on the pad
     assert (before["z"] - tel["z"].iloc[0]).abs().max() < 0.01
     assert tel["z"].max() - tel["z"].iloc[0] == pytest.approx(3.0, abs=0.3)   # set at run time
+
+
+def _turn_and_faces(tel, cx, cy, r):
+    """From the telemetry on the circle about (cx, cy), moving: (the sense of the turn,
+    +1 counter-clockwise seen from above, -1 clockwise; the headings; the headings
+    toward the centre; the headings along the velocity)."""
+    x, y = tel["x"].to_numpy(), tel["y"].to_numpy()
+    vx, vy = tel["vx"].to_numpy(), tel["vy"].to_numpy()
+    on = (np.abs(np.hypot(x - cx, y - cy) - r) < 1.0) & (np.hypot(vx, vy) > 1.0)
+    assert on.sum() > 20                    # 2 s or more on the circle
+    spin = np.median((x[on] - cx) * vy[on] - (y[on] - cy) * vx[on])   # angular momentum
+    yaw = tel["yaw"].to_numpy()[on]
+    return (math.copysign(1.0, spin), yaw, np.arctan2(cy - y[on], cx - x[on]),
+            np.arctan2(vy[on], vx[on]))
+
+
+def _off(a, b):
+    return np.abs(np.remainder(a - b + np.pi, 2 * np.pi) - np.pi)
+
+
+@pytest.mark.parametrize("radius, yaw_mode", [(6.0, 0), (-6.0, 3), (6.0, 1)])
+def test_orbit_pilot_turns_as_the_radius_sign_says_and_heads_as_asked(radius, yaw_mode):
+    from pytest_flockai.app.pilots import AppOrbit
+    pilot = AppOrbit((10.0, 0.0), radius, 5.0, 2.0, yaw_mode, yaw0=0.3)
+    res = fa.Mission(fa.drone(DRONE), pilot, until=35.0).run()
+    turn, yaw, center, along = _turn_and_faces(res.telemetry, 10.0, 0.0, 6.0)
+    assert turn == (-1.0 if radius > 0 else 1.0)   # radius > 0: clockwise
+    # the yaw loop trails a heading that turns at speed / radius (0.33 rad/s): ~0.2 rad
+    heads = {0: center, 3: along, 1: np.full_like(yaw, 0.3)}
+    for mode, want in heads.items():
+        off = np.median(_off(yaw, want))
+        assert off < math.radians(15) if mode == yaw_mode else off > math.radians(30), mode
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("radius, yaw_mode", [(6.0, 0), (-6.0, 3)])
+def test_do_orbit_from_pymavlink_sets_direction_and_yaw_behaviour(radius, yaw_mode):
+    r = fa.app.run(app("pymavlink_orbit.py"), fa.drone(DRONE), speed=4.0, timeout_s=90,
+                   env={"ORBIT_RADIUS": str(radius), "ORBIT_YAW": str(yaw_mode)})
+    assert r.exit_code == 0, r.output
+    cmds = [(e["command"], e["result"]) for e in events(r.result, "app_command")]
+    assert ("DO_ORBIT", "UNSUPPORTED") in cmds and ("DO_ORBIT", "ACCEPTED") in cmds
+    turn, yaw, center, along = _turn_and_faces(r.result.telemetry, 10.0, 0.0, 6.0)
+    assert turn == (-1.0 if radius > 0 else 1.0)
+    hz = float(r.output.split("attitude_hz ")[1].split()[0])   # in simulated time
+    assert 9.5 < hz < 10.5                  # the 10 Hz stream at 10 Hz on the 25 Hz step
+    assert np.median(_off(yaw, center if yaw_mode == 0 else along)) < math.radians(15)
+
+
+def test_queued_telemetry_goes_out_in_order_in_datagrams_an_app_can_read():
+    from pymavlink.dialects.v20 import common as M
+
+    from pytest_flockai.app.link import MAX_DATAGRAM, Link
+
+    rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    rx.bind(("127.0.0.1", 0))
+    rx.settimeout(2.0)
+    link = Link(rx.getsockname()[1], ap=None)
+    try:
+        link.queue([M.MAVLink_attitude_message(i, 0.1, 0.2, 0.3, 0.0, 0.0, 0.0)
+                    for i in range(60)])
+        assert link.pending
+        link.send(M.MAVLink_command_ack_message(M.MAV_CMD_NAV_LAND, 0, 0, 0, 1, 1))
+        assert not link.pending
+        parser, got, sizes = M.MAVLink(None), [], []
+        while len(got) < 61:
+            data = rx.recv(65535)
+            sizes.append(len(data))
+            got += parser.parse_buffer(data) or []
+    finally:
+        link.sock.close()
+        rx.close()
+    assert max(sizes) <= MAX_DATAGRAM and len(sizes) < 61      # batched, within the MTU
+    assert [g.time_boot_ms for g in got[:60]] == list(range(60))
+    assert got[60].get_type() == "COMMAND_ACK"                # after what was queued

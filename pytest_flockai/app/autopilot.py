@@ -19,7 +19,8 @@ import time
 
 from .. import limits
 from ..control.follow import yaw_of
-from ..control.stages import DONE, LAND, PILOT, RETURN, TAKEOFF
+from ..control.stages import DONE, PILOT, RETURN, TAKEOFF
+from ..control.stages import LANDING as LAND
 from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames
@@ -54,6 +55,8 @@ class Autopilot(Policy, Commands):
         self.run, self.st, self.stages = run, run.vehicle, run.stages
         self.stages.wait_on_ground(0.0)
         self.geo = frames.Geo(self.st.home)
+        hl = self.geo.to_global(*self.st.home)      # the pad: HOME_POSITION's fields
+        self._home_int = (int(round(hl[0] * 1e7)), int(round(hl[1] * 1e7)), int(hl[2] * 1000))
         self.armed, self.mode = False, "READY"
         self.t_last = 0.0
         self.commands = self.denied = self.unsupported = 0
@@ -103,7 +106,6 @@ class Autopilot(Policy, Commands):
         rpy = frames.euler_ned(q[3:7])
         vn, ve, vd = v[1], v[0], -v[2]
         volts = st.battery_v if st.battery_v > 0 else 16.8
-        hl = g.to_global(*st.home)
         return {"ms": int(t * 1000), "lat": int(round(lat * 1e7)), "lon": int(round(lon * 1e7)),
                 "amsl_mm": int(round(amsl * 1000)), "rel_mm": int(round(rel * 1000)),
                 "vn_cm": int(vn * 100), "ve_cm": int(ve * 100), "vd_cm": int(vd * 100),
@@ -113,7 +115,7 @@ class Autopilot(Policy, Commands):
                 "ca": int(st.power / volts * 100), "pct": int(round(100 * st.battery_remaining)),
                 "landed": self.landed_state(), "gs_cm": int(math.hypot(vn, ve) * 100),
                 "cog_cdeg": int(math.degrees(math.atan2(ve, vn)) % 360 * 100),
-                "home": (int(round(hl[0] * 1e7)), int(round(hl[1] * 1e7)), int(hl[2] * 1000)),
+                "home": self._home_int,
                 "mission_seq": self.mi}
 
     # -- the simulation's step -------------------------------------------------------------
@@ -125,6 +127,7 @@ class Autopilot(Policy, Commands):
         ahead = self._w0 + t / self.speed - now
         if ahead > 0.0:
             if ahead > SLEEP_MIN_S:           # fewer, longer sleeps: each costs a wake-up
+                self.link.flush()             # what this burst computed, in one datagram
                 time.sleep(ahead)
                 now += ahead
         else:
@@ -146,15 +149,24 @@ class Autopilot(Policy, Commands):
         self._modes(t, now)
         if self.mission_active:
             self.mission_step(t)
-        if t < self._next_tel:
-            return
-        due = [n for n, at in self._due.items() if t >= at]
+        if t >= self._next_tel:
+            self._telemetry(t, t)
+        link = self.link
+        if link.pending and now - link.queued_at >= SLEEP_MIN_S:   # not sleeping: behind
+            link.flush()
+
+    def _telemetry(self, clock: float, t: float) -> None:
+        """Queue the messages due at ``clock`` (s; each stream on its own grid of 1/rate
+        s, so a 10 Hz stream sends 10 a second, not one per 3 steps of 40 ms), stamped
+        with the simulated time ``t``."""
+        due = [n for n, at in self._due.items() if clock >= at]
         if due:
             snap = self.snapshot(t)
             for n in due:
                 r = self.rates[n]
-                self._due[n] = t + 1.0 / r if r > 0 else math.inf
-            self.link.send_all([self.link.message(n, snap) for n in due])
+                nxt = self._due[n] + 1.0 / r if r > 0 else math.inf
+                self._due[n] = nxt if nxt > clock else clock + 1.0 / r    # fell behind: resync
+            self.link.queue([self.link.message(n, snap) for n in due])
         self._next_tel = min(self._due.values())
 
     def _preflight(self, t: float) -> None:
@@ -163,7 +175,9 @@ class Autopilot(Policy, Commands):
         them ends the pre-flight (take-off, mission, offboard), the app exits or the
         deadline passes. So the flight does not depend on how long the app took to
         start, connect and arm (the same KPIs at every speed)."""
-        inbox, next_tel = self.link.inbox, 0.0
+        inbox, w0 = self.link.inbox, time.monotonic()
+        self._due = dict.fromkeys(self._due, 0.0)
+        self._next_tel = 0.0
         while self.stages.grounded:
             now = time.monotonic()
             if now >= self.deadline or self._app_gone:
@@ -171,17 +185,17 @@ class Autopilot(Policy, Commands):
             if now >= self._next_poll:
                 self._next_poll = now + 0.25
                 self._check_app(t)
-            if now >= next_tel:
-                snap = self.snapshot(t)
-                self.link.send_all([self.link.message(n, snap)
-                                    for n, r in self.rates.items() if r > 0])
-                next_tel = now + 0.1
+            if now - w0 >= self._next_tel:      # the stream rates, on the wall clock
+                self._telemetry(now - w0, t)
+                self.link.flush()
             try:
-                msg = inbox.get(timeout=0.05)
+                msg = inbox.get(timeout=max(0.0, min(0.05, self._next_tel - (now - w0))))
             except queue.Empty:
                 continue
             self.handle(t, msg)
         self._w0 = time.monotonic() - t / self.speed     # paced again from here
+        self._due = dict.fromkeys(self._due, t)
+        self._next_tel = t
 
     def _modes(self, t: float, now: float) -> None:
         """What the stages did on their own: climb done, landed, returning."""
@@ -216,6 +230,7 @@ class Autopilot(Policy, Commands):
         self.armed = False
         if self.mode not in ("READY",):
             self.mode = "LAND" if self.mode in ("LAND", "RTL") else self.mode
+        self.link.flush()
         self.link.snap = self.snapshot(t)
         self.link.sim_running = False
 

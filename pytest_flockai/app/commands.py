@@ -12,12 +12,13 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..control.pilots import Orbit, Waypoints
-from ..control.stages import DONE, LAND, TAKEOFF
+from ..control.pilots import Waypoints
+from ..control.stages import DONE, TAKEOFF
+from ..control.stages import LANDING as LAND
 from . import frames
 from .link import RATES, name_of
 from .link import mavlink as M
-from .pilots import Leg, Setpoint
+from .pilots import ORBIT_YAW, AppOrbit, Leg, Setpoint
 
 A, DENIED, UNSUP = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED
 GLOBAL_FRAMES = (M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_INT)
@@ -241,16 +242,19 @@ class Commands:
         lon = p[5] if _ok(p[5]) else here[1]
         rel = here[3] if not _ok(p[6]) else p[6] - self.geo.amsl0     # MSL, whatever the frame
         c = self.geo.to_world(lat, lon, rel)
-        radius = abs(p[0]) if _ok(p[0]) and p[0] != 0 else 10.0
+        radius = p[0] if _ok(p[0]) and p[0] != 0 else 10.0     # > 0: clockwise
         speed = abs(p[1]) if _ok(p[1]) and p[1] != 0 else 3.0
+        yaw_mode = int(p[2]) if _ok(p[2]) else 0            # 5: unchanged, the orbit's own
+        yaw_mode = getattr(self.stages.pilot, "yaw_mode", 0) if yaw_mode == 5 else yaw_mode
+        if yaw_mode not in ORBIT_YAW:
+            return UNSUP                    # RC-controlled yaw: no sticks
         try:
             self._in_reach(c)
-            pilot = Orbit((c[0], c[1]), radius, c[2], speed)
+            pilot = AppOrbit((c[0], c[1]), radius, c[2], speed, yaw_mode, self._yaw())
         except Exception as exc:            # ConfigError: out of reach, too fast
             self.run.event(t, "app_refused", reason=str(exc))
             return DENIED
-        self.mission_active = False
-        self.mode = "ORBIT"
+        self.mission_active, self.mode = False, "ORBIT"
         self.fly(t, pilot)
         return A
 

@@ -41,6 +41,10 @@ MISSION_FRAMES = {M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_RELATIVE_ALT, M.MAV_FRA
 PARAMS = {"MIS_TAKEOFF_ALT": 2.5, "MPC_XY_CRUISE": 5.0, "MPC_LAND_SPEED": 0.7,
           "MPC_TKO_SPEED": 1.5}
 
+#: bytes: the largest datagram of queued telemetry (within an Ethernet MTU of 1500;
+#: MAVSDK's UDP connection reads datagrams of up to 2048 bytes)
+MAX_DATAGRAM = 1400
+
 #: telemetry rates (Hz of simulated time) before the app asks for others
 RATES = {"ATTITUDE": 10.0, "GLOBAL_POSITION_INT": 10.0, "LOCAL_POSITION_NED": 10.0,
          "SYS_STATUS": 2.0, "EXTENDED_SYS_STATE": 2.0, "BATTERY_STATUS": 1.0,
@@ -64,6 +68,9 @@ class Link:
         self.mav = M.MAVLink(None, srcSystem=1, srcComponent=1)
         self.mav.robust_parsing = True
         self._lock = threading.Lock()
+        self._out: list = []                # packed messages not sent yet (``queue``)
+        self._out_n = 0                     # their bytes
+        self.queued_at = 0.0                # time.monotonic() of the oldest of them
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.params = dict(PARAMS)
         self.mission: list = []
@@ -80,8 +87,40 @@ class Link:
 
     # -- sending -----------------------------------------------------------------------
     def send(self, msg) -> None:
+        """Send ``msg`` now, after the telemetry queued before it (one datagram)."""
         with self._lock:
-            buf = msg.pack(self.mav)
+            self._out.append(msg.pack(self.mav))
+            self._flush()
+
+    def queue(self, msgs) -> None:
+        """Pack ``msgs`` for the next datagram (``flush``): telemetry computed in one
+        burst of simulated steps between two paced sleeps reaches the app at the same
+        instant whether it is sent in one datagram or in several, so it goes in one."""
+        with self._lock:
+            if not self._out:
+                self.queued_at = time.monotonic()
+            for m in msgs:
+                buf = m.pack(self.mav)
+                if self._out_n + len(buf) > MAX_DATAGRAM:
+                    self._flush()
+                self._out.append(buf)
+                self._out_n += len(buf)
+
+    @property
+    def pending(self) -> bool:
+        """Telemetry is queued and not sent yet."""
+        return bool(self._out)
+
+    def flush(self) -> None:
+        with self._lock:
+            self._flush()
+
+    def _flush(self) -> None:
+        buf = b"".join(self._out)
+        self._out.clear()
+        self._out_n = 0
+        if not buf:
+            return
         try:
             self.sock.sendto(buf, ("127.0.0.1", self.port))
         except OSError:
@@ -99,14 +138,10 @@ class Link:
                                               ap.custom_mode, status, 3))
 
     def send_all(self, msgs) -> None:
-        """Send ``msgs`` in one datagram (MAVLink parsers read a datagram as a byte stream:
-        one kernel call instead of one per message)."""
-        with self._lock:
-            buf = b"".join(m.pack(self.mav) for m in msgs)
-        try:
-            self.sock.sendto(buf, ("127.0.0.1", self.port))
-        except OSError:
-            pass
+        """Send ``msgs`` now, in one datagram (MAVLink parsers read a datagram as a byte
+        stream: one kernel call instead of one per message)."""
+        self.queue(msgs)
+        self.flush()
 
     def stream(self, name: str, s: dict) -> None:
         """Send telemetry message ``name`` from the state ``s`` (``Autopilot.snapshot``)."""

@@ -12,10 +12,15 @@ from __future__ import annotations
 
 import math
 
-from ..control.pilots import Pilot
+from ..control.pilots import Orbit, Pilot
 
 #: m/s: vertical speed limit (PX4 MPC_Z_VEL_MAX_UP default 3 m/s)
 Z_SPEED = 3.0
+#: MAV_CMD_DO_ORBIT param 3 (ORBIT_YAW_BEHAVIOUR) -> the heading flown: 0 front to the
+#: centre, 1 the heading when commanded, 2 uncontrolled (nothing turns the drone: it
+#: keeps that heading too), 3 front along the circle; 4 (RC) is not emulated; 5
+#: (unchanged) keeps an orbit's own; not given (NaN): PX4's MC_ORBIT_YAW_MOD default, 0
+ORBIT_YAW = {0: "center", 1: "initial", 2: "initial", 3: "tangent"}
 #: 1/s: the position gain that turns the distance to a position setpoint into a speed
 GAIN = 1.0
 
@@ -107,3 +112,44 @@ class Leg(Pilot):
 
     def to_dict(self):
         return {"type": "Leg", "inner": self.inner.to_dict()}
+
+
+class AppOrbit(Pilot):
+    """MAV_CMD_DO_ORBIT: circle ``center`` (x, y) at ``altitude``, ``speed`` m/s,
+    clockwise seen from above for a positive ``radius`` and counter-clockwise for a
+    negative one (MAVLink's sign convention), heading by ``yaw_mode`` (``ORBIT_YAW``:
+    0, 1, 2 or 3), ``yaw0`` the heading when commanded (rad); never done. Flies
+    ``control.pilots.Orbit`` (counter-clockwise) mirrored across the centre's
+    east-west line for a clockwise orbit."""
+
+    def __init__(self, center, radius: float, altitude: float, speed: float,
+                 yaw_mode: int = 0, yaw0: float = 0.0):
+        self.inner = Orbit(center, abs(radius), altitude, speed)
+        self.clockwise = radius > 0
+        self.center, self.radius = self.inner.center, float(radius)
+        self.altitude, self.speed = self.inner.altitude, self.inner.speed
+        self.yaw_mode, self.yaw0 = int(yaw_mode), float(yaw0)
+        self.path_length = None
+
+    def start(self, t, position, accel):
+        self.t0 = t
+        y = 2 * self.center[1] - position[1] if self.clockwise else position[1]
+        self.inner.start(t, (position[0], y, position[2]), accel)
+        self._yaw = self.yaw0
+
+    def update(self, t, state, sp):
+        self.inner.update(t, state, sp)
+        cx, cy = self.center
+        if self.clockwise:                  # mirrored: y, vy and ay change sign about cy
+            sp[1], sp[4], sp[7] = 2 * cy - sp[1], -sp[4], -sp[7]
+        how = ORBIT_YAW[self.yaw_mode]
+        if how == "center" and math.hypot(cx - sp[0], cy - sp[1]) > 0.5:
+            self._yaw = math.atan2(cy - sp[1], cx - sp[0])
+        elif how == "tangent" and math.hypot(sp[3], sp[4]) > 0.1:
+            self._yaw = math.atan2(sp[4], sp[3])
+        sp[9] = self._yaw
+        return False
+
+    def to_dict(self):
+        return {"type": "AppOrbit", "center": list(self.center), "radius": self.radius,
+                "altitude": self.altitude, "speed": self.speed, "yaw_mode": self.yaw_mode}

@@ -130,7 +130,7 @@ def run(cmd, drone: Drone, *, world=None, tasks=(), speed: float = 1.0,
         check_port_free(port)
         redirect = False
     ap = Autopilot(port, speed)
-    mission = Mission(drone, Hover(altitude=2.5), world, tasks, seed=seed, wind=wind,
+    mission = Mission(drone, Hover(altitude=2.5), world=world, tasks=tasks, seed=seed, wind=wind,
                       fly_on="estimate", policies=[ap], name=name,
                       max_time_s=max(600.0, 2.0 * timeout_s * speed))
     app_env = dict(os.environ)

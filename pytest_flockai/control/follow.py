@@ -151,11 +151,12 @@ class Track(Pilot):
 
 
 class Goto(Pilot):
-    """Fly to ``point`` (x, y, z) at ``speed`` and hold there (never done)."""
+    """Fly to ``point`` (x, y, z) at ``speed`` and hold there (never done), heading
+    ``yaw`` (rad, counter-clockwise from east; None: 0, as before yaw was given)."""
 
-    def __init__(self, point, speed: float = 5.0):
-        self.inner = Waypoints([point], speed)
-        self.point, self.speed = self.inner.points[0], self.inner.speed
+    def __init__(self, point, speed: float = 5.0, yaw: float | None = None):
+        self.inner = Waypoints([point], speed, yaw=0.0 if yaw is None else yaw)
+        self.point, self.speed, self.yaw = self.inner.points[0], self.inner.speed, yaw
         self.altitude = self.point[2]
 
     def start(self, t, position, accel):
@@ -167,7 +168,10 @@ class Goto(Pilot):
         return False
 
     def to_dict(self):
-        return {"type": "Goto", "point": list(self.point), "speed": self.speed}
+        d = {"type": "Goto", "point": list(self.point), "speed": self.speed}
+        if self.yaw is not None:
+            d["yaw"] = self.yaw
+        return d
 
 
 class Resume(Pilot):

@@ -7,7 +7,7 @@ simulator's truth:
 - ``drone.results(task)``: the task results *delivered* since the last call (``Delivered``: capture
   and delivery time, detections, the pose the drone believed it had at capture), after inference
   latency, queueing and the link;
-- ``drone.position`` / ``velocity`` / ``yaw``: the navigation state it flies on (the estimate with
+- ``drone.position`` / ``velocity`` / ``yaw`` / ``attitude``: the navigation state it flies on (the estimate with
   ``Mission(fly_on="estimate")``); ``drone.battery``: the battery monitor's remaining fraction;
   ``drone.link``: distance to the ground station and whether the tasks' radio reaches it;
   ``drone.stage``; ``drone.probe(name)``: the last sample of a probe (``energy``, ``compute``,
@@ -35,6 +35,7 @@ from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
 from ..ml.task import EXECUTIONS
+from . import attitude as _attitude
 from . import fence as _fence
 from . import reserved as _reserved
 from .views import Delivered, Link
@@ -76,6 +77,11 @@ class Cockpit:
     def yaw(self) -> float:
         """Heading (rad)."""
         return yaw_of(self._st.qc[3:7])
+
+    @property
+    def attitude(self) -> _attitude.Attitude:
+        """Roll, pitch, yaw (rad) and compass heading (policy/attitude.py)."""
+        return _attitude.attitude_of(self._st.qc[3:7])
 
     @property
     def battery(self) -> float:
@@ -192,13 +198,15 @@ class Cockpit:
         self._log(action, **info)
         return True
 
-    def goto(self, x: float, y: float, z: float | None = None, speed: float = 5.0) -> bool:
-        """Fly to (x, y, z) (z: the current altitude when None) and hover there; False
-        when refused (not in the pilot stage)."""
-        z = self.position[2] if z is None else z
+    def goto(self, x: float, y: float, z: float | None = None, speed: float = 5.0,
+             yaw: float | None = None) -> bool:
+        """Fly to (x, y, z) (z: the current altitude when None) and hover there heading
+        ``yaw`` (rad, as ``yaw``; None: east, 0); False when refused (not pilot stage)."""
+        z, yaw = self.position[2] if z is None else z, _attitude.goto_yaw(self._policy.name, yaw)
         why = _fence.refusal(self, x, y, z)            # outside the world or a geofence
-        return self.fly(Goto((x, y, z), speed), action="goto", x=float(x), y=float(y),
-                        z=float(z)) if why is None else self._refuse("goto", reason=why)
+        info = {} if yaw is None else {"yaw": yaw}
+        return self.fly(Goto((x, y, z), speed, yaw), action="goto", x=float(x), y=float(y),
+                        z=float(z), **info) if why is None else self._refuse("goto", reason=why)
 
     def orbit(self, x: float, y: float, radius: float = 10.0, speed: float = 3.0,
               altitude: float | None = None) -> bool:
