@@ -243,3 +243,22 @@ def test_every_module_fits_in_400_lines(path):
     n = len(path.read_text().splitlines())
     assert n <= MAX_MODULE_LINES, (f"{path.relative_to(PKG.parent)} has {n} lines; at most "
                                    f"{MAX_MODULE_LINES}: split it by concept")
+
+
+def test_mission_and_fleet_share_one_run_path():
+    """The cache lookup, the flight, the store and the publish are written once
+    (mission/sortie.py); Mission.run and Fleet.run hand it only what they build."""
+    calls = {}
+    for path in [*(PKG / "mission").glob("*.py"), *(PKG / "fleet").glob("*.py")]:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                    and node.func.attr in ("fly", "lookup", "store") \
+                    or isinstance(node, ast.Call) and getattr(node.func, "id", "") == "publish":
+                calls.setdefault(path.relative_to(PKG).as_posix(), set()).add(
+                    getattr(node.func, "attr", getattr(node.func, "id", "")))
+    assert calls == {"mission/sortie.py": {"fly", "lookup", "store", "publish"}}
+    for rel, cls in (("mission/mission.py", "Mission"), ("fleet/fleet.py", "Fleet")):
+        run = next(f for n in ast.parse((PKG / rel).read_text()).body
+                   if isinstance(n, ast.ClassDef) and n.name == cls
+                   for f in n.body if isinstance(f, ast.FunctionDef) and f.name == "run")
+        assert "sortie.run(" in ast.unparse(run), rel
