@@ -17,7 +17,7 @@ hypothesis' health checks pass; the failing scenario is shrunk and printed)::
 
 Each example flies a mission, so ``flight_settings`` leaves out what costs
 flights and buys little here: the ``explain`` phase (it re-flies the shrunk
-example with every argument varied: 300 s of a 314 s run in issue 16), the
+example with every argument varied: measured, 300 s of a 314 s run), the
 deadline and the example database (CI starts clean anyway; derandomized runs
 draw the same examples).
 

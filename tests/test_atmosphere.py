@@ -1,4 +1,4 @@
-"""The atmosphere (issue 15): ICAO standard air at a field elevation, in the
+"""The atmosphere: ICAO standard air at a field elevation, in the
 physics (thrust limits, body drag) and in the energy model alike."""
 
 import math

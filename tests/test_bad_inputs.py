@@ -1,4 +1,4 @@
-"""The bad-input corpus (issue 17): every public entry point answers bad input
+"""The bad-input corpus: every public entry point answers bad input
 with a ``ConfigError`` (``ReportError``, a bad report or baseline file, is a
 documented subclass) whose message names the field and the value; nothing raw
 (TypeError, AttributeError, UnicodeDecodeError, numpy errors) escapes.
@@ -354,7 +354,7 @@ CASES = [
     ("load-jsonl-header-list", lambda c: fa.FlightResult.load(c.file("f.jsonl", "[1, 2]\n")), ("header", "f.jsonl")),
     ("load-jsonl-garbage", lambda c: fa.FlightResult.load(c.file("f.jsonl", "garbage\n")), ("cannot read", "f.jsonl")),
     ("load-jsonl-not-utf8", lambda c: fa.FlightResult.load(c.file("f.jsonl", b"\xff\xfe\n")), ("cannot read", "f.jsonl")),
-    # -- issue 28: rates, speeds, periods the simulation cannot honour; raw errors left ---------------
+    # -- rates, speeds, periods the simulation cannot honour; raw errors left ---------------
     ("m-energy-hz-slow", lambda c: M(energy_hz=0.01), ("energy_hz", "0.01")),
     ("m-energy-hz-tiny", lambda c: M(energy_hz=1e-9), ("MIN_ENERGY_HZ", "1e-09")),
     ("m-climb-crawl", lambda c: M(climb_speed=1e-6), ("climb_speed", "1e-06")),

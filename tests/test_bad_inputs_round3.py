@@ -1,4 +1,4 @@
-"""The bad-input corpus, round 3 (issue 36): policies, moving actors, the oracle,
+"""The bad-input corpus, round 3: policies, moving actors, the oracle,
 label folders, the keyed cache, reports and the CLI, hangs. Beside the first corpus
 (``test_bad_inputs.py``), in the same form.
 
@@ -10,7 +10,7 @@ label folders, the keyed cache, reports and the CLI, hangs. Beside the first cor
   (a warning and nothing written through a link, user files left alone).
 
 Counts at the time of writing: 59 clear (56 + 3), 4 harmless, 0 other (unclear,
-silent, a crash or a hang). On main before issue 36, 26 of these 63 held; 37 did not
+silent, a crash or a hang). Before these fixes, 26 of these 63 held; 37 did not
 (raw errors, silent mis-scoring, a hang, user files deleted).
 """
 

@@ -1,4 +1,4 @@
-"""The battery as an equivalent circuit (issue 15): open-circuit voltage per
+"""The battery as an equivalent circuit: open-circuit voltage per
 chemistry, internal resistance, I^2 R loss, sag under load, cut-off voltage."""
 
 import importlib.resources as res

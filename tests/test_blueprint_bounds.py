@@ -1,4 +1,4 @@
-"""Physical-plausibility bounds on blueprint fields (issue 15): a unit slip is
+"""Physical-plausibility bounds on blueprint fields: a unit slip is
 refused where it enters, naming the file, the field, what is allowed and why."""
 
 import importlib.resources as res

@@ -1,4 +1,4 @@
-"""The flight cache beyond single flights (issue 13): fleets, sweep variants and
+"""The flight cache beyond single flights: fleets, sweep variants and
 the memoised computations (rendered views, conditions applied to them, detection
 scores, envelopes). Each part of each key misses when it changes; a cached
 value equals the computed one; corrupt entries are recomputed and rewritten."""

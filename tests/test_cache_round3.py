@@ -1,4 +1,4 @@
-"""The flight cache, round 3 (issue 36, items 3, 4, 6, 7, 8): the key covers every file
+"""The flight cache, round 3: the key covers every file
 a flight reads, a verify fraction needs the verify mode, the cache removes only its own
 files, never writes through a symlinked shard folder, and re-flies a folder planted at
 an entry's path with one warning."""

@@ -64,7 +64,7 @@ def _stored(tmp_path):
 
 # -- authenticity ------------------------------------------------------------------------------
 def test_a_forged_entry_is_not_trusted_and_the_flight_is_flown_again(tmp_path, monkeypatch):
-    """The reproduction of issue 28: re-sealing a doctored result with put()."""
+    """The attack that mattered: re-sealing a doctored result with put()."""
     cache, first, path = _stored(tmp_path)
     key = first.cache["key"]
     forged = hover().run()

@@ -1,4 +1,4 @@
-"""Cameras (issue 6): rendered frames and their ground truth, replay, dataset export."""
+"""Cameras: rendered frames and their ground truth, replay, dataset export."""
 
 import math
 import os

@@ -1,4 +1,4 @@
-"""Issue 35: CI runs the README's test command as written: no extra flags that change
+"""CI runs the README's test command as written: no extra flags that change
 what the tests see (``-p no:cacheprovider`` turned the flight cache off in CI only)."""
 
 import re

@@ -1,4 +1,4 @@
-"""Imaging conditions (issue 19): motion blur from the simulated motion, light,
+"""Imaging conditions: motion blur from the simulated motion, light,
 haze, exposure and noise; the shipped detector's recall falls with haze and
 blur; hypothesis finds a failing condition for a tight budget and shrinks it."""
 

@@ -1,4 +1,4 @@
-"""Issue 35: the dashboard's KPI table reads at 1280 px (a few headline columns, not one
+"""The dashboard's KPI table reads at 1280 px (a few headline columns, not one
 per KPI of the run: 67,868 px before), every KPI is still shown, one row each, and a
 fleet flight's headline cells carry its drones' numbers instead of n/a."""
 

@@ -1,4 +1,4 @@
-"""Datasheet-level blueprints (issue 15, session 4): airframe/datasheet.py derives the rotor
+"""Datasheet-level blueprints: airframe/datasheet.py derives the rotor
 coefficients, figure of merit, motor efficiency and body from a maker's figures. The endurance
 table against published figures is a benchmark (benchmarks/validation.py), not a test."""
 
@@ -263,7 +263,7 @@ def test_a_datasheet_blueprint_gets_its_class_avionics_unless_it_gives_its_own(t
 
 
 def test_a_brushed_coreless_blueprint_gets_the_measured_coreless_efficiency(tmp_path):
-    """Issue 30: toy drones on brushed coreless motors are outside the brushless size laws; their
+    """Toy drones on brushed coreless motors are outside the brushless size laws; their
     motor and drive efficiency is the one measured on the Crazyflie 2.0's coreless propulsion
     (Bitcraze's electrical power over Foerster's shaft power at hover: 3.06 / 6.50 W)."""
     assert dsm.CORELESS_EFFICIENCY == pytest.approx(3.06 / 6.50, abs=0.005)

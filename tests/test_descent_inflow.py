@@ -1,4 +1,4 @@
-"""Descent through the vortex-ring state (issue 15): momentum theory extended
+"""Descent through the vortex-ring state: momentum theory extended
 smoothly into descent was optimistic at 2-4 m/s; the empirical curve (Leishman
 2006, sec. 2.14) raises the induced velocity there."""
 

@@ -1,4 +1,4 @@
-"""Issue 16: misspelled pilot arguments and custom-probe KPIs in budgets get the
+"""Misspelled pilot arguments and custom-probe KPIs in budgets get the
 did-you-mean treatment, the probe KPI at collection (before anything flies)."""
 
 import pytest

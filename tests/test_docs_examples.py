@@ -3,7 +3,7 @@ namespace per page, as a reader would paste them; a page's plain test functions
 (named test_*, without marks or hypothesis) are called too. Pages whose examples
 make a claim in prose have that claim checked below, on the same namespace.
 
-A block fenced as ```python is executed as written, with no name injected (issue 35); a
+A block fenced as ```python is executed as written, with no name injected; a
 block that is not meant to run (an output listing, a shell command, or a fragment whose
 names come from elsewhere, which the sentence before it says) uses another fence
 (```text, ```bash) and is skipped."""
@@ -78,7 +78,7 @@ def test_the_tutorial_test_file_passes_under_pytest(pytester):
 
 
 def test_the_geofence_example_stops_the_flight(tmp_path):
-    assert page_namespace("docs/explanation/layers.md", tmp_path)["r"].end_reason == "geofence"
+    assert page_namespace("docs/explanation/architecture.md", tmp_path)["r"].end_reason == "geofence"
 
 
 @pytest.mark.slow
@@ -114,7 +114,7 @@ def test_the_robustness_search_finds_the_haze(tmp_path):
 
 def test_the_sweeps_page_prints_what_its_example_computes(tmp_path):
     """docs/how-to/sweeps.md shows the first example's DataFrame as printed: its figures
-    are the run's (issue 35: they had drifted by up to 2.3 %)."""
+    are the run's (hand-copied figures had drifted by up to 2.3 %)."""
     ns = page_namespace("docs/how-to/sweeps.md", tmp_path)
     text = (ROOT / "docs" / "how-to" / "sweeps.md").read_text()
     shown = re.search(r"prints \(this machine.*?\n```\n(.*?)```", text, re.S).group(1)

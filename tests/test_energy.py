@@ -1,4 +1,4 @@
-"""Energy and battery must-shows (issue 3). Endurance comes from simulated
+"""Energy and battery must-shows. Endurance comes from simulated
 flights until the battery is depleted, not from a formula on the side."""
 
 import pytest
@@ -191,7 +191,7 @@ def test_paper_wifi_power_states_give_the_papers_comm_share():
 
 
 def test_wake_immersion_is_geometry():
-    """Issue 30: the aft rotor sits in the fore rotor's wake by how far that wake has sunk
+    """The aft rotor sits in the fore rotor's wake by how far that wake has sunk
     when it reaches it: h = L (V_ax + v_i) / V_par below the aft disc, immersion 1 - h / D."""
     from pytest_flockai.energy.rotors import wake_immersion
     L, D = 0.25, 0.221                          # Mavic 2 rotor spacing and propeller
@@ -208,7 +208,7 @@ def test_wake_immersion_is_geometry():
 
 @pytest.mark.slow
 def test_cruise_beats_hover_on_a_small_folding_drone():
-    """Issue 30: the Mini 3 Pro lasts longer at 21.6 km/h than in hover, as its maker says
+    """The Mini 3 Pro lasts longer at 21.6 km/h than in hover, as its maker says
     (34 against 30 min): translational lift outweighs the profile and parasite power and the
     aft rotors' wake ingestion at that speed."""
     hover = _hover_until_empty("dji-mini-3-pro").kpis["flight_time_s"]

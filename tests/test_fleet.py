@@ -1,4 +1,4 @@
-"""Fleets (issue 14): several drones in one MuJoCo model on one clock."""
+"""Fleets: several drones in one MuJoCo model on one clock."""
 
 import math
 

@@ -1,5 +1,5 @@
 """The golden fleets (tests/golden/fleet_scenarios.py) fly as they were recorded
-before the fleet loop was made faster (issue 14): the same KPIs of every drone
+before the fleet loop was made faster: the same KPIs of every drone
 and of the fleet, end reasons, event counts, telemetry rows and column sums and
 energy breakdown. Same tolerance rule as tests/test_golden.py."""
 

@@ -51,7 +51,7 @@ def test_a_pad_against_a_wall_is_refused():
 
 
 def test_a_drone_that_cannot_climb_fails_with_its_reason_never_landed():
-    """The drone of issue 28 stood inside a 6.5 m building and "landed" after a normal
+    """A drone once stood inside a 6.5 m building and "landed" after a normal
     looking flight; a single Mission (home at the origin) still can stand there."""
     world = fa.World.scene(buildings=[(0.0, 0.0, 5.0, 5.0, 6.5)], size=(60.0, 60.0))
     r = fa.Mission(fa.drone(MAVIC), fa.pilots.Hover(10.0, 5.0), world=world).run()

@@ -31,7 +31,7 @@ def two():
     return search(2).run()
 
 
-# Issue 35: resume() after a second detour used to skip plan legs; these figures were first
+# resume() after a second detour used to skip plan legs; these figures were first
 # recorded with that bug (5 of 5 found, the skipped legs flown by luck at the right time).
 # Flying every leg, two drones find 4 of the 5 walkers (one walks where the strips were
 # already flown), four drones too, and sharing the diverted drone's tail finds all five.

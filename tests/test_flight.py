@@ -1,4 +1,4 @@
-"""The flight core's must-shows (issue 2)."""
+"""The flight core's must-shows."""
 
 import math
 
@@ -95,7 +95,7 @@ def test_crazyflie_holds_position_in_5mps_wind_and_tilts_into_it():
     t0 = tel[tel.stage == "pilot"].index[0]
     held = tel[(tel.stage == "pilot") & (tel.index > t0 + 5.0)]
     err = np.sqrt(held.x ** 2 + held.y ** 2 + (held.z - 1.0) ** 2)
-    # 0.5 m until issue 15's rotor drag: the H-force (airframe/rotor_drag.py) adds ~10 % to
+    # 0.5 m before rotor drag was modelled: the H-force (airframe/rotor_drag.py) adds ~10 % to
     # the wind's force on the Crazyflie and the slow integral leaves it 0.41 m downwind
     # instead of 0.37 m (largest error 0.51 m, was 0.46 m); budget widened by 0.05 m
     assert err.max() < 0.55

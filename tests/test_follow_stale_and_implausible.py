@@ -1,4 +1,4 @@
-"""Issue 35: Follow with old results, and false positives.
+"""Follow with old results, and false positives.
 
 - Results delivered late (inference, queueing, the link) are fused at their capture time
   and predicted to now; the lost timer counts from delivery, so boxes every 0.2 s

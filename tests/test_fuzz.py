@@ -1,4 +1,4 @@
-"""Property-based fuzz (issue 17): valid-by-the-docs scenarios across
+"""Property-based fuzz: valid-by-the-docs scenarios across
 blueprints, payloads, batteries, pilots, winds up to 25 m/s, ``until`` values
 and seeds; every flight (also the partial result of a SimulationError) must
 keep the invariants, and nothing but the documented ``SimulationError`` may

@@ -1,4 +1,4 @@
-"""Issue 35: a geofence (the world's bounds by default, or a polygon and a ceiling) with
+"""A geofence (the world's bounds by default, or a polygon and a ceiling) with
 a PX4-like breach action; goto/orbit targets outside the world refused; a false
 positive stuck at one pixel no longer flies the drone out of the world."""
 

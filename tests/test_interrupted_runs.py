@@ -1,4 +1,4 @@
-"""Issue 17 (report side): a run cut off by Ctrl-C (once, or twice under ``-n 2``), by
+"""The report side of reliability: a run cut off by Ctrl-C (once, or twice under ``-n 2``), by
 SIGTERM, or by a dead xdist worker still writes a valid JSON report and JUnit file,
 and says which tests did not finish. Real pytest processes, real signals."""
 

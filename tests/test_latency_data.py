@@ -1,5 +1,5 @@
 """Integrity of the published latency table, its sources, the computer datasheets and the
-published energy figures (pytest_flockai/compute/data, issue 34)."""
+published energy figures (pytest_flockai/compute/data)."""
 
 import csv
 import tomllib

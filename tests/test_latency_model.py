@@ -1,4 +1,4 @@
-"""Issue 34: latency from the network's layers, the runtime and the precision.
+"""Latency from the network's layers, the runtime and the precision.
 
 Runtimes and precisions a computer cannot run are ConfigErrors naming both; the roofline
 responds to what it should (MACs, precision, threads, depthwise layers); a bare MAC count

@@ -1,4 +1,4 @@
-"""Issue 34: a profile written by ``flockai profile-device`` on this machine (ONNX Runtime
+"""A profile written by ``flockai profile-device`` on this machine (ONNX Runtime
 standing in for the drone's computer), used as a task's computer in flight, reproduces its
 measured p50 and p95 within 5 %; the draws are seeded (same seed, same flight)."""
 

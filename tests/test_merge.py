@@ -1,4 +1,4 @@
-"""Sharded runs merge into one report (issue 5, item 8)."""
+"""Sharded runs merge into one report."""
 
 import json
 

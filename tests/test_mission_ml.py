@@ -1,4 +1,4 @@
-"""ML tasks flown in missions (issue 7 must-shows, mission level).
+"""ML tasks flown in missions (the must-shows at mission level).
 
 The model here is a PythonModel with the shipped CNN's MAC count (modeled
 latency depends only on MACs and the device): the relations below hold for

@@ -1,4 +1,4 @@
-"""Issue 35: a mark name close to one of the plugin's own (``flockia``, ``kpis``,
+"""A mark name close to one of the plugin's own (``flockia``, ``kpis``,
 ``flockai_sweeps``) is a collection error naming the mark and the one meant, instead
 of an unknown mark that silently switches the gate off."""
 

@@ -264,7 +264,7 @@ def test_task_validation_errors():
     Task(PythonModel(len), latency="measured")        # fine: measured needs no MACs
     with pytest.raises(ConfigError, match="jpeg_quality"):
         Task(m, jpeg_quality=101)
-    assert Task(m, name="count").to_dict()["device"] is None     # the drone's own computer (issue 16)
+    assert Task(m, name="count").to_dict()["device"] is None     # the drone's own computer
 
 
 # -- the runner on a fake clock ------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""Motor efficiency at each operating point (issue 15, session 5): with a blueprint's motor
+"""Motor efficiency at each operating point: with a blueprint's motor
 (Kv, Rm, I0) the energy model's Motors component computes each motor's electrical power
 from the torque and speed of its rotor every tick, in hover, climb and cruise alike."""
 
@@ -153,7 +153,7 @@ def test_a_datasheet_drone_flies_on_the_motor_model(tmp_path):
 
 
 def test_a_payload_moves_the_motor_operating_point():
-    """Issue 30: a payload raises each motor's thrust, speed and torque; on the Matrice 600
+    """A payload raises each motor's thrust, speed and torque; on the Matrice 600
     Pro (motors sized for 15.5 kg) 6 kg more brings the motors nearer the load they are
     sized for: the electrical power rises less than the (m g)^1.5 of momentum theory over
     a constant efficiency would say, and more than the shaft power alone."""

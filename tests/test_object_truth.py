@@ -1,4 +1,4 @@
-"""Per-object ground truth (issue 12): planted objects, known camera poses,
+"""Per-object ground truth: planted objects, known camera poses,
 every truth box checked against an independent projection of the object's
 geometry and against the rendered pixels; occlusion by buildings and by
 other objects; the COCO export."""

@@ -1,4 +1,4 @@
-"""Issue 16: the build-system's setuptools lower bound is honest: the package
+"""The build-system's setuptools lower bound is honest: the package
 builds with exactly that version (``--no-build-isolation``), and the version
 below it rejects the SPDX ``license = "MIT"`` string. Needs the package index
 (as installing the package does); skipped when pip cannot reach it."""
@@ -61,7 +61,7 @@ def tutorial_wheel_command() -> list[str]:
 
 
 def test_the_tutorials_wheel_command_builds_a_wheel_with_the_package_data(tmp_path):
-    """Issue 35: a user without a checkout installs a wheel built by the tutorial's
+    """A user without a checkout installs a wheel built by the tutorial's
     command: it carries every file of the package (blueprints, shipped models, py.typed),
     the pytest11 entry point, and flies when installed without the source tree."""
     src = tmp_path / "src"

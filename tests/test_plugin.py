@@ -255,7 +255,7 @@ def test_never_run():
     assert res.ret == pytest.ExitCode.INTERRUPTED
     report = load(pytester.path / "report.json")
     assert report["interrupted"] is True
-    # the test cut off is listed as interrupted (issue 17), the one never started is not
+    # the test cut off is listed as interrupted, the one never started is not
     assert {t["nodeid"]: t["outcome"] for t in report["tests"]} == {
         "test_flights.py::test_first": "passed", "test_flights.py::test_interrupt": "interrupted"}
     assert report["tests"][0]["flights"][0]["kpis"]["flight_time_s"] > 0
@@ -298,7 +298,7 @@ def test_none():
     res = run(pytester, "--junitxml", "junit.xml", "--flockai-json", "report.json")
     res.assert_outcomes(passed=3)
     root = ET.parse(pytester.path / "junit.xml").getroot()
-    # the schema allows no properties in a testcase (issue 16): suite properties per test
+    # the schema allows no properties in a testcase: suite properties per test
     assert not [p for tc in root.iter("testcase") for p in tc.iter("property")]
     suite = {p.get("name"): p.get("value") for p in root.find("testsuite").iter("property")}
     props = {n: {k.split("].", 1)[1]: v for k, v in suite.items()

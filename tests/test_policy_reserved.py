@@ -1,4 +1,4 @@
-"""Issue 35: a Policy subclass storing data under a name the flight loop calls
+"""A Policy subclass storing data under a name the flight loop calls
 (``self.step``, ``self.kpis``, ``self.finish``) is a ConfigError where it is written,
 not a raw TypeError in the loop; the policies as flown are ``result.policies[name]``."""
 

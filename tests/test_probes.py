@@ -1,4 +1,4 @@
-"""Monitoring probes and telemetry (issue 4)."""
+"""Monitoring probes and telemetry."""
 
 import queue
 

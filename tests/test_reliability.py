@@ -1,4 +1,4 @@
-"""Issue 17's core findings, each with a test that failed before the fix:
+"""The core reliability findings, each with a test that failed before the fix:
 ONNX external data resolved from the model's folder, invalid predictions
 counted as failed inferences, saved flights validated on load, unique
 artifact names, the telemetry in chunks, the wall-clock guard and the

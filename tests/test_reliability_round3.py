@@ -1,4 +1,4 @@
-"""Reliability, round 3 (issue 36, items 5, 9 and 10): label folders read without a
+"""Reliability, round 3: label folders read without a
 guess, actors and oracles within limits, a call that never returns stopped by
 ``max_wall_s``, and one clear line for what used to be a raw error."""
 

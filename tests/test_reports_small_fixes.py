@@ -1,4 +1,4 @@
-"""Issue 35, smaller report and input fixes: the last telemetry row is not duplicated
+"""Smaller report and input fixes: the last telemetry row is not duplicated
 when ``until`` is a number; two actors may not share a name (``Follow(score=...)``
 would pick one silently)."""
 

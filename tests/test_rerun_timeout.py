@@ -1,4 +1,4 @@
-"""Issue 16: reruns start clean, timeouts are reported as timeouts, an overridden
+"""Reruns start clean, timeouts are reported as timeouts, an overridden
 fixture says that it wins over the marker, hypothesis examples are recorded
 compactly. pytester runs generated tests that fly short Crazyflie hovers."""
 
@@ -119,7 +119,7 @@ def test_fails(d):
     assert ok["flights"] == [] and len(ok["budgets"]) == 1 and ok["budgets"][0]["verdict"] == "pass"
     lo, hi = ok["hypothesis"]["kpi_ranges"]["flight_time_s"]
     assert 1.0 <= lo < hi
-    # the shrunk example, in full, named apart from the earlier examples (issue 35)
+    # the shrunk example, in full, named apart from the earlier examples
     n = bad["flights"][0]["name"].rsplit("-", 1)[1]
     assert [f["name"] for f in bad["flights"]] == [f"a-example-{n}", f"b-example-{n}"]
     assert bad["hypothesis"]["kept"] == 2 and bad["hypothesis"]["examples"] > 2

@@ -1,10 +1,11 @@
-"""Issue 35: ``resume()`` returns to exactly where the plan was left, however many
+"""``resume()`` returns to exactly where the plan was left, however many
 detours (orbit, hold, goto) came before, and whether the previous resume had reached
 the plan again or was still on its way back. Observable: a ZigZag flown with detours
 still passes over every one of its corners (a plan whose clock jumps skips legs)."""
 
 import math
 
+import pytest
 from hypothesis import Phase, example, given, settings
 from hypothesis import strategies as st
 

@@ -1,4 +1,4 @@
-"""Rotor drag, the H-force (issue 15): airframe/rotor_drag.py in the physics, the
+"""Rotor drag, the H-force: airframe/rotor_drag.py in the physics, the
 datasheet's top-speed balance and the energy model's profile power."""
 
 import math
@@ -143,7 +143,7 @@ def test_blade_drag_out_of_range_names_the_field():
 
 @pytest.mark.parametrize("name", ["dji-mini-3-pro", "dji-mavic-2-pro-datasheet", "dji-matrice-600-pro"])
 def test_blade_drag_follows_the_section_drag_at_the_hover_reynolds_number(name):
-    """Issue 30: sigma C_d0 of a datasheet rotor is its solidity times the section drag at
+    """Sigma C_d0 of a datasheet rotor is its solidity times the section drag at
     its hover Reynolds number, laminar on a Mini (Re ~ 2.6e4), turbulent on the Matrice 600
     Pro's 21 in rotor (Re ~ 1.6e5), where the H-force is larger than the laminar law gives."""
     d = fa.drone(name)

@@ -1,4 +1,4 @@
-"""Issue 19, second part: figures that look the part (articulated people in
+"""Figures that look the part (articulated people in
 poses, cars with glass and tyres), the sun's direction and its shadows, a
 rolling shutter, and weather corruptions from albumentations."""
 

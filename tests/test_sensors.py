@@ -1,4 +1,4 @@
-"""Sensors (issue 6): noise statistics, determinism, scheduling, custom sensors."""
+"""Sensors: noise statistics, determinism, scheduling, custom sensors."""
 
 import math
 

@@ -33,7 +33,7 @@ def test_an_unknown_shipped_model_is_refused_with_the_names():
 
 @pytest.mark.slow
 def test_the_wheel_carries_the_shipped_models(tmp_path):
-    """Built as test_issue16_packaging builds it (a venv with a setuptools that reads the
+    """Built as tests/test_packaging.py builds it (a venv with a setuptools that reads the
     SPDX licence); skipped when the package index cannot be reached."""
     subprocess.run([sys.executable, "-m", "venv", str(tmp_path / "v")], check=True)
     py = tmp_path / "v" / "bin" / "python"

@@ -38,7 +38,7 @@ def test_a_component_without_a_row_is_refused():
 
 
 def test_the_docs_print_the_table_not_a_copy():
-    page = (ROOT / "docs" / "explanation" / "architecture.md").read_text()
+    page = (ROOT / "docs" / "explanation" / "flight-path.md").read_text()
     assert "<!-- gen:step_order -->" in page
     for s in STEP_ORDER:      # no hand-written row of the table left on any page
         for p in (ROOT / "docs").rglob("*.md"):

@@ -1,4 +1,4 @@
-"""Hypothesis strategies and the documented @given pattern (issue 5, item 9)."""
+"""Hypothesis strategies and the documented @given pattern."""
 
 import math
 

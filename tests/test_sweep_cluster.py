@@ -189,7 +189,7 @@ def test_the_pytest_option_points_marked_sweeps_at_the_scheduler(cluster, pytest
 
 
 def test_a_variant_that_kills_its_worker_costs_no_innocent_row(cluster):
-    """Issue 36: the innocent variants beside a variant that kills its worker are
+    """The innocent variants beside a variant that kills its worker are
     flown (or their rows say ``worker died``), never ``not flown: CancelledError``."""
     cluster.ensure_workers(2)
     axes = dict(payload_kg=[0.0, 0.001, 0.002, 0.003, 0.004])

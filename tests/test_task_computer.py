@@ -1,4 +1,4 @@
-"""Issue 16: a task does not silently replace the drone's on-board computer.
+"""A task does not silently replace the drone's on-board computer.
 
 ``Task(device=None)`` (the default) runs on the drone's own computer; a task that
 names another computer carries it as a second one: added, powered and reported.

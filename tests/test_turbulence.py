@@ -1,4 +1,4 @@
-"""Turbulence per MIL-F-8785C / Dryden (issue 15): horizontal and vertical
+"""Turbulence per MIL-F-8785C / Dryden: horizontal and vertical
 intensities and length scales by height, instead of the vertical intensity on
 every axis with a fixed 2 s correlation time."""
 

@@ -37,7 +37,7 @@ def test_new_blueprints_are_listed_and_span_sub_250_g_to_over_3_kg():
 
 
 def test_the_validation_set_spans_80_g_to_15_kg_with_payload_tables_and_a_split():
-    """Issue 30: at least 25 drones and 50 rows, 80 g to 15 kg, six drones with payload rows,
+    """At least 25 drones and 50 rows, 80 g to 15 kg, six drones with payload rows,
     every speed row a maker gives; at most half of the drones in the tuning half."""
     cases = [c for c in VALIDATION.CASES if c[6] != VALIDATION.OUTSIDE]
     assert len(cases) >= 50
@@ -58,7 +58,7 @@ def test_the_validation_set_spans_80_g_to_15_kg_with_payload_tables_and_a_split(
 
 @pytest.mark.parametrize("name", DATASHEET)
 def test_blueprint_is_datasheet_level(name):
-    """Issue 15, session 4: the validation blueprints give datasheet values only; the rotor
+    """The validation blueprints give datasheet values only; the rotor
     coefficients and efficiencies come from airframe/datasheet.py, the same for every drone."""
     d = fa.drone(name)
     text = (BLUEPRINTS / f"{name}.toml").read_text()

@@ -1,4 +1,4 @@
-"""Steady-wind position hold (issue 15): the velocity loop's integral may supply
+"""Steady-wind position hold: the velocity loop's integral may supply
 the acceleration that holds the drone against the wind's drag.
 
 Before the fix the integrator clamp was applied to the integral state (0.3 g of

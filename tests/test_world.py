@@ -1,4 +1,4 @@
-"""Worlds (issue 6): urban layout, people, MJCF scenes, physics obstacles."""
+"""Worlds: urban layout, people, MJCF scenes, physics obstacles."""
 
 import math
 

@@ -273,7 +273,7 @@ class Motors(Component):
             if v <= 0.0:
                 v = sqrt(vh2)
             # Newton on f(v) = v sqrt(V_par^2 + (V_ax+v)^2) - vh^2, warm-started: two steps,
-            # unrolled (the hot loop of every flight; a fleet's energy share, issue 14)
+            # unrolled (the hot loop of every flight: a fleet's profile spends a large share here)
             s = vax + v
             root = sqrt(vpar2 + s * s)
             v -= (v * root - vh2) / (root + v * s / root if root > 1e-9 else 1.0)

@@ -12,21 +12,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time as _time
 from collections.abc import Iterable, Sequence
 from dataclasses import KW_ONLY, dataclass
 from numbers import Integral
 from typing import Any, cast
 
 from .. import _check
-from .. import cache as _cache
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
-from ..mission import Mission, loop
+from ..mission import Mission, sortie
 from ..mission.assemble import Flight
 from ..mission.plan import check_tasks, resolve
-from ..recording import publish
 from ..world import World
 from . import pads as _pads
 from . import result
@@ -218,32 +215,31 @@ class Fleet:
     def run(self) -> result.FleetResult:
         """Fly every drone together (or take the fleet from the open flight cache); a
         ``SimulationError`` carries the partial FleetResult on ``.result``."""
-        found = _cache.lookup(self, result.FleetResult)     # the flight cache, if one is open
-        if found is not None and found.result is not None:
-            publish(found.result, self)
-            return cast(result.FleetResult, found.result)    # decoded as the type asked for
-        wall0 = _time.perf_counter()
-        plans = self._plans()
-        flight = Flight(plans, self.missions, [fd.name for fd in self.drones],
-                        [fd.pad for fd in self.drones])
-        runs = flight.runs
-        off = OffloadStep(self.offload, runs) if self.offload is not None else None
-        sep = result.Separation()
-        ground = share_ground(runs, self.shared_link) if self.remote else None
-        try:
-            loop.fly(flight, [st for st in (off, sep) if st is not None])
-        except SimulationError as exc:
-            exc.result = result.build(self, runs, {"min_separation_m": math.inf},
-                                      _time.perf_counter() - wall0)
-            publish(exc.result, self)
-            raise
-        stats = {"min_separation_m": sep.min_m, "t_end": [r.t_end for r in runs],
-                 "offload": off, "ground": ground}
-        res = result.build(self, runs, stats, _time.perf_counter() - wall0)
-        if found is not None and found.status != "off":
-            found.store(res)
-        publish(res, self)
-        return res
+        return cast(result.FleetResult, sortie.run(self, _AllDrones, result.FleetResult))
+
+
+class _AllDrones:
+    """A Fleet's sortie (``mission.sortie.run``): every drone in one flight, the fleet-wide
+    steps (offload, separation) after the drones' components, and its FleetResult."""
+
+    def __init__(self, fleet: Fleet) -> None:
+        self.fleet = fleet
+        self.flight = Flight(fleet._plans(), fleet.missions, [fd.name for fd in fleet.drones],
+                             [fd.pad for fd in fleet.drones])
+        runs = self.flight.runs
+        self.off = OffloadStep(fleet.offload, runs) if fleet.offload is not None else None
+        self.sep = result.Separation()
+        self.ground = share_ground(runs, fleet.shared_link) if fleet.remote else None
+        self.steps: Sequence = [st for st in (self.off, self.sep) if st is not None]
+
+    def finished(self, wall_s: float) -> result.FleetResult:
+        runs = self.flight.runs
+        stats = {"min_separation_m": self.sep.min_m, "t_end": [r.t_end for r in runs],
+                 "offload": self.off, "ground": self.ground}
+        return result.build(self.fleet, runs, stats, wall_s)
+
+    def stopped(self, exc: SimulationError, wall_s: float) -> result.FleetResult:
+        return result.build(self.fleet, self.flight.runs, {"min_separation_m": math.inf}, wall_s)
 
 
 def _check_unique(drones) -> None:

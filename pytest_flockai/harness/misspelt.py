@@ -1,4 +1,4 @@
-"""A misspelt pytest-flockai mark is a collection error (issue 35).
+"""A misspelt pytest-flockai mark is a collection error.
 
 ``@pytest.mark.flockia(...)`` or ``@pytest.mark.kpis(...)`` would otherwise be an
 unknown mark that pytest only warns about: the test flies the default drone and no

@@ -233,8 +233,8 @@ def _is_flight_result(value) -> bool:
     return mod is not None and isinstance(value, mod.FlightResult)
 
 
-#: the events of a flight's policies that go in the reports (issue 35: without
-#: --flockai-artifacts they were nowhere): actions, modes, refusals, rejected tracks
+#: the events of a flight's policies that go in the reports (without
+#: them, a run without --flockai-artifacts would show them nowhere): actions, modes, refusals, rejected tracks
 DECISION_KINDS = ("policy", "policy_mode", "policy_refused", "track_rejected",
                   "geofence_breach")
 #: at most this many per flight in the report (the artifacts keep every event)

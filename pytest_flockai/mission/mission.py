@@ -17,25 +17,22 @@ from __future__ import annotations
 
 import os
 import queue
-import time as _time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import KW_ONLY, dataclass, field
 
 import numpy as np
 
 from .. import _check, limits
-from .. import cache as _cache
 from ..airframe.drone import Drone
 from ..control.pilots import Pilot
 from ..errors import ConfigError, SimulationError
 from ..probes.hub import resolve_probes
-from ..recording import publish
 from ..result import FlightResult
 from ..sensors import Conditions
 from ..world import Atmosphere, World
 from ..world.actors import check_actors
 from ..world.wind import Wind
-from . import collect, loop
+from . import collect, sortie
 from .assemble import Flight
 from .plan import check_components, check_policies, check_sensors, check_tasks, check_until, resolve
 from .plan import computers as _computers
@@ -193,23 +190,22 @@ class Mission:
     def run(self) -> FlightResult:
         """Fly the mission (or take it from the open flight cache) and return its
         result; a ``SimulationError`` carries the partial result on ``.result``."""
-        found = _cache.lookup(self)     # the flight cache of this context, if one is open
-        if found is not None and found.result is not None:
-            publish(found.result, self)
-            return found.result
-        wall0 = _time.perf_counter()
-        flight = Flight([resolve(self)], [self])
-        run = flight.runs[0]
-        try:
-            loop.fly(flight)
-        except SimulationError as exc:
-            exc.result = collect.flight_result(run, self, _time.perf_counter() - wall0,
-                                               run.data.time, getattr(exc, "end_reason", "diverged"))
-            publish(exc.result, self)
-            raise
-        res = collect.flight_result(run, self, _time.perf_counter() - wall0, run.t_end,
-                                    run.vehicle.end_reason)
-        if found is not None and found.status != "off":
-            found.store(res)            # before publish: derived KPIs of a test stay out
-        publish(res, self)
-        return res
+        return sortie.run(self, _OneDrone)
+
+
+class _OneDrone:
+    """A Mission's sortie (``sortie.run``): one drone's flight and its FlightResult."""
+
+    def __init__(self, mission: Mission) -> None:
+        self.mission = mission
+        self.flight = Flight([resolve(mission)], [mission])
+        self.steps: Sequence = ()
+
+    def finished(self, wall_s: float) -> FlightResult:
+        run = self.flight.runs[0]
+        return collect.flight_result(run, self.mission, wall_s, run.t_end, run.vehicle.end_reason)
+
+    def stopped(self, exc: SimulationError, wall_s: float) -> FlightResult:
+        run = self.flight.runs[0]
+        return collect.flight_result(run, self.mission, wall_s, run.data.time,
+                                     getattr(exc, "end_reason", "diverged"))

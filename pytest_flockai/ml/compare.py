@@ -21,11 +21,14 @@ default runtime):
 
 from __future__ import annotations
 
+import warnings
+
 import cv2
 import numpy as np
 import pandas as pd
 
 from ..compute.latency import resolve_device
+from ..compute.predict import LatencyFallbackWarning
 from ..errors import ConfigError
 from .dataset_eval import evaluate_dataset
 from .latency_model import InferenceTimer
@@ -55,8 +58,10 @@ def compare_models(models: dict, path, *, flight=None, device="raspberry-pi-4",
             raise ConfigError(f"compare_models: model {name!r} has macs = None; the modeled "
                               f"latency needs its MAC count: give the model macs=...")
         for runtime, precision in deps:
-            task.runtime, task.precision = runtime, precision
-            timer = InferenceTimer(task, dev)
+            with warnings.catch_warnings():     # the row's latency_model says which rule ran
+                warnings.simplefilter("ignore", LatencyFallbackWarning)
+                deployed = task.replace(runtime=runtime, precision=precision)
+            timer = InferenceTimer(deployed, dev)
             lat = timer.seconds(m, frame if frame is not None else _blank(m), macs)
             e = lat * (dev.active_w - dev.idle_w)
             power = e / max(period_s, lat)

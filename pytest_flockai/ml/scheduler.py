@@ -11,7 +11,6 @@ KPIs, events and truth records.
 
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
@@ -125,14 +124,13 @@ class TaskScheduler(Clocked):
 
     def retask(self, runner: TaskRunner, t: float, **changes) -> None:
         """Change a running task from time t on (a policy's action): ``period_s``,
-        ``model``, ``execution`` (a copy of its Task, the mission's is untouched), or
+        ``model``, ``execution`` (``Task.replace``: a checked copy, the mission's Task is
+        untouched), or
         ``enabled`` (False: no frame until enabled again; True: a frame now)."""
         enabled = changes.pop("enabled", None)
         if changes:
             last = runner.next_frame_t - runner.task.period_s
-            runner.task = copy.copy(runner.task)
-            for k, v in changes.items():
-                setattr(runner.task, k, v)
+            runner.task = runner.task.replace(**changes)     # a checked copy
             if "period_s" in changes and runner.next_frame_t != math.inf:
                 runner._t0 = last
                 runner._next_frame_t = max(t, last + runner.task.period_s)

@@ -11,11 +11,11 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Callable, Sequence
+from dataclasses import KW_ONLY, dataclass
 from numbers import Integral
 from typing import Any
 
 from .. import _check, _io, limits
-from ..comm.link import Link
 from ..comm.link import link as _link
 from ..compute import runtimes as _rt
 from ..compute.devices import Device
@@ -41,8 +41,13 @@ def _uses_dynamic_macs(model) -> bool:
     return isinstance(model, Template) and model._macs_from_model
 
 
+@dataclass(frozen=True, eq=False, repr=False)
 class Task:
     """An ML task: a validated description (see the module docstring).
+
+    A frozen spec like ``Mission``: every argument after ``model`` is keyword-only, all are
+    checked here, and ``task.replace(**changes)`` returns a checked copy (assigning a field
+    raises ``dataclasses.FrozenInstanceError``).
 
     ``count``: ``prediction -> people count`` (default ``metrics.count_of``);
     ``crowd_threshold``: people count that makes a crowd (detection KPIs);
@@ -75,89 +80,113 @@ class Task:
     (``compute.predict_latency``); a computer that cannot run them is a ConfigError.
     """
 
-    def __init__(self, model: Any, sensor: str = "camera", period_s: float = 5.0,
-                 execution: str = "onboard", device: str | Device | None = None, *,
-                 name: str | None = None, ground_device: str | Device = "ground-gpu",
-                 link: str | Link = "wifi-80211n", on_busy: str = "drop",
-                 latency: str = "modeled", result_bytes: int = 256, jpeg_quality: int = 90,
-                 crowd_threshold: float = 10.0, count: Callable | None = None,
-                 alert: str = "frame", ground_station: Sequence[float] = (0.0, 0.0, 0.0),
-                 max_queue: int = 16, evaluate: str = "count", classes: Sequence[str] = CLASSES,
-                 score_threshold: float = 0.25, iou_threshold: float = 0.5,
-                 decode: str | Callable = "auto", min_visible: float = 0.25,
-                 runtime: str | None = None, precision: str | None = None,
-                 target: str | None = None, threads: int | None = None) -> None:
-        self.model = as_model(model)
-        self.name = name if name is not None else str(getattr(self.model, "name", "task"))
-        if not isinstance(self.name, str) or not self.name or "." in self.name:
-            raise ConfigError(f"Task: name = {self.name!r} is not allowed; expected a non-empty "
+    model: Any
+    _: KW_ONLY
+    sensor: str = "camera"
+    period_s: float = 5.0
+    execution: str = "onboard"
+    # given as a name or an object, stored as the object (typed Any for that reason)
+    device: Any = None                             # str | Device, stored as Device | None
+    name: Any = None                               # str | None, stored as str (the model's)
+    ground_device: Any = "ground-gpu"              # str | Device, stored as Device
+    link: Any = "wifi-80211n"                      # str | Link, stored as Link
+    on_busy: str = "drop"
+    latency: str = "modeled"
+    result_bytes: int = 256
+    jpeg_quality: int = 90
+    crowd_threshold: float = 10.0
+    count: Callable | None = None                  # stored as the counting function
+    alert: str = "frame"
+    ground_station: Sequence[float] = (0.0, 0.0, 0.0)
+    max_queue: int = 16
+    evaluate: str | Callable = "count"
+    classes: Sequence[str] = CLASSES               # stored as a tuple
+    score_threshold: float = 0.25
+    iou_threshold: float = 0.5
+    decode: str | Callable = "auto"
+    min_visible: float = 0.25
+    runtime: str | None = None
+    precision: str | None = None
+    target: str | None = None
+    threads: int | None = None
+
+    def __post_init__(self) -> None:
+        put = object.__setattr__         # the checked, normalized value of a frozen field
+        put(self, "model", as_model(self.model))
+        name = self.name if self.name is not None else str(getattr(self.model, "name", "task"))
+        if not isinstance(name, str) or not name or "." in name:
+            raise ConfigError(f"Task: name = {name!r} is not allowed; expected a non-empty "
                               f"string without '.' (it prefixes KPI names)")
-        where = f"task {self.name!r}"
-        if not isinstance(sensor, str) or not sensor:
-            raise ConfigError(f"{where}: sensor = {sensor!r} is not allowed; expected a sensor name "
-                              f"such as 'camera'")
-        self.sensor = sensor
-        self.period_s = _check.positive("period_s", period_s, where=where)
+        put(self, "name", name)
+        where = f"task {name!r}"
+        if not isinstance(self.sensor, str) or not self.sensor:
+            raise ConfigError(f"{where}: sensor = {self.sensor!r} is not allowed; expected a "
+                              f"sensor name such as 'camera'")
+        put(self, "period_s", _check.positive("period_s", self.period_s, where=where))
         limits.check_at_least("period_s", self.period_s, "MIN_TASK_PERIOD_S", where=where,
                               unit=" s")
-        self.execution = _check.choice("execution", execution, EXECUTIONS, where=where)
+        put(self, "execution", _check.choice("execution", self.execution, EXECUTIONS, where=where))
         if self.execution == "remote" and not getattr(self.model, "needs_pixels", True):
             raise ConfigError(f"{where}: execution = 'remote' is not allowed for model "
-                              f"{self.name!r}: it reads the truth, not pixels, so there is no "
+                              f"{name!r}: it reads the truth, not pixels, so there is no "
                               f"frame to send; model the transport as its delay_s instead")
-        self.device = None if device is None else self._device("device", device, where)
-        self.ground_device = self._device("ground_device", ground_device, where)
-        self._deployment(where, runtime, precision, target, threads)
+        if self.device is not None:
+            put(self, "device", self._device("device", self.device, where))
+        put(self, "ground_device", self._device("ground_device", self.ground_device, where))
+        self._deployment(where)
         try:
-            self.link = _link(link)
+            put(self, "link", _link(self.link))
         except ConfigError as e:
             raise ConfigError(f"{where}: {e}") from None
-        self.on_busy = _check.choice("on_busy", on_busy, ON_BUSY, where=where)
-        self.latency = _check.choice("latency", latency, LATENCY_MODES, where=where)
-        self.result_bytes = self._int("result_bytes", result_bytes, where, 0)
-        self.jpeg_quality = self._int("jpeg_quality", jpeg_quality, where, 0, 100)
-        self.crowd_threshold = _check.positive("crowd_threshold", crowd_threshold, where=where)
-        if count is not None and not callable(count):
-            raise ConfigError(f"{where}: count = {count!r} is not callable; expected "
+        put(self, "on_busy", _check.choice("on_busy", self.on_busy, ON_BUSY, where=where))
+        put(self, "latency", _check.choice("latency", self.latency, LATENCY_MODES, where=where))
+        put(self, "result_bytes", self._int("result_bytes", self.result_bytes, where, 0))
+        put(self, "jpeg_quality", self._int("jpeg_quality", self.jpeg_quality, where, 0, 100))
+        put(self, "crowd_threshold", _check.positive("crowd_threshold", self.crowd_threshold,
+                                                     where=where))
+        if self.count is not None and not callable(self.count):
+            raise ConfigError(f"{where}: count = {self.count!r} is not callable; expected "
                               f"prediction -> people count")
-        self.count = count or count_of
-        self.alert = _check.choice("alert", alert, ALERTS, where=where)
-        self.ground_station = _check.vector("ground_station", ground_station, 3, where=where)
-        self.max_queue = self._int("max_queue", max_queue, where, 1)
-        self._evaluation(where, evaluate, classes, score_threshold, iou_threshold, decode,
-                         min_visible)
+        put(self, "count", self.count or count_of)
+        put(self, "alert", _check.choice("alert", self.alert, ALERTS, where=where))
+        put(self, "ground_station", _check.vector("ground_station", self.ground_station, 3,
+                                                  where=where))
+        put(self, "max_queue", self._int("max_queue", self.max_queue, where, 1))
+        self._evaluation(where)
         if (self.latency == "modeled" and getattr(self.model, "macs", None) is None
                 and not _uses_dynamic_macs(self.model)):
-            raise ConfigError(f"{where}: model {self.name!r} has macs = None; latency='modeled' "
+            raise ConfigError(f"{where}: model {name!r} has macs = None; latency='modeled' "
                               f"needs its MAC count: give the model macs=... or use "
                               f"latency='measured'")
 
-    def _evaluation(self, where, evaluate, classes, score_threshold, iou_threshold, decode,
-                    min_visible):
+    def replace(self, **changes) -> Task:
+        """A copy with ``changes`` (field=value), checked again like a new Task
+        (``dataclasses.replace``). The name stays the one resolved here unless changed."""
+        return _check.replace(self, "Task", changes)
+
+    def _evaluation(self, where) -> None:
+        put = object.__setattr__
+        evaluate, classes, decode = self.evaluate, self.classes, self.decode
         if not (callable(evaluate) or evaluate in EVALUATIONS):
             raise ConfigError(f"{where}: evaluate = {evaluate!r} is not allowed; allowed: "
                               f"{', '.join(map(repr, EVALUATIONS))} or a callable fn(records)")
-        self.evaluate = evaluate
         try:
-            self.classes = tuple(str(c) for c in classes)
+            put(self, "classes", tuple(str(c) for c in classes))
         except TypeError:
             raise ConfigError(f"{where}: classes = {classes!r} is not a list of class names") from None
         if not self.classes or len(set(self.classes)) != len(self.classes):
             raise ConfigError(f"{where}: classes = {classes!r} is not allowed; expected distinct names")
-        self.score_threshold = _check.fraction("score_threshold", score_threshold, where=where)
-        self.iou_threshold = _check.fraction("iou_threshold", iou_threshold, where=where)
+        for f in ("score_threshold", "iou_threshold", "min_visible"):
+            put(self, f, _check.fraction(f, getattr(self, f), where=where))
         if not (callable(decode) or decode in DECODERS):
             raise ConfigError(f"{where}: decode = {decode!r} is not allowed; allowed: "
                               f"{', '.join(map(repr, DECODERS))} or a callable")
-        self.decode = decode
-        self.min_visible = _check.fraction("min_visible", min_visible, where=where)
 
-    def _deployment(self, where, runtime, precision, target, threads):
+    def _deployment(self, where) -> None:
         """The runtime/precision/target/threads: names checked now, and against the computer
         now when it is known (else when the flight binds the drone's)."""
+        runtime, precision, target, threads = self.runtime, self.precision, self.target, self.threads
         _rt.check_names(runtime, precision, target, threads, where=where)
-        self.runtime, self.precision, self.target, self.threads = (runtime, precision, target,
-                                                                   threads)
         dev = self.device if self.execution == "onboard" else self.ground_device
         if dev is not None and dev.deployments and dev.measured is None:
             _rt.resolve(dev, runtime, precision, target, threads,
@@ -166,7 +195,7 @@ class Task:
             warnings.warn(f"{where}: runtime/precision/target given, but model {self.name!r} is "
                           f"known only by its MAC count: its latency uses the computer's "
                           f"MAC-count rule, whatever the runtime (give an ONNX model for the "
-                          f"layer model)", LatencyFallbackWarning, stacklevel=3)
+                          f"layer model)", LatencyFallbackWarning, stacklevel=4)
 
     @staticmethod
     def _device(field, value, where) -> Device:

@@ -16,7 +16,7 @@ search to look for the next target (a new target is one farther than ``gate_m``
 from every target found). Once ``find`` targets are found: ``after="return_home"``
 (go home and land) or ``"orbit"`` (keep orbiting the last one).
 
-Old and implausible results (issue 35). A result's age (delivery minus capture: inference,
+Old and implausible results. A result's age (delivery minus capture: inference,
 queueing, the link) is known: one up to ``max_age_s`` old (Follow: ``lost_after_s``; the
 searches: 3 s) is fused at its capture time and predicted to now at constant velocity, and
 the lost timer counts from its delivery; an older one cannot hold a track and is rejected

@@ -1,4 +1,4 @@
-"""Geofence (issue 35): where the drone may fly, and what it does when it would leave.
+"""Geofence: where the drone may fly, and what it does when it would leave.
 
 ``Geofence(polygon=None, ceiling_m=None, action="hold")`` is a policy: the fence is the
 mission world's bounds (its ``size``, centred on the origin; worlds without one:

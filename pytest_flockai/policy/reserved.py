@@ -1,4 +1,4 @@
-"""A policy's reserved names (issue 35): the methods the flight loop calls on every
+"""A policy's reserved names: the methods the flight loop calls on every
 policy (``step``, ``finish``, ``kpis``, ``bind``, ...). A subclass that stores data
 under one of them (``self.step = 0``, ``self.kpis = {}``, or a class attribute
 ``finish = True``) would make the loop call a number: refused where it is written, with

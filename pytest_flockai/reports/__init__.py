@@ -9,7 +9,8 @@
   commit; ``flockai history DIR --kpi endurance_s`` prints (and draws) the trend;
 - ``markdown``: the job summary (``--flockai-md PATH``, ``GITHUB_STEP_SUMMARY``);
 - ``html``: the self-contained dashboard (``--flockai-html PATH``; ``html_assets``: its
-  style and script).
+  style and script; ``ml_gallery``: a detection task's worst frames);
+- ``commands``: the ``flockai compare`` and ``flockai history`` subcommands.
 
 Everything here reads the plain data of the JSON report (``report.py``); none
 of it needs pytest.

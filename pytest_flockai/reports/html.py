@@ -224,7 +224,7 @@ def tests(page: Page) -> str:
 
 
 #: KPI columns of the per-flight table (the headline KPIs, then the budgeted ones): the
-#: table reads at 1280 px; every KPI is in "Every KPI", one row each (issue 35)
+#: table reads at 1280 px; every KPI is in "Every KPI", one row each
 KPI_COLUMNS = 8
 
 

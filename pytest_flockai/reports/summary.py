@@ -59,7 +59,7 @@ def broken_budgets(doc: dict) -> list[dict]:
 
 def per_test(rows: list[dict]) -> list[dict]:
     """Budget rows counted once per test: a budget broken by several flights of a test
-    (or by every hypothesis example, or by the marker and a check) is one (issue 35)."""
+    (or by every hypothesis example, or by the marker and a check) is one."""
     seen: dict = {}
     for b in rows:
         seen.setdefault((b["test"], b.get("kpi"), b.get("budget")), b)

@@ -2,7 +2,7 @@
 before a change: ``python tests/golden/compare.py GOLDEN.json REPORT.json``.
 Prints every flight whose KPIs or end reason differ; exit 1 if any do. A
 flight found under another name with identical KPIs counts as renamed (the
-naming rule of issue 11), not as a difference; new flights are listed apart."""
+one naming rule of a test's flights renames, it does not change KPIs), not as a difference; new flights are listed apart."""
 
 import json
 import math

@@ -2,7 +2,7 @@
 telemetry sums are recorded in ``tests/golden/fleet_golden.json``
 (``tests/test_fleet_golden.py`` flies them again and compares).
 
-Recorded before the fleet loop was made faster (issue 14), so they prove that
+Recorded before the fleet loop was made faster, so they prove that
 speeding it up did not move behaviour. ``python tests/golden/fleet_scenarios.py``
 re-records; do that only for an intended change of behaviour, and say why in the
 commit.
