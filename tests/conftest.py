@@ -69,6 +69,9 @@ SLOW_TESTS = {
     "test_the_wheel_carries_the_shipped_models",
     "test_a_slow_radio_degrades_the_loop",
     "test_lands_on_the_marker",
+    "test_jax_and_the_core_agree_on_end_reasons_over_wind_payload_and_seed",
+    "test_mjx_and_the_core_agree_on_end_reasons_in_extreme_wind_at_the_payload_limit",
+    "test_jax_sees_the_crashes_of_a_crazyflie_in_strong_wind",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",

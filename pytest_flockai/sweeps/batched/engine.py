@@ -325,9 +325,13 @@ def _physics(m, p, s, d, ctrl, nsub):
         def free(_, dd):
             f = E.drag(p.aero, dd.qpos[3:7], dd.qvel[:3], s["w"])
             return R.step(m, dd, ctrl, jnp.concatenate([f + hf, hm]))
+        touched = jnp.zeros((), bool)
         for k in range(nsub):                 # unrolled: XLA fuses across the substeps
             d = free(k, d)
-        return _crash(s, d, R.up_z(d) < 0.0)
+            touched = touched | d.contact
+        # a touch in any substep counts (MuJoCo's soft contact lasts a few ms, the hard
+        # floor's only the substep that stops the fall: the next one may lift off it)
+        return _crash(s, d._replace(contact=touched), R.up_z(d) < 0.0)
     d = d.replace(ctrl=ctrl)
 
     def sub(_, dd):
