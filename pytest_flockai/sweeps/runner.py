@@ -128,13 +128,13 @@ def sweep(base_mission: Mission, *, samples: int | None = None, method: str = "g
                 else (backend, "asked"))
     wall0 = time.perf_counter()
     interrupted = False
-    threads = None                  # the XLA CPU threads of a batch flown in this process
+    jax_cpu: dict = {"jax_cpu_threads": None, "jax_cpu_shards": None}  # a batch flown here
     if ran == "process" or executor is not None:
         outcomes, interrupted = fly(base_mission, plan, workers, executor=executor,
                                     backend=ran, device=device, batch_size=batch_size,
                                     progress=progress)
     else:                       # the batched path neither reads nor stores the flight cache
-        rows, threads = _fly_batched_here(base_mission, plan, device, ran)
+        rows, jax_cpu = _fly_batched_here(base_mission, plan, device, ran)
         outcomes = [Outcome(r, None, None) for r in rows]
     wall = time.perf_counter() - wall0
     df = frame([o.row for o in outcomes], list(axes), parsed)
@@ -142,7 +142,7 @@ def sweep(base_mission: Mission, *, samples: int | None = None, method: str = "g
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
                      "wall_s": wall, "backend": ran, "backend_asked": backend,
                      "backend_why": why, "device": device,
-                     "jax_cpu_threads": threads,
+                     **jax_cpu,
                      "executor": _executors.describe_executor(executor),
                      "interrupted": interrupted,
                      "tracebacks": {i: o.trace for i, o in enumerate(outcomes) if o.trace},
@@ -202,17 +202,17 @@ def _fly_batched(base, plan, device, physics="mjx") -> list[dict]:
     return _fly_batched_here(base, plan, device, physics)[0]
 
 
-def _fly_batched_here(base, plan, device, physics="mjx") -> tuple[list[dict], str]:
+def _fly_batched_here(base, plan, device, physics="mjx") -> tuple[list[dict], dict]:
     """The variants in one JAX batch (the backend's modules import JAX: loaded here), and
-    the XLA CPU threads it ran on (``batched/cpu_threads.py``); ``physics``: the batched
-    backend ("jax": the free-flight body, "mjx")."""
+    the XLA CPU threads and shards it ran on (``batched/cpu_threads.py``, ``shards.py``);
+    ``physics``: the batched backend ("jax": the free-flight body, "mjx")."""
     try:
         from .batched import engine
     except ImportError as exc:
         raise ConfigError(f"sweep: backend={physics!r} needs JAX and MJX ({exc}); install them "
                           f"with pip install 'pytest-flockai[mjx]', or use backend='process'") from None
     rows = engine.fly(base, plan, device, physics)
-    return rows, engine.LAST_TIMINGS["jax_cpu_threads"]
+    return rows, {k: engine.LAST_TIMINGS[k] for k in ("jax_cpu_threads", "jax_cpu_shards")}
 
 
 def _check_batch_size(batch_size) -> None:

@@ -57,6 +57,16 @@ def stack(items, to_jax: bool = True):
     return jax.tree_util.tree_unflatten(treedef, [jnp.asarray(x) for x in out] if to_jax else out)
 
 
+def to_jax(tree):
+    """Numpy leaves as JAX arrays (the types the chunk's outputs have)."""
+    return jax.tree_util.tree_map(jnp.asarray, tree)
+
+
+def take(tree, sl):
+    """The variants ``sl`` of a batched (numpy) pytree (a shard's)."""
+    return jax.tree_util.tree_map(lambda x: x[sl], tree)
+
+
 def models(models, dev):
     """(shared leaves, batched leaves by index, treedef) of the MJX models."""
     flat = [jax.tree_util.tree_flatten(mjx.put_model(m, device=dev)) for m in models]
