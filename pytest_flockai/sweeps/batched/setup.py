@@ -14,6 +14,7 @@ from mujoco import mjx
 
 from ...control.stages import TAKEOFF
 from ...errors import FlockAIError
+from ...mission.plan import resolve
 from . import params as P
 from . import rigid as R
 
@@ -35,8 +36,11 @@ def checked(groups: dict) -> tuple[dict, int]:
             out.setdefault(key, []).extend(members)
             continue
         picks = sorted(set(np.linspace(0, len(members) - 1, CHECKED).round().astype(int)))
-        compiled += len(picks)
-        same = [R.same_body(members[j][3], P.compiled_body(members[j][1])) for j in picks]
+        same = []
+        for j in picks:
+            body, new = compiled_body(members[j][1])
+            compiled += new
+            same.append(R.same_body(members[j][3], body))
         if all(same):
             out.setdefault(key, []).extend(members)
             continue
@@ -45,6 +49,27 @@ def checked(groups: dict) -> tuple[dict, int]:
             compiled += 1
             out.setdefault(k, []).append((i, m, num, mdl))
     return out, compiled
+
+
+#: the compiled free bodies of the blueprints checked so far in this process, by what
+#: MuJoCo's compile reads (the drone's blueprint, the physics step, the air density): a
+#: later sweep of the same drones checks against them without compiling again
+_COMPILED: dict = {}
+_COMPILED_MAX = 4096
+
+
+def compiled_body(m) -> tuple:
+    """(the ``FreeBody`` of mission ``m``'s compiled MuJoCo model, 1 if compiled now, 0 if
+    this process compiled the same blueprint before)."""
+    plan = resolve(m)
+    key = (repr(plan.drone.to_dict()), plan.physics_dt, plan.atmosphere.density)
+    body = _COMPILED.get(key)
+    if body is not None:
+        return body, 0
+    if len(_COMPILED) >= _COMPILED_MAX:
+        _COMPILED.clear()
+    body = _COMPILED[key] = P.compiled_body(m)
+    return body, 1
 
 
 def stack(items, to_jax: bool = True):
