@@ -72,6 +72,7 @@ SLOW_TESTS = {
     "test_jax_and_the_core_agree_on_end_reasons_over_wind_payload_and_seed",
     "test_mjx_and_the_core_agree_on_end_reasons_in_extreme_wind_at_the_payload_limit",
     "test_jax_sees_the_crashes_of_a_crazyflie_in_strong_wind",
+    "test_a_repeated_sweep_reuses_its_variants_and_a_changed_base_does_not",
 }
 JAX_FILES = {"test_sweep_mjx.py"}
 BROWSER_TESTS = {"test_the_dashboard_in_a_headless_browser",

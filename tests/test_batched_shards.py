@@ -77,3 +77,24 @@ def test_the_default_is_one_shard_per_cpu_the_process_may_use(monkeypatch):
     assert shards.wanted() == len(os.sched_getaffinity(0))
     monkeypatch.setenv("FLOCKAI_JAX_CPU_SHARDS", "3")
     assert shards.wanted() == 3
+
+
+@pytest.mark.jax
+def test_a_repeated_sweep_reuses_its_variants_and_a_changed_base_does_not():
+    """The host side of a repeated sweep: the variants built once per base mission."""
+    pytest.importorskip("jax")
+    pytest.importorskip("mujoco.mjx")
+    from pytest_flockai.sweeps.batched import setup
+
+    m = fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=1.0))
+    setup._BUILT.clear()
+    first = fa.sweep(m, backend="jax", payload_kg=[0.0, 0.004, 0.008])
+    assert len(setup._BUILT) == 3
+    again = fa.sweep(m, backend="jax", payload_kg=[0.0, 0.004, 0.008])
+    assert len(setup._BUILT) == 3                                 # nothing built again
+    cols = [c for c in first.columns if c != "error"]
+    assert first[cols].equals(again[cols])
+    m.pilot.altitude = 2.0                                         # a changed base: new variants
+    higher = fa.sweep(m, backend="jax", payload_kg=[0.0, 0.004, 0.008])
+    assert len(setup._BUILT) == 6
+    assert (higher["energy_total_j"] > first["energy_total_j"]).all()

@@ -30,7 +30,6 @@ from mujoco import mjx
 
 from ...control.stages import DONE, TAKEOFF
 from ...errors import FlockAIError
-from .. import axes as _axes
 from . import compile_cache, cpu_threads, setup, shards
 from . import control as C
 from . import energy as E
@@ -208,11 +207,12 @@ def _finish_fn(kinds, cpu=True):
 
 
 def _variants(base, plan, physics, rows, groups) -> None:
-    """Each variant's (key, numbers, model) into ``groups`` by key, or its error row."""
+    """Each variant's (key, numbers, model) into ``groups`` by key, or its error row
+    (reused from an earlier call on the same base mission: ``setup.built``)."""
+    built = setup.built(base, physics)
     for i, values in enumerate(plan):
         try:
-            m, fp = _axes.resolved(base, values, share=True)     # read only: never flown
-            key, num, model = P.variant(m, fp, physics)
+            m, key, num, model = built(values)
         except FlockAIError as exc:
             rows[i] = {**values, "end_reason": "error", "error": f"{type(exc).__name__}: {exc}",
                        "sim_time_s": math.nan}

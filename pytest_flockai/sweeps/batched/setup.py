@@ -5,6 +5,7 @@ on the device)."""
 from __future__ import annotations
 
 import math
+import pickle
 
 import jax
 import jax.numpy as jnp
@@ -15,6 +16,7 @@ from mujoco import mjx
 from ...control.stages import TAKEOFF
 from ...errors import FlockAIError
 from ...mission.plan import resolve
+from .. import axes as _axes
 from . import params as P
 from . import rigid as R
 
@@ -70,6 +72,35 @@ def compiled_body(m) -> tuple:
         _COMPILED.clear()
     body = _COMPILED[key] = P.compiled_body(m)
     return body, 1
+
+
+#: variants built by earlier sweeps in this process, by (the base mission's pickle, the
+#: physics, the variant's values): a repeated sweep builds none again
+_BUILT: dict = {}
+_BUILT_MAX = 8192
+
+
+def built(base, physics: str):
+    """``values -> (mission, key, numbers, model)`` of the variants of ``base`` (read-only
+    copies: never flown), reusing what an earlier call built for a base mission with the
+    same pickle (any change to the base, its drone or its pilot is a new pickle)."""
+    try:
+        base_key = (pickle.dumps(base, protocol=pickle.HIGHEST_PROTOCOL), physics)
+    except (pickle.PicklingError, TypeError, AttributeError):   # not picklable: no reuse
+        base_key = None
+
+    def one(values):
+        key = None if base_key is None else (base_key, repr(sorted(values.items())))
+        out = _BUILT.get(key) if key is not None else None
+        if out is None:
+            m, fp = _axes.resolved(base, values, share=True)     # read only: never flown
+            out = (m, *P.variant(m, fp, physics))
+            if key is not None:
+                if len(_BUILT) >= _BUILT_MAX:
+                    _BUILT.clear()
+                _BUILT[key] = out
+        return out
+    return one
 
 
 def stack(items, to_jax: bool = True):
