@@ -132,7 +132,7 @@ def _fly_group(key, members, devs, physics) -> list[dict]:
         p_np = setup.stack(nums[sl], to_jax=False)
         s = setup.init_states(p_np, setup.data(members[sl], dev, physics), w_g[sl], nu)
         parts.append([sl, dev, put(tuple(leaves)), put(setup.to_jax(setup.take(dvals, sl))),
-                      put(setup.to_jax(p_np)), put(setup.to_jax(s))])
+                      put(setup.to_jax(p_np)), put(setup.to_jax(s)), False])
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
     t_end = max(num.mission.t_end for num in nums)
     t = 0.0
@@ -141,11 +141,14 @@ def _fly_group(key, members, devs, physics) -> list[dict]:
         for b, smp in enumerate(samplers):
             if smp is not None:
                 noise[:, b, :] = smp.rng.standard_normal(3 * chunk_ticks).reshape(chunk_ticks, 3)
-        for part in parts:                  # dispatched: the shards run at once
-            sl, dev, shared, dv, p, s = part
+        live = [part for part in parts if not part[6]]   # a shard whose variants all ended
+        for part in live:                   # keeps its state; dispatched: they run at once
+            sl, dev, shared, dv, p, s, _ = part
             part[5] = step(shared, dv, p, s, jax.device_put(noise[:, sl], dev))
         t += chunk_ticks * ctrl_dt
-        if all(bool(jnp.all(part[5]["end"] != 0)) for part in parts) or t > t_end + 2 * CHUNK_S:
+        for part in live:
+            part[6] = bool(jnp.all(part[5]["end"] != 0))
+        if all(part[6] for part in parts) or t > t_end + 2 * CHUNK_S:
             break
     out = [_finish_fn(kinds, cpu)(part[4], part[5]) for part in parts]
     host = jax.device_get(out)
