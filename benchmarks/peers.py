@@ -1,7 +1,7 @@
 """Our batched sweep against peer simulators on the same job, in one interleaved run:
-N Crazyflies hovering 10 s (default N = 64 and 1,024), in drone-seconds simulated per
-wall second, with the load average beside every figure (the machines are shared: read
-the ratios, taken round by round).
+N Crazyflies hovering ``--seconds`` (default 10 s; N = 64 and 1,024), in drone-seconds
+simulated per wall second and per CPU-second, with the load average beside every figure
+(the machines are shared: read the ratios, taken round by round).
 
 - **pytest-flockai**: ``fa.sweep(Mission(crazyflie-2-1, Hover(1 m, 10 s)), backend=...,
   device="cpu", payload_kg=<N values, 0 to 5 g>)``, the full model (rotor dynamics,
@@ -13,8 +13,12 @@ the ratios, taken round by round).
   and MuJoCo model).
 - **crazyflow** (``pip install crazyflow``, its own venv): ``Sim(n_worlds=N,
   control=Control.state)`` at its defaults (500 Hz first-principles dynamics), one
-  state set-point at 1 m and ``sim.step(5000)``: one compiled call. Also ``--cf-loop``:
-  a Python loop of 100 Hz set-points, ``sim.step(5)`` each.
+  state set-point at 1 m and ``sim.step(500 x seconds)``: one compiled call, XLA's pool
+  over every CPU. Also **one thread per shard**, the way our batch runs: as many
+  crazyflow processes as our batch has shards (``FLOCKAI_JAX_CPU_SHARDS``, default one
+  per CPU), each pinned to its own CPU (so XLA starts one thread) with N / shards
+  worlds, started together; wall = the slowest, CPU = the sum. Also ``--cf-loop``: a
+  Python loop of 100 Hz set-points, ``sim.step(5)`` each.
 - **PyFlyt** and **rotorpy** (optional, ``--peers``): single-drone Python loops, N
   drones one after another (capped by ``--loop-cap``, the rate scaled from it).
 
@@ -23,7 +27,7 @@ the ratios, taken round by round).
 and pip-installs them from PyPI; without it a peer whose venv is missing is skipped
 with a line saying so.
 
-    python benchmarks/peers.py [--n 64 1024] [--rounds 3] [--install]
+    python benchmarks/peers.py [--n 64 1024] [--rounds 3] [--seconds 10] [--install]
         [--peers crazyflow pyflyt rotorpy] [--backend jax] [--cf-loop]
 """
 
@@ -42,7 +46,7 @@ from pathlib import Path
 import numpy as np
 
 import pytest_flockai as fa
-from pytest_flockai.sweeps.batched import engine
+from pytest_flockai.sweeps.batched import engine, shards
 
 SECONDS = 10.0
 PACKAGES = {"crazyflow": ["crazyflow"], "pyflyt": ["PyFlyt"], "rotorpy": ["rotorpy"]}
@@ -141,17 +145,35 @@ def install(peer: str, root: Path) -> Path:
     return venv
 
 
-def peer_run(peer: str, venv: Path, n: int, loop: bool = False, cap: int = 0) -> dict | None:
+def peer_run(peer: str, venv: Path, n: int, loop: bool = False, cap: int = 0,
+             pinned: int = 0) -> dict | None:
     """One measurement of ``peer`` in its venv (a fresh process: its first call is timed
-    apart); None, with the reason printed, if it failed."""
+    apart); ``pinned`` > 0: that many processes started together, each on its own CPU
+    with n / pinned drones (wall: the slowest, CPU and drone-seconds: the sums). None,
+    with the reason printed, if it failed."""
     runs = min(n, cap) if cap and peer != "crazyflow" else n
-    cmd = [str(venv / "bin" / "python"), "-c", SCRIPTS[peer], str(runs), str(SECONDS), "1" if loop else "0"]
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=3600)
-    lines = [ln for ln in out.stdout.splitlines() if ln.startswith("{")]
-    if out.returncode != 0 or not lines:
-        print(f"  {peer}: failed (rc {out.returncode}): {out.stderr.strip().splitlines()[-1:]}")
-        return None
-    res = json.loads(lines[-1])
+    cpus = sorted(os.sched_getaffinity(0))
+    procs = []
+    for j in range(max(1, pinned)):
+        share = runs // pinned + (j < runs % pinned) if pinned else runs
+        cmd = [str(venv / "bin" / "python"), "-c", SCRIPTS[peer], str(share), str(SECONDS),
+               "1" if loop else "0"]
+        if pinned:                           # XLA sizes its pool from the affinity
+            cmd = ["taskset", "-c", str(cpus[j % len(cpus)]), *cmd]
+        procs.append(subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      text=True))
+    got = []
+    for proc in procs:
+        stdout, stderr = proc.communicate(timeout=3600)
+        lines = [ln for ln in stdout.splitlines() if ln.startswith("{")]
+        if proc.returncode != 0 or not lines:
+            print(f"  {peer}: failed (rc {proc.returncode}): {stderr.strip().splitlines()[-1:]}")
+            return None
+        got.append(json.loads(lines[-1]))
+    res = {"first_s": max(g["first_s"] for g in got), "wall_s": max(g["wall_s"] for g in got),
+           "drone_s": sum(g["drone_s"] for g in got)}
+    if all("cpu_s" in g for g in got):
+        res["cpu_s"] = sum(g["cpu_s"] for g in got)
     res["drone_s"] *= n / runs               # a capped loop: the same rate over N drones
     res["wall_s"] *= n / runs
     return res
@@ -167,7 +189,8 @@ def ours(n: int, backend: str) -> dict:
     assert df["error"].isna().all() and (df["end_reason"] == "landed").all(), df["end_reason"]
     return {"wall_s": wall, "cpu_s": cpu, "drone_s": float(df["sim_time_s"].sum()),
             "batch_s": engine.LAST_TIMINGS.get("batch_s", wall),
-            "batch_cpu_s": engine.LAST_TIMINGS.get("batch_cpu_s"), "ran": df.attrs["backend"]}
+            "batch_cpu_s": engine.LAST_TIMINGS.get("batch_cpu_s"), "ran": df.attrs["backend"],
+            "shards": df.attrs.get("jax_cpu_shards")}
 
 
 def _line(rnd, n, who, res) -> tuple:
@@ -180,9 +203,11 @@ def _line(rnd, n, who, res) -> tuple:
 
 
 def main() -> None:
+    global SECONDS
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, nargs="+", default=[64, 1024])
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--seconds", type=float, default=SECONDS, help="hover length (s)")
     ap.add_argument("--peers", nargs="*", default=["crazyflow"], choices=sorted(SCRIPTS))
     ap.add_argument("--backend", default="jax", choices=("jax", "mjx", "auto"))
     ap.add_argument("--install", action="store_true", help="create the peers' venvs and install")
@@ -192,6 +217,8 @@ def main() -> None:
     ap.add_argument("--cf-loop", action="store_true", help="also crazyflow's Python loop")
     ap.add_argument("--loop-cap", type=int, default=8, help="drones flown by a per-drone loop")
     a = ap.parse_args()
+    SECONDS = a.seconds
+    n_shards = shards.wanted()
     venvs = {}
     for peer in a.peers:
         venv = install(peer, a.venv_dir) if a.install else venv_of(peer, a.venv_dir)
@@ -199,8 +226,9 @@ def main() -> None:
             venvs[peer] = venv
         else:
             print(f"{peer}: no venv at {venv} (run with --install); skipped")
-    print(f"N Crazyflies hovering {SECONDS:g} s; {os.cpu_count()} CPU core(s); drone-s/s = "
-          f"simulated drone-seconds per wall second")
+    print(f"N Crazyflies hovering {SECONDS:g} s; {os.cpu_count()} CPU core(s), "
+          f"{len(os.sched_getaffinity(0))} usable; our batch in {n_shards} shard(s); drone-s/s "
+          f"= simulated drone-seconds per wall second")
     for n in a.n:                                    # compile (or load) once per size
         t0 = time.perf_counter()
         ours(n, a.backend)
@@ -212,7 +240,8 @@ def main() -> None:
     for rnd in range(1, a.rounds + 1):
         for n in a.n:
             res = ours(n, a.backend)
-            rates.setdefault((n, "sweep"), []).append(_line(rnd, n, f"fa.sweep backend={res['ran']}", res))
+            rates.setdefault((n, "sweep"), []).append(
+                _line(rnd, n, f"fa.sweep {res['ran']}, {res['shards']} shard(s)", res))
             rates.setdefault((n, "batch"), []).append(
                 _line(rnd, n, "  of which the batch", {**res, "wall_s": res["batch_s"],
                                                        "cpu_s": res["batch_cpu_s"]}))
@@ -221,6 +250,11 @@ def main() -> None:
                     got = peer_run(peer, venv, n, loop, a.loop_cap)
                     if got is not None:
                         name = peer + (" (Python loop)" if loop else "")
+                        rates.setdefault((n, name), []).append(_line(rnd, n, name, got))
+                if peer == "crazyflow" and n_shards > 1:
+                    got = peer_run(peer, venv, n, pinned=n_shards)
+                    if got is not None:
+                        name = f"crazyflow, 1 thread x {n_shards}"
                         rates.setdefault((n, name), []).append(_line(rnd, n, name, got))
     print("\nmedians over the rounds (drone-s per wall s; per CPU-s of the process, which the "
           "load\nchanges less), and ratios to crazyflow (one compiled call):")

@@ -88,13 +88,16 @@ def test_a_derivation_that_differs_from_the_compile_compiles_every_member():
         key, num, body = P.variant(m, physics="jax")
         members.append((i, m, num, body))
     groups[key] = members
+    setup._COMPILED.clear()                                 # nothing compiled before
     good, compiled = setup.checked(dict(groups))
     assert compiled == 4 and list(good) == [key] and good[key] == members
+    again, compiled = setup.checked(dict(groups))           # the same blueprints: reused
+    assert compiled == 0 and again == good
     wrong = members[:2] + [(2, members[2][1], members[2][2],
                             members[2][3]._replace(c_blunt=members[2][3].c_blunt * (1 + 1e-9)))] \
         + members[3:]
     fixed, compiled = setup.checked({key: wrong})
-    assert compiled == 4 + 4                                # the checks, then all four
+    assert compiled == 4                    # the checks reuse the compiles above; all four
     (ckey, got), = fixed.items()
     assert ckey[-1][0] != "free" and [g[0] for g in got] == [0, 1, 2, 3]
     for (_, m, _, body), (_, _, _, mine) in zip(got, members):

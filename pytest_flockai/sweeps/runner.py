@@ -124,23 +124,25 @@ def sweep(base_mission: Mission, *, samples: int | None = None, method: str = "g
     _executors.check_executor(executor)
     _check_batch_size(batch_size)
     _progress.check(progress)
-    ran = choose_backend(base_mission, len(plan), device) if backend == "auto" else backend
+    ran, why = (backend_choice(base_mission, len(plan), device) if backend == "auto"
+                else (backend, "asked"))
     wall0 = time.perf_counter()
     interrupted = False
-    threads = None                  # the XLA CPU threads of a batch flown in this process
+    jax_cpu: dict = {"jax_cpu_threads": None, "jax_cpu_shards": None}  # a batch flown here
     if ran == "process" or executor is not None:
         outcomes, interrupted = fly(base_mission, plan, workers, executor=executor,
                                     backend=ran, device=device, batch_size=batch_size,
                                     progress=progress)
     else:                       # the batched path neither reads nor stores the flight cache
-        rows, threads = _fly_batched_here(base_mission, plan, device, ran)
+        rows, jax_cpu = _fly_batched_here(base_mission, plan, device, ran)
         outcomes = [Outcome(r, None, None) for r in rows]
     wall = time.perf_counter() - wall0
     df = frame([o.row for o in outcomes], list(axes), parsed)
     df.attrs.update({"axes": list(axes), "method": method, "samples": samples, "seed": seed,
                      "budgets": {b.kpi: b.text for b in parsed}, "workers": workers,
-                     "wall_s": wall, "backend": ran, "backend_asked": backend, "device": device,
-                     "jax_cpu_threads": threads,
+                     "wall_s": wall, "backend": ran, "backend_asked": backend,
+                     "backend_why": why, "device": device,
+                     **jax_cpu,
                      "executor": _executors.describe_executor(executor),
                      "interrupted": interrupted,
                      "tracebacks": {i: o.trace for i, o in enumerate(outcomes) if o.trace},
@@ -163,7 +165,7 @@ def _check_backend(backend, base, device) -> None:
                               f"or backend='mjx'; "
                               f"backend='process' flies on this machine's CPU cores")
         return
-    _batched.check(base)
+    _batched.check(base, backend)
     why = _batched.free_flight_unsupported(base) if backend == "jax" else None
     if why is not None:
         raise ConfigError(f"sweep: backend='jax' cannot fly this drone ({why}); allowed: "
@@ -174,15 +176,25 @@ def choose_backend(base, n_variants: int, device=None) -> str:
     """``backend="auto"``: "jax" (the free-flight batch) for a mission the batched path
     flies, with JAX installed, of at least ``AUTO_MIN_VARIANTS`` variants or with a
     ``device``; "mjx" there if the free-flight body cannot fly the drone; else "process"."""
+    return backend_choice(base, n_variants, device)[0]
+
+
+def backend_choice(base, n_variants: int, device=None) -> tuple[str, str]:
+    """``choose_backend``'s backend and why (``df.attrs["backend_why"]``): a batched
+    backend never flies a mission it would change (a policy, a task: its refusal is the
+    reason given for "process")."""
     if device is None and n_variants < AUTO_MIN_VARIANTS:
-        return "process"
+        return "process", f"{n_variants} variants, fewer than {AUTO_MIN_VARIANTS} to batch"
     if importlib.util.find_spec("jax") is None or importlib.util.find_spec("mujoco.mjx") is None:
-        return "process"
+        return "process", "JAX or MJX is not installed"
     try:
         _batched.check(base)
-    except ConfigError:
-        return "process"
-    return "jax" if _batched.free_flight_unsupported(base) is None else "mjx"
+    except ConfigError as exc:
+        return "process", str(exc)
+    why = _batched.free_flight_unsupported(base)
+    if why is None:
+        return "jax", f"{n_variants} variants the free-flight batch flies"
+    return "mjx", f"the free-flight body cannot fly this drone ({why})"
 
 
 def _fly_batched(base, plan, device, physics="mjx") -> list[dict]:
@@ -190,17 +202,17 @@ def _fly_batched(base, plan, device, physics="mjx") -> list[dict]:
     return _fly_batched_here(base, plan, device, physics)[0]
 
 
-def _fly_batched_here(base, plan, device, physics="mjx") -> tuple[list[dict], str]:
+def _fly_batched_here(base, plan, device, physics="mjx") -> tuple[list[dict], dict]:
     """The variants in one JAX batch (the backend's modules import JAX: loaded here), and
-    the XLA CPU threads it ran on (``batched/cpu_threads.py``); ``physics``: the batched
-    backend ("jax": the free-flight body, "mjx")."""
+    the XLA CPU threads and shards it ran on (``batched/cpu_threads.py``, ``shards.py``);
+    ``physics``: the batched backend ("jax": the free-flight body, "mjx")."""
     try:
         from .batched import engine
     except ImportError as exc:
         raise ConfigError(f"sweep: backend={physics!r} needs JAX and MJX ({exc}); install them "
                           f"with pip install 'pytest-flockai[mjx]', or use backend='process'") from None
     rows = engine.fly(base, plan, device, physics)
-    return rows, engine.LAST_TIMINGS["jax_cpu_threads"]
+    return rows, {k: engine.LAST_TIMINGS[k] for k in ("jax_cpu_threads", "jax_cpu_shards")}
 
 
 def _check_batch_size(batch_size) -> None:

@@ -26,6 +26,7 @@ import os
 import jax
 
 from ...errors import ConfigError
+from . import shards
 
 try:                                        # JAX's own query, not in its public API
     from jax._src import xla_bridge as _xla_bridge
@@ -76,18 +77,29 @@ def start(device: str | None) -> str:
     if _STATE["mode"] is not None:
         return _STATE["mode"]
     want = wanted()
-    if _initialized():
-        mode = "as started before"
-    elif want == "all" or device not in (None, "cpu") or not hasattr(os, "sched_setaffinity"):
-        jax.devices()
-        mode = "all CPUs"
-    else:
-        cpus = os.sched_getaffinity(0)
-        try:
-            os.sched_setaffinity(0, {min(cpus)})
-            jax.devices()
-        finally:
-            _restore(cpus)
-        mode = "1 thread"
+    flags = os.environ.get("XLA_FLAGS")
+    try:
+        mode = _start(want, device)
+    finally:                                # the host devices were for this client only
+        if flags is None:
+            os.environ.pop("XLA_FLAGS", None)
+        else:
+            os.environ["XLA_FLAGS"] = flags
     _STATE["mode"] = mode
     return mode
+
+
+def _start(want: str, device: str | None) -> str:
+    if _initialized():
+        return "as started before"
+    shards.prepare(device)                  # the host devices the shards run on
+    if want == "all" or device not in (None, "cpu") or not hasattr(os, "sched_setaffinity"):
+        jax.devices()
+        return "all CPUs"
+    cpus = os.sched_getaffinity(0)
+    try:
+        os.sched_setaffinity(0, {min(cpus)})
+        jax.devices()
+    finally:
+        _restore(cpus)
+    return "1 thread"

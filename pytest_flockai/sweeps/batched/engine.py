@@ -30,8 +30,7 @@ from mujoco import mjx
 
 from ...control.stages import DONE, TAKEOFF
 from ...errors import FlockAIError
-from .. import axes as _axes
-from . import compile_cache, cpu_threads, setup
+from . import compile_cache, cpu_threads, setup, shards
 from . import control as C
 from . import energy as E
 from . import params as P
@@ -40,8 +39,10 @@ from . import rows as _rows
 
 #: s of simulated time per compiled chunk (the host checks for the end between chunks)
 CHUNK_S = 2.0
-#: XLA options of the chunk (see README: compile time against run time)
-COMPILER_OPTIONS: dict = {}
+#: XLA options of the chunk: XLA's CPU fusion emitters generate code that depends on the
+#: batch's size (an element can round differently in a batch of 16 and one of 32), which
+#: would make the rows depend on the shard count (``shards.py``); the classic emitters do not
+COMPILER_OPTIONS: dict = {"xla_cpu_use_fusion_emitters": False}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
 #: wall (and CPU) seconds of the last ``fly`` in this process: the variants' numbers and
 #: models (``variants_s``) and the batches (``batch_s``: states, compile or load, chunks);
@@ -52,7 +53,9 @@ LAST_TIMINGS: dict = {}
 def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx") -> list[dict]:
     """One row dict per variant, in the plan's order (as ``runner._fly``); ``physics``:
     "mjx" (MJX's ``mjx.step``) or "jax" (``rigid.step``, the free-flight body)."""
+    shards.wanted()                         # a bad $FLOCKAI_JAX_CPU_SHARDS: before anything
     threads = cpu_threads.start(device)     # first: before anything starts JAX's client
+    n_shards = shards.count(device)
     t0, c0 = time.perf_counter(), time.process_time()
     rows: list[dict | None] = [None] * len(plan)
     groups: dict = {}
@@ -65,15 +68,18 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
         if collect:
             gc.enable()
     groups, compiled = setup.checked(groups)
-    dev = jax.devices(device)[0] if device else jax.devices()[0]
+    devs = (jax.devices("cpu")[:n_shards] if n_shards > 1
+            else [jax.devices(device)[0] if device else jax.devices()[0]])
     compile_cache.enable()
     LAST_TIMINGS.update(variants_s=time.perf_counter() - t0, batch_s=0.0,
                         variants_cpu_s=time.process_time() - c0, batch_cpu_s=0.0,
-                        compiled=compiled, jax_cpu_threads=threads)
+                        compiled=compiled, jax_cpu_threads=threads, jax_cpu_shards=1)
     with jax.enable_x64(True):
         for key, members in groups.items():
             t1, c1 = time.perf_counter(), time.process_time()
-            out = _fly_group(key, members, dev, physics)
+            k = max(1, min(n_shards, len(members)))
+            LAST_TIMINGS["jax_cpu_shards"] = max(LAST_TIMINGS["jax_cpu_shards"], k)
+            out = _fly_group(key, members, devs[:k], physics)
             LAST_TIMINGS["batch_s"] += time.perf_counter() - t1
             LAST_TIMINGS["batch_cpu_s"] += time.process_time() - c1
             for (i, _, _, _), row in zip(members, out):
@@ -90,21 +96,23 @@ def bucket(n: int) -> int:
     return max(8, 1 << (n - 1).bit_length())
 
 
-def _fly_group(key, members, dev, physics) -> list[dict]:
+def _fly_group(key, members, devs, physics) -> list[dict]:
+    """One group's rows: its variants split in order over the devices ``devs`` (the
+    shards, ``shards.py``: one bucket each, padded at the end by repeating the last
+    variant), each shard's chunks dispatched before any is waited for, so the shards run
+    at once, one XLA thread each."""
     nsub, _, ctrl_dt, book_dt, _, (kinds, tops), pkind = key[:7]
     real = len(members)
-    members = members + [members[-1]] * (bucket(real) - real)
+    size = bucket(-(-real // len(devs)))
+    members = members + [members[-1]] * (-(-real // size) * size - real)
     nums = [num for _, _, num, _ in members]
-    p_np = setup.stack(nums, to_jax=False)
-    p = jax.device_put(jax.tree_util.tree_map(jnp.asarray, p_np), dev)  # committed, like
-    # the chunk's outputs: uncommitted inputs would compile the chunk a second time
     if physics == "mjx":
-        leaves, diff, treedef = setup.models([mdl for *_, mdl in members], dev)
-        idx, dvals = tuple(sorted(diff)), tuple(diff[j] for j in sorted(diff))
+        leaves, diff, treedef = setup.models([mdl for *_, mdl in members], devs[0])
+        idx, dvals = tuple(sorted(diff)), tuple(np.asarray(diff[j]) for j in sorted(diff))
         nu = members[0][3].nu
     else:
         leaves, idx, treedef = (), None, None
-        dvals = setup.stack([mdl.rigid for *_, mdl in members])
+        dvals = setup.stack([mdl.rigid for *_, mdl in members], to_jax=False)
         nu = len(members[0][3].rigid.tau)
     samplers = []
     w_g = np.zeros((len(members), 3))
@@ -114,12 +122,18 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
             smp = m.wind.sampler(P.wind_rng(m), ctrl_dt)
             w_g[b] = np.asarray(smp.g, dtype=float)
         samplers.append(smp)
-    s = jax.device_put(jax.tree_util.tree_map(
-        jnp.asarray, setup.init_states(p_np, setup.data(members, dev, physics), w_g, nu)), dev)
+    cpu = devs[0].platform == "cpu"
+    step = _chunk_fn(idx, treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt, kinds, pkind, cpu)
+    parts = []
+    for j in range(len(members) // size):
+        sl, dev = slice(j * size, (j + 1) * size), devs[j]
+        put = functools.partial(jax.device_put, device=dev)  # committed, like the chunk's
+        # outputs: uncommitted inputs would compile the chunk a second time
+        p_np = setup.stack(nums[sl], to_jax=False)
+        s = setup.init_states(p_np, setup.data(members[sl], dev, physics), w_g[sl], nu)
+        parts.append([sl, dev, put(tuple(leaves)), put(setup.to_jax(setup.take(dvals, sl))),
+                      put(setup.to_jax(p_np)), put(setup.to_jax(s)), False])
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
-    step = _chunk_fn(idx, treedef, nsub, ctrl_dt, book_dt, book_dt == ctrl_dt, kinds, pkind)
-    dvals = jax.device_put(dvals, dev)
-    shared = jax.device_put(tuple(leaves), dev)
     t_end = max(num.mission.t_end for num in nums)
     t = 0.0
     while True:
@@ -127,16 +141,23 @@ def _fly_group(key, members, dev, physics) -> list[dict]:
         for b, smp in enumerate(samplers):
             if smp is not None:
                 noise[:, b, :] = smp.rng.standard_normal(3 * chunk_ticks).reshape(chunk_ticks, 3)
-        s = step(shared, dvals, p, s, jax.device_put(noise, dev))
+        live = [part for part in parts if not part[6]]   # a shard whose variants all ended
+        for part in live:                   # keeps its state; dispatched: they run at once
+            sl, dev, shared, dv, p, s, _ = part
+            part[5] = step(shared, dv, p, s, jax.device_put(noise[:, sl], dev))
         t += chunk_ticks * ctrl_dt
-        if bool(jnp.all(s["end"] != 0)) or t > t_end + 2 * CHUNK_S:
+        for part in live:
+            part[6] = bool(jnp.all(part[5]["end"] != 0))
+        if all(part[6] for part in parts) or t > t_end + 2 * CHUNK_S:
             break
-    s = _finish_fn(kinds)(p, s)
-    return _rows.rows(jax.device_get(s), nums[:real], tops, book_dt)
+    out = [_finish_fn(kinds, cpu)(part[4], part[5]) for part in parts]
+    host = jax.device_get(out)
+    s = jax.tree_util.tree_map(lambda *xs: np.concatenate(xs), *host) if len(host) > 1 else host[0]
+    return _rows.rows(s, nums[:real], tops, book_dt)
 
 
 @functools.lru_cache(maxsize=16)
-def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkind):
+def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkind, cpu=True):
     """The compiled chunk of one batch structure (cached: a second sweep of the same
     structure does not compile again). One tick is vmapped in parts; the clocked parts
     (energy, and the book when it is slower than the tick) run under a ``lax.cond`` on
@@ -178,21 +199,23 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
 
     def run(shared, dvals, p, s, noise):
         return jax.lax.scan(lambda st, n: (tick(shared, dvals, p, st, n), None), s, noise)[0]
-    return jax.jit(run, compiler_options=COMPILER_OPTIONS)
+    return jax.jit(run, compiler_options=COMPILER_OPTIONS if cpu else {})
 
 
 @functools.lru_cache(maxsize=16)
-def _finish_fn(kinds):
+def _finish_fn(kinds, cpu=True):
     """``_finish`` on the batch, compiled (op by op it costs ~0.1 s of dispatch)."""
-    return jax.jit(jax.vmap(lambda p1, s1: _finish(p1, s1, kinds)))
+    return jax.jit(jax.vmap(lambda p1, s1: _finish(p1, s1, kinds)),
+                   compiler_options=COMPILER_OPTIONS if cpu else {})
 
 
 def _variants(base, plan, physics, rows, groups) -> None:
-    """Each variant's (key, numbers, model) into ``groups`` by key, or its error row."""
+    """Each variant's (key, numbers, model) into ``groups`` by key, or its error row
+    (reused from an earlier call on the same base mission: ``setup.built``)."""
+    built = setup.built(base, physics)
     for i, values in enumerate(plan):
         try:
-            m, fp = _axes.resolved(base, values, share=True)     # read only: never flown
-            key, num, model = P.variant(m, fp, physics)
+            m, key, num, model = built(values)
         except FlockAIError as exc:
             rows[i] = {**values, "end_reason": "error", "error": f"{type(exc).__name__}: {exc}",
                        "sim_time_s": math.nan}
@@ -255,7 +278,7 @@ def _pre(p, s, landed, yaw_cs, ctrl_dt):
     mixer: ``_mix``), heartbeats: (state, wrench)."""
     d = s["d"]
     t, q, v = d.time, d.qpos, d.qvel
-    speed = jnp.sqrt(jnp.sum(v[:3] * v[:3]))
+    speed = jnp.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])   # the core's order, on any shard
     w, integ = C.wrench(p.ctrl, s["integ"], q, v, s["sp"], ctrl_dt, yaw_cs)
     off = s["stage"] == DONE
     s = {**s, "speed": speed, "integ": jnp.where(off, s["integ"], integ),
@@ -325,9 +348,13 @@ def _physics(m, p, s, d, ctrl, nsub):
         def free(_, dd):
             f = E.drag(p.aero, dd.qpos[3:7], dd.qvel[:3], s["w"])
             return R.step(m, dd, ctrl, jnp.concatenate([f + hf, hm]))
+        touched = jnp.zeros((), bool)
         for k in range(nsub):                 # unrolled: XLA fuses across the substeps
             d = free(k, d)
-        return _crash(s, d, R.up_z(d) < 0.0)
+            touched = touched | d.contact
+        # a touch in any substep counts (MuJoCo's soft contact lasts a few ms, the hard
+        # floor's only the substep that stops the fall: the next one may lift off it)
+        return _crash(s, d._replace(contact=touched), R.up_z(d) < 0.0)
     d = d.replace(ctrl=ctrl)
 
     def sub(_, dd):

@@ -39,37 +39,44 @@ ENERGY_KINDS = (Motors, Constant, SoC, RadioLinear, RadioStates, HoverPower)
 END_REASONS = (None, "landed", "battery_depleted", "time", "time_cap", "crashed", "diverged")
 
 
-def _refuse(what: str, value, why: str) -> ConfigError:
-    return ConfigError(f"sweep: backend='mjx' cannot fly {what} = {value!r} ({why}); it flies "
-                       f"Hover, Waypoints and ZigZag missions without tasks, worlds or user "
-                       f"components; allowed here: backend='process' (per flight)")
+def _refuse(what: str, value, why: str, backend: str = "jax") -> ConfigError:
+    return ConfigError(f"sweep: backend={backend!r} cannot fly {what} = {value!r} ({why}); it "
+                       f"flies Hover, Waypoints and ZigZag missions without tasks, policies, "
+                       f"worlds or user components; allowed here: backend='process' (per "
+                       f"flight) or 'auto' (chooses it)")
 
 
-def check(m) -> None:
-    """ConfigError naming the first part of mission ``m`` the batched path does not fly."""
+def check(m, backend: str = "jax") -> None:
+    """ConfigError naming the first part of mission ``m`` the batched path (``backend``:
+    "jax" or "mjx", named in the message) does not fly: the batch never flies a mission
+    other than the one asked (a policy ignored would change the verdict)."""
     if m.tasks:
-        raise ConfigError(f"sweep: backend='mjx' cannot fly tasks = "
-                          f"{[getattr(t, 'name', t) for t in m.tasks]!r} (camera and ML tasks "
-                          f"stay per flight); allowed with tasks: backend='process'")
+        raise _refuse("tasks", [getattr(t, "name", t) for t in m.tasks],
+                      "camera and ML tasks stay per flight", backend)
+    if getattr(m, "policies", ()):
+        raise _refuse("policies", [getattr(p, "name", p) for p in m.policies],
+                      "a policy decides in Python during the flight", backend)
+    if getattr(m, "actors", ()):
+        raise _refuse("actors", len(m.actors), "moving people and cars stay per flight", backend)
     if type(m.pilot) not in PILOTS:
-        raise _refuse("pilot", m.pilot, f"{type(m.pilot).__name__} has no batched version")
+        raise _refuse("pilot", m.pilot, f"{type(m.pilot).__name__} has no batched version", backend)
     if m.world is not None:
-        raise _refuse("world", m.world, "scenery stays per flight")
+        raise _refuse("world", m.world, "scenery stays per flight", backend)
     if m.fly_on != "truth":
-        raise _refuse("fly_on", m.fly_on, "the navigation estimate reads simulated sensors")
+        raise _refuse("fly_on", m.fly_on, "the navigation estimate reads simulated sensors", backend)
     if m.components:
-        raise _refuse("components", m.components, "user components run Python every tick")
+        raise _refuse("components", m.components, "user components run Python every tick", backend)
     custom = [p.name for p in m.probes if not getattr(p, "builtin", False)]
     if custom:
-        raise _refuse("probes", custom, "user probes run Python on the flight")
+        raise _refuse("probes", custom, "user probes run Python on the flight", backend)
     if m.dataset_dir is not None:
-        raise _refuse("dataset_dir", str(m.dataset_dir), "recording a dataset renders frames")
+        raise _refuse("dataset_dir", str(m.dataset_dir), "recording a dataset renders frames", backend)
     if m.max_wall_s is not None:
-        raise _refuse("max_wall_s", m.max_wall_s, "a per-flight host-time guard")
+        raise _refuse("max_wall_s", m.max_wall_s, "a per-flight host-time guard", backend)
     for path, comp in parts.energy_model(resolve(m)).leaves():
         if type(comp) not in ENERGY_KINDS:
             raise _refuse(f"energy component {path!r}", comp, "a user energy component has no "
-                          "batched version")
+                          "batched version", backend)
 
 
 class EnergyLeaves(NamedTuple):

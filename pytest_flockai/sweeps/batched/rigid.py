@@ -85,9 +85,17 @@ def step(m: RigidModel, d: RigidData, ctrl, xfrc) -> RigidData:
     return ground(m, RigidData(d.time + m.dt, jnp.concatenate([pos, quat]), v, act, d.contact))
 
 
+#: sliding friction of the drone's box on the ground: MuJoCo takes the larger of the two
+#: geoms' (the floor's 1.0 in ``airframe/model.py``, the box's MuJoCo default 1.0)
+MU_GROUND = 1.0
+
+
 def ground(m: RigidModel, d: RigidData) -> RigidData:
     """The collision box against the plane z = 0: a corner below it is pushed back up,
-    the downward velocity removed; resting on it, the body does not slide or turn."""
+    the downward velocity removed; resting on it, the body does not turn, and slides
+    with Coulomb friction: the horizontal velocity loses at most ``MU_GROUND`` times the
+    vertical velocity the ground took away (a drone pushed along the pad by strong wind
+    as it spools up slides, as on MuJoCo's contact)."""
     q, v = d.qpos, d.qvel
     w, x, y, z = q[3], q[4], q[5], q[6]
     r2 = jnp.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])  # R[2]
@@ -95,7 +103,12 @@ def ground(m: RigidModel, d: RigidData) -> RigidData:
     touch = low <= 0.0
     rest = touch & (v[2] <= 0.0)
     z = jnp.where(touch, q[2] - low, q[2])
-    v = jnp.where(rest, jnp.zeros(6), v)
+    vxy = v[:2]
+    sp = jnp.sqrt(jnp.sum(vxy * vxy))
+    keep = jnp.where(sp > 0.0, jnp.maximum(0.0, 1.0 - MU_GROUND * -v[2] / jnp.where(
+        sp > 0.0, sp, 1.0)), 0.0)
+    slid = jnp.concatenate([vxy * keep, jnp.zeros(4)])
+    v = jnp.where(rest, slid, v)
     return RigidData(d.time, q.at[2].set(z), v, d.act, touch)
 
 

@@ -5,6 +5,7 @@ on the device)."""
 from __future__ import annotations
 
 import math
+import pickle
 
 import jax
 import jax.numpy as jnp
@@ -14,6 +15,8 @@ from mujoco import mjx
 
 from ...control.stages import TAKEOFF
 from ...errors import FlockAIError
+from ...mission.plan import resolve
+from .. import axes as _axes
 from . import params as P
 from . import rigid as R
 
@@ -35,8 +38,11 @@ def checked(groups: dict) -> tuple[dict, int]:
             out.setdefault(key, []).extend(members)
             continue
         picks = sorted(set(np.linspace(0, len(members) - 1, CHECKED).round().astype(int)))
-        compiled += len(picks)
-        same = [R.same_body(members[j][3], P.compiled_body(members[j][1])) for j in picks]
+        same = []
+        for j in picks:
+            body, new = compiled_body(members[j][1])
+            compiled += new
+            same.append(R.same_body(members[j][3], body))
         if all(same):
             out.setdefault(key, []).extend(members)
             continue
@@ -47,6 +53,56 @@ def checked(groups: dict) -> tuple[dict, int]:
     return out, compiled
 
 
+#: the compiled free bodies of the blueprints checked so far in this process, by what
+#: MuJoCo's compile reads (the drone's blueprint, the physics step, the air density): a
+#: later sweep of the same drones checks against them without compiling again
+_COMPILED: dict = {}
+_COMPILED_MAX = 4096
+
+
+def compiled_body(m) -> tuple:
+    """(the ``FreeBody`` of mission ``m``'s compiled MuJoCo model, 1 if compiled now, 0 if
+    this process compiled the same blueprint before)."""
+    plan = resolve(m)
+    key = (repr(plan.drone.to_dict()), plan.physics_dt, plan.atmosphere.density)
+    body = _COMPILED.get(key)
+    if body is not None:
+        return body, 0
+    if len(_COMPILED) >= _COMPILED_MAX:
+        _COMPILED.clear()
+    body = _COMPILED[key] = P.compiled_body(m)
+    return body, 1
+
+
+#: variants built by earlier sweeps in this process, by (the base mission's pickle, the
+#: physics, the variant's values): a repeated sweep builds none again
+_BUILT: dict = {}
+_BUILT_MAX = 8192
+
+
+def built(base, physics: str):
+    """``values -> (mission, key, numbers, model)`` of the variants of ``base`` (read-only
+    copies: never flown), reusing what an earlier call built for a base mission with the
+    same pickle (any change to the base, its drone or its pilot is a new pickle)."""
+    try:
+        base_key = (pickle.dumps(base, protocol=pickle.HIGHEST_PROTOCOL), physics)
+    except (pickle.PicklingError, TypeError, AttributeError):   # not picklable: no reuse
+        base_key = None
+
+    def one(values):
+        key = None if base_key is None else (base_key, repr(sorted(values.items())))
+        out = _BUILT.get(key) if key is not None else None
+        if out is None:
+            m, fp = _axes.resolved(base, values, share=True)     # read only: never flown
+            out = (m, *P.variant(m, fp, physics))
+            if key is not None:
+                if len(_BUILT) >= _BUILT_MAX:
+                    _BUILT.clear()
+                _BUILT[key] = out
+        return out
+    return one
+
+
 def stack(items, to_jax: bool = True):
     """The variants' pytrees (``VariantParams``, states) stacked leaf by leaf into one
     pytree of batched arrays (numpy first: strongly typed, so the scan's output has the
@@ -55,6 +111,16 @@ def stack(items, to_jax: bool = True):
     cols = zip(*[jax.tree_util.tree_leaves(x) for x in items])
     out = [np.asarray(c) if np.ndim(c[0]) == 0 else np.stack(c) for c in cols]
     return jax.tree_util.tree_unflatten(treedef, [jnp.asarray(x) for x in out] if to_jax else out)
+
+
+def to_jax(tree):
+    """Numpy leaves as JAX arrays (the types the chunk's outputs have)."""
+    return jax.tree_util.tree_map(jnp.asarray, tree)
+
+
+def take(tree, sl):
+    """The variants ``sl`` of a batched (numpy) pytree (a shard's)."""
+    return jax.tree_util.tree_map(lambda x: x[sl], tree)
 
 
 def models(models, dev):
