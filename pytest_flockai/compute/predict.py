@@ -61,6 +61,44 @@ PRIOR_TARGET = {
 }
 
 
+#: runtimes whose dense 3x3 stride-1 convolutions run as Winograd F(m x m, 3 x 3) kernels,
+#: which need fewer multiplications than the direct MAC count: ncnn on Arm CPUs and on Vulkan
+#: GPUs (its ``convolution_3x3_winograd`` kernels, chosen for 3x3 s1 with >= 8 input channels
+#: by default: ``Option::use_winograd_convolution``) and TensorRT (cuDNN's / TensorRT's
+#: Winograd tactics for 3x3 s1).
+WINOGRAD = frozenset(("ncnn/cpu",))
+#: untuned prior of the effective speed-up of a Winograd convolution over the direct one:
+#: F(2x2, 3x3) cuts the multiplications 2.25x (Lavin and Gray, "Fast Algorithms for
+#: Convolutional Neural Networks", CVPR 2016, section 4); larger tiles cut more (F(4x4, 3x3):
+#: 4x) but pay for transforms. The tuned figure lies in [1, 4].
+PRIOR_WINOGRAD = 2.25
+
+
+#: sustained (STREAM) bandwidth as a fraction of the DRAM wire rate where a board has no
+#: published STREAM figure: Texas Instruments measure 67-79 % on (LP)DDR4 Arm SoCs (app notes
+#: SPRACV1B, AM64x "STREAM" table: 67-79 %; SPRAD45A, AM62x: 74-78 %); 0.73, their middle.
+STREAM_OF_PEAK = 0.73
+
+
+def stream_gbs(dev: Device) -> float:
+    """The board's sustained memory bandwidth, GB/s: its measured STREAM figure where one is
+    published (``memory_bandwidth_stream_gbs`` in computers.toml), else ``STREAM_OF_PEAK`` of
+    the DRAM peak."""
+    s = float(getattr(dev, "stream_gbs", 0.0) or 0.0)
+    return s if s > 0 else STREAM_OF_PEAK * dev.bandwidth_gbs
+
+
+def winograd_3x3(n) -> bool:
+    """Whether a node is a dense 3x3 stride-1 convolution with >= 8 input channels, read from
+    its counts alone: MACs = out x Cin x k^2 and, at stride 1, the input's spatial size is the
+    output's (MACs / weights), so k^2 = (MACs / out) / (in / (MACs / weights))."""
+    if n.kind != "conv" or not (n.macs and n.weight_elems and n.in_elems and n.out_elems):
+        return False
+    spatial = n.macs / n.weight_elems
+    cin = n.in_elems / spatial
+    return cin >= 8 and 7.0 <= (n.macs / n.out_elems) / cin <= 11.0
+
+
 #: held-out rows a (computer, runtime) needs for its own band (else its target's band)
 MIN_BAND_ROWS = 4
 
@@ -131,14 +169,17 @@ def params_for(table: dict, dep: _rt.Deployment) -> dict:
     d = table.get("dispatch", {}).get(f"{dep.runtime}/{dep.target}")
     if d is not None:
         tgt["dispatch_s"] = tgt["dispatch_s"] * float(d["factor"])
-    return {**tgt, "scale": scale, "tuned": g is not None}
+    wino = 1.0
+    if f"{dep.runtime}/{dep.target}" in WINOGRAD:
+        wino = float(table.get("winograd", {}).get("factor", PRIOR_WINOGRAD))
+    return {**tgt, "scale": scale, "winograd": wino, "tuned": g is not None}
 
 
 def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
     """(seconds, per-node timings) of a network cost on a deployment with efficiencies."""
     unit = dev.unit(dep.target)
     peak = _rt.peak_macs(dep, unit)
-    bw = dev.bandwidth_gbs * 1e9 * prm["mem"]
+    bw = stream_gbs(dev) * 1e9 * prm["mem"]
     nbytes = _rt.compute_precision(dep, unit)[1]
     clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
     dispatch = prm["dispatch_s"] / clock
@@ -149,6 +190,8 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
         eff = min(1.0, prm[n.kind] * (prm["scale"] if n.kind in ("conv", "dwconv", "matmul")
                                       else 1.0))
         tc = n.macs / (peak * eff) if n.macs else 0.0
+        if prm.get("winograd", 1.0) != 1.0 and winograd_3x3(n):
+            tc /= prm["winograd"]
         tm = (n.weight_elems + n.in_elems + n.out_elems) * nbytes / bw if bw > 0 else 0.0
         t = max(tc, tm) + dispatch
         total += t
@@ -248,5 +291,6 @@ def _measured(model, dev) -> LatencyPrediction:
                              math.nan)
 
 
-__all__ = ["EFFICIENCIES", "KINDS", "LatencyFallbackWarning", "LatencyPrediction",
+__all__ = ["EFFICIENCIES", "KINDS", "PRIOR_WINOGRAD", "STREAM_OF_PEAK", "WINOGRAD",
+           "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
            "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]
