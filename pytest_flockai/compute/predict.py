@@ -33,7 +33,7 @@ import json
 import math
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -97,6 +97,36 @@ def winograd_3x3(n) -> bool:
     spatial = n.macs / n.weight_elems
     cin = n.in_elems / spatial
     return cin >= 8 and 7.0 <= (n.macs / n.out_elems) / cin <= 11.0
+
+
+#: runtimes that fuse a gated activation ``x * gate(x)`` into the convolution before it, by
+#: gate. TensorRT fuses point-wise chains into the convolution's epilogue (TensorRT developer
+#: guide, "Layer fusion": PointWise fusion) and OpenVINO's CPU plugin fuses Swish and
+#: HSwish as post-ops; ncnn's Convolution fuses hard-swish (``activation_type`` 6) but has no
+#: Swish activation, so SiLU runs as its own Swish layer (ncnn ``src/layer/convolution``,
+#: ``fuse_convolution_activation`` in ``tools/ncnnoptimize``); ONNX Runtime's FusedConv takes
+#: Relu / Sigmoid / Tanh / LeakyRelu / Clip / HardSigmoid, never the Mul after them; TFLite
+#: runs LOGISTIC / HARD_SWISH and MUL as their own ops; eager PyTorch runs SiLU as one op.
+#: Any other runtime/gate pair: one separate element-wise pass (read x, write x * gate(x)).
+GATE_FUSED = {"tensorrt": ("Sigmoid", "HardSigmoid"), "openvino": ("Sigmoid", "HardSigmoid"),
+              "edgetpu": ("Sigmoid", "HardSigmoid"), "ncnn": ("HardSigmoid",)}
+
+
+def dispatched(nodes, runtime: str) -> list:
+    """The nodes a runtime runs: the unfused ones, plus, where the runtime does not fuse a
+    gated activation (``GATE_FUSED``), that activation's Mul as one element-wise pass over
+    its output (one read, one write, one op per element)."""
+    gates = {n.fused_into: n.op_type for n in nodes
+             if n.fused_into and n.op_type in ("Sigmoid", "HardSigmoid")}
+    fused = GATE_FUSED.get(runtime, ())
+    out = []
+    for n in nodes:
+        if not n.fused_into:
+            out.append(n)
+        elif (n.op_type == "Mul" and n.fused_into in gates
+              and gates[n.fused_into] not in fused):
+            out.append(replace(n, in_elems=n.out_elems, macs=n.out_elems, fused_into=None))
+    return out
 
 
 #: held-out rows a (computer, runtime) needs for its own band (else its target's band)
@@ -184,9 +214,7 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
     clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
     dispatch = prm["dispatch_s"] / clock
     total, per = prm["overhead_s"] / clock, []
-    for n in cost.nodes:
-        if getattr(n, "fused_into", None):
-            continue
+    for n in dispatched(cost.nodes, dep.runtime):
         eff = min(1.0, prm[n.kind] * (prm["scale"] if n.kind in ("conv", "dwconv", "matmul")
                                       else 1.0))
         tc = n.macs / (peak * eff) if n.macs else 0.0
@@ -291,6 +319,6 @@ def _measured(model, dev) -> LatencyPrediction:
                              math.nan)
 
 
-__all__ = ["EFFICIENCIES", "KINDS", "PRIOR_WINOGRAD", "STREAM_OF_PEAK", "WINOGRAD",
+__all__ = ["EFFICIENCIES", "KINDS", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
            "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
            "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]

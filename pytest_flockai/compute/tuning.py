@@ -35,7 +35,7 @@ from scipy.optimize import least_squares
 
 from . import runtimes as _rt
 from .devices import DEVICES
-from .predict import PRIOR_TARGET, PRIOR_WINOGRAD, WINOGRAD, stream_gbs, winograd_3x3
+from .predict import PRIOR_TARGET, dispatched, PRIOR_WINOGRAD, WINOGRAD, stream_gbs, winograd_3x3
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "dispatch_s", "overhead_s")
@@ -51,7 +51,7 @@ class _Compiled:
         dev = DEVICES[row.computer]
         dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
         unit = dev.unit(dep.target)
-        nodes = [n for n in row.cost.nodes if not getattr(n, "fused_into", None)]
+        nodes = dispatched(row.cost.nodes, dep.runtime)
         self.target, self.group = dep.target, dep.key
         self.rt = f"{dep.runtime}/{dep.target}"
         self.peak = _rt.peak_macs(dep, unit)
