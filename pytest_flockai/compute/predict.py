@@ -49,15 +49,17 @@ from .measured import is_measured
 EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
 KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
 #: untuned priors (used where the tuning file has no figure): dense convolution runs at a
-#: fraction of peak, depthwise far below it (low arithmetic intensity); memory at ~half
-#: the DRAM peak; a few microseconds per kernel dispatch at 1 GHz.
+#: fraction of peak, depthwise far below it (low arithmetic intensity); memory (``mem``) as
+#: a fraction of the sustained STREAM bandwidth (``stream_gbs``), set so that the prior
+#: keeps its earlier value as a fraction of the DRAM peak (0.4 / 0.73, 0.5 / 0.73,
+#: 0.3 / 0.73); a few microseconds per kernel dispatch at 1 GHz.
 PRIOR_TARGET = {
     "cpu": {"conv": 0.5, "dwconv": 0.15, "matmul": 0.5, "elementwise": 0.25, "pool": 0.25,
-            "data": 0.25, "mem": 0.4, "dispatch_s": 20e-6, "overhead_s": 1e-3},
+            "data": 0.25, "mem": 0.55, "dispatch_s": 20e-6, "overhead_s": 1e-3},
     "gpu": {"conv": 0.4, "dwconv": 0.05, "matmul": 0.4, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.5, "dispatch_s": 10e-6, "overhead_s": 1e-3},
+            "data": 0.1, "mem": 0.68, "dispatch_s": 10e-6, "overhead_s": 1e-3},
     "npu": {"conv": 0.5, "dwconv": 0.2, "matmul": 0.3, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.3, "dispatch_s": 5e-6, "overhead_s": 2e-3},
+            "data": 0.1, "mem": 0.41, "dispatch_s": 5e-6, "overhead_s": 2e-3},
 }
 
 

@@ -35,7 +35,7 @@ from scipy.optimize import least_squares
 
 from . import runtimes as _rt
 from .devices import DEVICES
-from .predict import PRIOR_TARGET, dispatched, PRIOR_WINOGRAD, WINOGRAD, stream_gbs, winograd_3x3
+from .predict import PRIOR_TARGET, PRIOR_WINOGRAD, WINOGRAD, dispatched, stream_gbs, winograd_3x3
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "dispatch_s", "overhead_s")
