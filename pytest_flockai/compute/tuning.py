@@ -13,6 +13,8 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
    - per runtime/target/precision with tuning rows: one scale of the compute efficiency;
    - per runtime/target with tuning rows: one factor on the dispatch cost (how much a
      runtime fuses and how cheaply it launches: TensorRT against eager PyTorch).
+   - one shared Winograd speed-up of dense 3x3 stride-1 convolutions for the runtimes in
+     ``predict.WINOGRAD`` (prior 2.25, bounds 1-4).
 
    Nothing is per network, per computer or per row. A runtime/target/precision without
    tuning rows takes the median scale of the same runtime and target at other precisions,
