@@ -8,9 +8,13 @@ roofline: the slower of
 
 - compute: ``macs / (peak[precision] * eff[target][kind] * scale[runtime/target/precision])``
   (``kind``: conv, dwconv, matmul, elementwise, pool, data), and
-- memory: ``bytes / (bandwidth * mem[target])``, bytes = (weights + inputs + outputs) x the
-  precision's element size,
+- memory: ``bytes / (stream_gbs * mem[target])``, bytes = (weights + inputs + outputs) x the
+  precision's element size, ``stream_gbs`` the board's measured STREAM bandwidth where
+  published, else ``STREAM_OF_PEAK`` of the DRAM peak,
 
+with dense 3x3 stride-1 convolutions' compute divided by a tuned Winograd speed-up on the
+runtimes of ``WINOGRAD``, and a gated activation (SiLU, hard-swish) its own element-wise
+pass where the runtime does not fuse it (``GATE_FUSED``, ``dispatched``);
 plus a dispatch cost per unfused node (``dispatch_s[target]`` at 1 GHz times a factor per
 runtime/target, scaled by the unit's clock), plus a per-inference overhead. The efficiencies (``eff``, ``mem``,
 ``scale``, ``dispatch_s``, ``overhead_s``) are read from ``data/latency_efficiencies.json``,
