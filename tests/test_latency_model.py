@@ -251,3 +251,45 @@ def test_the_stored_efficiencies_are_what_the_tuning_procedure_gives():
     assert stored["validation"]["heldout"]["n"] == s["heldout"]["all"]["n"]
     assert s["heldout"]["all"]["median_abs_ln"] == pytest.approx(
         stored["validation"]["heldout"]["median_abs_ln"])
+
+
+def _conv(name, cin, cout, k, stride, side):
+    from pytest_flockai.compute.graph import NodeCost
+    out_side = side // stride
+    w = cout * cin * k * k
+    return NodeCost(name, "Conv", "conv", w * out_side ** 2, w + cout, cin * side ** 2,
+                    cout * out_side ** 2)
+
+
+def test_winograd_eligibility_is_read_from_the_node_counts():
+    from pytest_flockai.compute.predict import winograd_3x3
+    assert winograd_3x3(_conv("a", 64, 64, 3, 1, 56))          # VGG/ResNet body convolution
+    assert not winograd_3x3(_conv("b", 64, 128, 3, 2, 56))     # stride 2
+    assert not winograd_3x3(_conv("c", 64, 256, 1, 1, 56))     # 1x1
+    assert not winograd_3x3(_conv("d", 3, 32, 3, 1, 224))      # too few input channels
+    assert not winograd_3x3(_conv("e", 64, 64, 5, 1, 56))      # 5x5
+
+
+def test_a_gated_activation_is_its_own_pass_where_the_runtime_cannot_fuse_it():
+    from dataclasses import replace
+
+    from pytest_flockai.compute.graph import NodeCost
+    from pytest_flockai.compute.predict import dispatched
+    conv = _conv("c", 64, 64, 3, 1, 56)
+    n = conv.out_elems
+    silu = [conv, NodeCost("s", "Sigmoid", "elementwise", n, 0, n, n, "c"),
+            NodeCost("m", "Mul", "elementwise", n, 0, 2 * n, n, "c")]
+    hswish = [conv, replace(silu[1], op_type="HardSigmoid"), silu[2]]
+    assert [x.name for x in dispatched(silu, "tensorrt")] == ["c"]
+    extra = dispatched(silu, "ncnn")            # ncnn has no Swish activation in its Conv
+    assert [x.name for x in extra] == ["c", "m"] and extra[1].in_elems == n
+    assert [x.name for x in dispatched(hswish, "ncnn")] == ["c"]      # hard-swish fused
+    assert [x.name for x in dispatched(silu, "onnxruntime")] == ["c", "m"]
+
+
+def test_memory_time_uses_the_measured_stream_bandwidth_where_published():
+    from pytest_flockai.compute.predict import STREAM_OF_PEAK, stream_gbs
+    pi4, orin = fa.compute.device("raspberry-pi-4"), fa.compute.device("jetson-orin-nano")
+    assert pi4.stream_gbs == pytest.approx(5.56) and stream_gbs(pi4) == pytest.approx(5.56)
+    assert orin.stream_gbs == 0.0
+    assert stream_gbs(orin) == pytest.approx(STREAM_OF_PEAK * orin.bandwidth_gbs)

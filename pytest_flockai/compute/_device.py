@@ -46,6 +46,8 @@ class Device:
     source: str
     units: tuple[Unit, ...] = ()
     bandwidth_gbs: float = 0.0
+    #: sustained (STREAM) memory bandwidth measured on the board, GB/s; 0: none published
+    stream_gbs: float = 0.0
     deployments: tuple[str, ...] = ()
     mode: str = ""
     #: the default (runtime, precision, target, threads) a drone's blueprint sets for its tasks

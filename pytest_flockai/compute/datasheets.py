@@ -160,6 +160,7 @@ def from_table(name: str, t: dict) -> Device:
                       macs_per_s=float(t["macs_per_s"]), overhead_s=float(t["overhead_s"]),
                       memory_mb=float(t["memory_mb"]), source=str(t.get("source", "")),
                       units=units, bandwidth_gbs=float(t.get("bandwidth_gbs", 0.0)),
+                      stream_gbs=float(t.get("stream_gbs", 0.0)),
                       deployments=tuple(t.get("runtimes", ())), mode=str(t.get("mode", "")))
     except KeyError as e:
         raise ConfigError(f"{where}: missing field {e.args[0]!r}") from None
@@ -215,6 +216,7 @@ def from_datasheet(name: str, t: dict) -> Device:
     table = {"idle_w": idle, "busy_w": busy,
              "memory_mb": t.get("memory_mb", old.get("memory_mb")),
              "bandwidth_gbs": t.get("memory_bandwidth_gbs", 0.0), "runtimes": deps,
+             "stream_gbs": t.get("memory_bandwidth_stream_gbs", 0.0),
              "mode": str(t.get("name", "")), "macs_per_s": old.get("macs_per_s"),
              "overhead_s": old.get("overhead_s"), "units": units, "source": "; ".join(src)}
     dev = from_table(name, table)

@@ -8,9 +8,13 @@ roofline: the slower of
 
 - compute: ``macs / (peak[precision] * eff[target][kind] * scale[runtime/target/precision])``
   (``kind``: conv, dwconv, matmul, elementwise, pool, data), and
-- memory: ``bytes / (bandwidth * mem[target])``, bytes = (weights + inputs + outputs) x the
-  precision's element size,
+- memory: ``bytes / (stream_gbs * mem[target])``, bytes = (weights + inputs + outputs) x the
+  precision's element size, ``stream_gbs`` the board's measured STREAM bandwidth where
+  published, else ``STREAM_OF_PEAK`` of the DRAM peak,
 
+with dense 3x3 stride-1 convolutions' compute divided by a tuned Winograd speed-up on the
+runtimes of ``WINOGRAD``, and a gated activation (SiLU, hard-swish) its own element-wise
+pass where the runtime does not fuse it (``GATE_FUSED``, ``dispatched``);
 plus a dispatch cost per unfused node (``dispatch_s[target]`` at 1 GHz times a factor per
 runtime/target, scaled by the unit's clock), plus a per-inference overhead. The efficiencies (``eff``, ``mem``,
 ``scale``, ``dispatch_s``, ``overhead_s``) are read from ``data/latency_efficiencies.json``,
@@ -33,7 +37,7 @@ import json
 import math
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -49,16 +53,86 @@ from .measured import is_measured
 EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
 KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
 #: untuned priors (used where the tuning file has no figure): dense convolution runs at a
-#: fraction of peak, depthwise far below it (low arithmetic intensity); memory at ~half
-#: the DRAM peak; a few microseconds per kernel dispatch at 1 GHz.
+#: fraction of peak, depthwise far below it (low arithmetic intensity); memory (``mem``) as
+#: a fraction of the sustained STREAM bandwidth (``stream_gbs``), set so that the prior
+#: keeps its earlier value as a fraction of the DRAM peak (0.4 / 0.73, 0.5 / 0.73,
+#: 0.3 / 0.73); a few microseconds per kernel dispatch at 1 GHz.
 PRIOR_TARGET = {
     "cpu": {"conv": 0.5, "dwconv": 0.15, "matmul": 0.5, "elementwise": 0.25, "pool": 0.25,
-            "data": 0.25, "mem": 0.4, "dispatch_s": 20e-6, "overhead_s": 1e-3},
+            "data": 0.25, "mem": 0.55, "dispatch_s": 20e-6, "overhead_s": 1e-3},
     "gpu": {"conv": 0.4, "dwconv": 0.05, "matmul": 0.4, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.5, "dispatch_s": 10e-6, "overhead_s": 1e-3},
+            "data": 0.1, "mem": 0.68, "dispatch_s": 10e-6, "overhead_s": 1e-3},
     "npu": {"conv": 0.5, "dwconv": 0.2, "matmul": 0.3, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.3, "dispatch_s": 5e-6, "overhead_s": 2e-3},
+            "data": 0.1, "mem": 0.41, "dispatch_s": 5e-6, "overhead_s": 2e-3},
 }
+
+
+#: runtimes whose dense 3x3 stride-1 convolutions run as Winograd F(m x m, 3 x 3) kernels,
+#: which need fewer multiplications than the direct MAC count: ncnn on Arm CPUs and on Vulkan
+#: GPUs (its ``convolution_3x3_winograd`` kernels, chosen for 3x3 s1 with >= 8 input channels
+#: by default: ``Option::use_winograd_convolution``) and TensorRT (cuDNN's / TensorRT's
+#: Winograd tactics for 3x3 s1).
+WINOGRAD = frozenset(("ncnn/cpu",))
+#: untuned prior of the effective speed-up of a Winograd convolution over the direct one:
+#: F(2x2, 3x3) cuts the multiplications 2.25x (Lavin and Gray, "Fast Algorithms for
+#: Convolutional Neural Networks", CVPR 2016, section 4); larger tiles cut more (F(4x4, 3x3):
+#: 4x) but pay for transforms. The tuned figure lies in [1, 4].
+PRIOR_WINOGRAD = 2.25
+
+
+#: sustained (STREAM) bandwidth as a fraction of the DRAM wire rate where a board has no
+#: published STREAM figure: Texas Instruments measure 67-79 % on (LP)DDR4 Arm SoCs (app notes
+#: SPRACV1B, AM64x "STREAM" table: 67-79 %; SPRAD45A, AM62x: 74-78 %); 0.73, their middle.
+STREAM_OF_PEAK = 0.73
+
+
+def stream_gbs(dev: Device) -> float:
+    """The board's sustained memory bandwidth, GB/s: its measured STREAM figure where one is
+    published (``memory_bandwidth_stream_gbs`` in computers.toml), else ``STREAM_OF_PEAK`` of
+    the DRAM peak."""
+    s = float(getattr(dev, "stream_gbs", 0.0) or 0.0)
+    return s if s > 0 else STREAM_OF_PEAK * dev.bandwidth_gbs
+
+
+def winograd_3x3(n) -> bool:
+    """Whether a node is a dense 3x3 stride-1 convolution with >= 8 input channels, read from
+    its counts alone: MACs = out x Cin x k^2 and, at stride 1, the input's spatial size is the
+    output's (MACs / weights), so k^2 = (MACs / out) / (in / (MACs / weights))."""
+    if n.kind != "conv" or not (n.macs and n.weight_elems and n.in_elems and n.out_elems):
+        return False
+    spatial = n.macs / n.weight_elems
+    cin = n.in_elems / spatial
+    return cin >= 8 and 7.0 <= (n.macs / n.out_elems) / cin <= 11.0
+
+
+#: runtimes that fuse a gated activation ``x * gate(x)`` into the convolution before it, by
+#: gate. TensorRT fuses point-wise chains into the convolution's epilogue (TensorRT developer
+#: guide, "Layer fusion": PointWise fusion) and OpenVINO's CPU plugin fuses Swish and
+#: HSwish as post-ops; ncnn's Convolution fuses hard-swish (``activation_type`` 6) but has no
+#: Swish activation, so SiLU runs as its own Swish layer (ncnn ``src/layer/convolution``,
+#: ``fuse_convolution_activation`` in ``tools/ncnnoptimize``); ONNX Runtime's FusedConv takes
+#: Relu / Sigmoid / Tanh / LeakyRelu / Clip / HardSigmoid, never the Mul after them; TFLite
+#: runs LOGISTIC / HARD_SWISH and MUL as their own ops; eager PyTorch runs SiLU as one op.
+#: Any other runtime/gate pair: one separate element-wise pass (read x, write x * gate(x)).
+GATE_FUSED = {"tensorrt": ("Sigmoid", "HardSigmoid"), "openvino": ("Sigmoid", "HardSigmoid"),
+              "edgetpu": ("Sigmoid", "HardSigmoid"), "ncnn": ("HardSigmoid",)}
+
+
+def dispatched(nodes, runtime: str) -> list:
+    """The nodes a runtime runs: the unfused ones, plus, where the runtime does not fuse a
+    gated activation (``GATE_FUSED``), that activation's Mul as one element-wise pass over
+    its output (one read, one write, one op per element)."""
+    gates = {n.fused_into: n.op_type for n in nodes
+             if n.fused_into and n.op_type in ("Sigmoid", "HardSigmoid")}
+    fused = GATE_FUSED.get(runtime, ())
+    out = []
+    for n in nodes:
+        if not n.fused_into:
+            out.append(n)
+        elif (n.op_type == "Mul" and n.fused_into in gates
+              and gates[n.fused_into] not in fused):
+            out.append(replace(n, in_elems=n.out_elems, macs=n.out_elems, fused_into=None))
+    return out
 
 
 #: held-out rows a (computer, runtime) needs for its own band (else its target's band)
@@ -131,24 +205,27 @@ def params_for(table: dict, dep: _rt.Deployment) -> dict:
     d = table.get("dispatch", {}).get(f"{dep.runtime}/{dep.target}")
     if d is not None:
         tgt["dispatch_s"] = tgt["dispatch_s"] * float(d["factor"])
-    return {**tgt, "scale": scale, "tuned": g is not None}
+    wino = 1.0
+    if f"{dep.runtime}/{dep.target}" in WINOGRAD:
+        wino = float(table.get("winograd", {}).get("factor", PRIOR_WINOGRAD))
+    return {**tgt, "scale": scale, "winograd": wino, "tuned": g is not None}
 
 
 def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
     """(seconds, per-node timings) of a network cost on a deployment with efficiencies."""
     unit = dev.unit(dep.target)
     peak = _rt.peak_macs(dep, unit)
-    bw = dev.bandwidth_gbs * 1e9 * prm["mem"]
+    bw = stream_gbs(dev) * 1e9 * prm["mem"]
     nbytes = _rt.compute_precision(dep, unit)[1]
     clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
     dispatch = prm["dispatch_s"] / clock
     total, per = prm["overhead_s"] / clock, []
-    for n in cost.nodes:
-        if getattr(n, "fused_into", None):
-            continue
+    for n in dispatched(cost.nodes, dep.runtime):
         eff = min(1.0, prm[n.kind] * (prm["scale"] if n.kind in ("conv", "dwconv", "matmul")
                                       else 1.0))
         tc = n.macs / (peak * eff) if n.macs else 0.0
+        if prm.get("winograd", 1.0) != 1.0 and winograd_3x3(n):
+            tc /= prm["winograd"]
         tm = (n.weight_elems + n.in_elems + n.out_elems) * nbytes / bw if bw > 0 else 0.0
         t = max(tc, tm) + dispatch
         total += t
@@ -248,5 +325,6 @@ def _measured(model, dev) -> LatencyPrediction:
                              math.nan)
 
 
-__all__ = ["EFFICIENCIES", "KINDS", "LatencyFallbackWarning", "LatencyPrediction",
+__all__ = ["EFFICIENCIES", "KINDS", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
+           "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
            "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]

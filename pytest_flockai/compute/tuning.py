@@ -13,6 +13,8 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
    - per runtime/target/precision with tuning rows: one scale of the compute efficiency;
    - per runtime/target with tuning rows: one factor on the dispatch cost (how much a
      runtime fuses and how cheaply it launches: TensorRT against eager PyTorch).
+   - one shared Winograd speed-up of dense 3x3 stride-1 convolutions for the runtimes in
+     ``predict.WINOGRAD`` (prior 2.25, bounds 1-4).
 
    Nothing is per network, per computer or per row. A runtime/target/precision without
    tuning rows takes the median scale of the same runtime and target at other precisions,
@@ -35,7 +37,7 @@ from scipy.optimize import least_squares
 
 from . import runtimes as _rt
 from .devices import DEVICES
-from .predict import PRIOR_TARGET
+from .predict import PRIOR_TARGET, PRIOR_WINOGRAD, WINOGRAD, dispatched, stream_gbs, winograd_3x3
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "dispatch_s", "overhead_s")
@@ -51,24 +53,29 @@ class _Compiled:
         dev = DEVICES[row.computer]
         dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
         unit = dev.unit(dep.target)
-        nodes = [n for n in row.cost.nodes if not getattr(n, "fused_into", None)]
+        nodes = dispatched(row.cost.nodes, dep.runtime)
         self.target, self.group = dep.target, dep.key
         self.rt = f"{dep.runtime}/{dep.target}"
         self.peak = _rt.peak_macs(dep, unit)
-        self.bw = dev.bandwidth_gbs * 1e9
+        self.bw = stream_gbs(dev) * 1e9
         self.clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
         self.kind = np.array([_KIND[n.kind] for n in nodes], dtype=int)
         self.macs = np.array([float(n.macs) for n in nodes])
         self.bytes = np.array([float(n.weight_elems + n.in_elems + n.out_elems)
                                for n in nodes]) * _rt.compute_precision(dep, unit)[1]
+        self.wino = np.array([winograd_3x3(n) for n in nodes], dtype=bool)
+        self.uses_wino = self.rt in WINOGRAD and bool(self.wino.any())
         self.n = len(nodes)
         self.published = row.latency_s
 
-    def seconds(self, tgt: dict, scale: float, dispatch: float = 1.0) -> float:
+    def seconds(self, tgt: dict, scale: float, dispatch: float = 1.0,
+                wino: float = 1.0) -> float:
         eff = np.array([tgt["conv"] * scale, tgt["dwconv"] * scale, tgt["matmul"] * scale,
                         tgt["elementwise"], tgt["pool"], tgt["data"]])
         eff = np.minimum(eff, 1.0)
         tc = self.macs / (self.peak * eff[self.kind])
+        if self.uses_wino:
+            tc = np.where(self.wino, tc / wino, tc)
         tm = self.bytes / (self.bw * tgt["mem"]) if self.bw > 0 else 0.0 * self.bytes
         return float(np.sum(np.maximum(tc, tm)) + (self.n * tgt["dispatch_s"] * dispatch
                                                    + tgt["overhead_s"]) / self.clock)
@@ -90,7 +97,7 @@ def _unpack(theta, targets, groups, rts):
     for r in rts:
         out_d[r] = math.exp(theta[i])
         i += 1
-    return out_t, out_g, out_d
+    return out_t, out_g, out_d, math.exp(theta[i])
 
 
 def _prior(targets, groups, rts):
@@ -110,6 +117,9 @@ def _prior(targets, groups, rts):
         th.append(0.0)
         lo.append(math.log(0.05))
         hi.append(math.log(20.0))
+    th.append(math.log(PRIOR_WINOGRAD))         # the Winograd speed-up, shared by all
+    lo.append(0.0)
+    hi.append(math.log(4.0))
     return np.array(th), np.array(lo), np.array(hi)
 
 
@@ -124,15 +134,17 @@ def tune(rows) -> dict:
     th0 = np.clip(th0, lo + 1e-9, hi - 1e-9)
 
     def resid(theta):
-        tg, gs, ds = _unpack(theta, targets, groups, rts)
-        r = [math.log(c.seconds(tg[c.target], gs[c.group], ds[c.rt]) / c.published)
+        tg, gs, ds, w = _unpack(theta, targets, groups, rts)
+        r = [math.log(c.seconds(tg[c.target], gs[c.group], ds[c.rt], w) / c.published)
              for c in comp]
         return np.concatenate([r, PRIOR_WEIGHT * (theta - th0)])
 
     fit = least_squares(resid, th0, bounds=(lo, hi), loss="soft_l1", f_scale=0.3,
                         x_scale=1.0, max_nfev=4000)
-    tg, gs, ds = _unpack(fit.x, targets, groups, rts)
-    return {"targets": {t: {k: float(v) for k, v in p.items()} for t, p in tg.items()},
+    tg, gs, ds, w = _unpack(fit.x, targets, groups, rts)
+    return {"winograd": {"factor": float(w), "runtimes": sorted(WINOGRAD),
+                         "rows": sum(c.uses_wino for c in comp)},
+            "targets": {t: {k: float(v) for k, v in p.items()} for t, p in tg.items()},
             "dispatch": {r: {"factor": float(v), "rows": sum(c.rt == r for c in comp)}
                          for r, v in ds.items()},
             "groups": {g: {"scale": float(v), "rows": sum(c.group == g for c in comp)}
