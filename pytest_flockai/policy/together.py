@@ -251,6 +251,7 @@ class SharedSearch(_Perceiving):
     """One drone's part in a search together (module docstring)."""
 
     modes = ("search", "confirm")
+    judges = True
 
     def __init__(self, task: str, station: GroundStation, *, target: str = "person",
                  radius: float = 8.0, speed: float = 3.0, orbit_s: float = 20.0, confirm: int = 2,
@@ -292,12 +293,13 @@ class SharedSearch(_Perceiving):
         if self._mode is None:
             drone.mode("search")
         tr = self.tracker
-        if tr.confirmed:
+        job = self._job                 # a confirmation at the job's point is not judged
+        near = tr.confirmed and job is not None and math.dist(tr.predict(t)[:2], job[1]) <= s.gate_m
+        if tr.confirmed and (near or self.plausible(drone)):
             *p, vx, vy = tr.predict(t)
             xy = tuple(p)
             tr.reset()
-            job = self._job
-            if job is not None and math.dist(xy, job[1]) <= s.gate_m:
+            if near and job is not None:
                 s.post(t, self.me, "confirm", xy, job[0])
             elif all(math.dist(xy, p) > s.gate_m for p in self._sent):
                 self._sent.append(xy)
@@ -316,6 +318,8 @@ class SharedSearch(_Perceiving):
                     speed = getattr(drone.plan_pilot, "speed", self.speed)
                     s.post(t, self.me, "handoff", drone.position[:2],
                            (ahead, 2 * away + self.orbit_s * speed))
+            else:                       # refused (outside the world or the fence)
+                s.post(t, self.me, "free", drone.position[:2])
         elif self._job is not None and t - self._job[2] >= self.orbit_s:
             s.post(t, self.me, "free", drone.position[:2])
             self._job = None
