@@ -160,8 +160,8 @@ class _Perceiving(Policy):
                              f"a faster link or task, or a longer lost_after_s")
             return
         nav = self._navs.get(t_cap)
-        if self.judges and drone.stage != "pilot":
-            return                          # a search acts in the pilot stage only
+        if self.judges and drone.stage not in ("pilot", "return"):
+            return              # a search acts on its plan or the way home (not judged climbing)
         if self.judges and nav is not None and self._phantoms:
             pts = [p for p in pts if not plausible.masked(p, nav, self._phantoms)]
             if not pts:

@@ -67,7 +67,8 @@ def judge(hits, max_speed: float):
     if len(hits) < 2:
         return None
     t1, p1, n1 = hits[-1]
-    for t0, p0, n0 in reversed(hits[:-1]):
+    for i in range(len(hits) - 2, -1, -1):
+        t0, p0, n0 = hits[i]
         ddx, ddy = n1[0] - n0[0], n1[1] - n0[1]
         drone = math.hypot(ddx, ddy)
         if drone >= max(BASELINE_M, 2.0 * WALK_MAX_MPS * (t1 - t0)):

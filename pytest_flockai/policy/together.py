@@ -293,17 +293,18 @@ class SharedSearch(_Perceiving):
         if self._mode is None:
             drone.mode("search")
         tr = self.tracker
-        job = self._job                 # a confirmation at the job's point is not judged
-        near = tr.confirmed and job is not None and math.dist(tr.predict(t)[:2], job[1]) <= s.gate_m
-        if tr.confirmed and (near or self.plausible(drone)):
-            *p, vx, vy = tr.predict(t)
-            xy = tuple(p)
+        job, new = self._job, False     # only a new target's report is judged (plausible.py)
+        if tr.confirmed:
+            x, y, vx, vy = tr.predict(t)
+            near = job is not None and math.dist((x, y), job[1]) <= s.gate_m
+            new = not near and all(math.dist((x, y), q) > s.gate_m for q in self._sent)
+        if tr.confirmed and (not new or self.plausible(drone)):
             tr.reset()
-            if near and job is not None:
-                s.post(t, self.me, "confirm", xy, job[0])
-            elif all(math.dist(xy, p) > s.gate_m for p in self._sent):
-                self._sent.append(xy)
-                s.post(t, self.me, "report", xy, (vx, vy) if s.predict else (0.0, 0.0))
+            if new:
+                self._sent.append((x, y))
+                s.post(t, self.me, "report", (x, y), (vx, vy) if s.predict else (0.0, 0.0))
+            elif near and job is not None:
+                s.post(t, self.me, "confirm", (x, y), job[0])
         elif tr.x is not None and t - tr.last_delivered > self.max_age_s:
             tr.reset()
         job = self._todo.pop(0) if self._job is None and self._todo else None
