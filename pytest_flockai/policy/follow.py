@@ -24,7 +24,9 @@ the lost timer counts from its delivery; an older one cannot hold a track and is
 track whose estimated speed exceeds what its class can move at (``MAX_SPEED_MPS``: a false
 positive stuck in the image moves with the drone) is dropped (``reason="implausible"``,
 ``track_rejected_implausible``; judged from the third hit, so it matters for Follow: the
-searches act on a track at its confirmation).
+searches act on a track at its confirmation, and judge it there with ``policy.plausible``: a
+target faster than its class or moving with the drone is rejected, an event
+``target_rejected`` and the KPI ``targets_rejected_implausible``).
 
 Closed-loop KPIs (``policy/scoring.py``, from the truth after the flight, never
 in a decision): ``time_to_detect_s``, ``track_error_p95_m``, ``track_lost_count``,
@@ -36,12 +38,12 @@ from __future__ import annotations
 import math
 
 from .. import _check
-from ..control.follow import Track, Tracker, ground_point
+from ..control.follow import Track, Tracker, ground_point, yaw_of
 from ..control.stages import PILOT
 from ..errors import ConfigError
 from ..world.objects import CAR_HEIGHT, PERSON_HEIGHT
 from ..world.truth import CLASSES
-from . import scoring
+from . import plausible, scoring
 from .base import Policy
 
 ON_LOST = ("search", "hold", "return_home", "land")
@@ -74,6 +76,9 @@ def _task_of(mission, task, where):
 
 class _Perceiving(Policy):
     """Shared by the perception policies: results to ground points, a tracker."""
+
+    #: the searches judge a target before acting on it (``policy.plausible``)
+    judges = False
 
     def __init__(self, task, target, name, period_s, gate_m, confirm, score):
         super().__init__(name, period_s)
@@ -117,11 +122,15 @@ class _Perceiving(Policy):
         self.rejected = {"stale": 0, "implausible": 0}
         self._last_reject: str | None = None
         self._max_speed = MAX_SPEED_MPS.get(self.target, math.inf)
+        self._navs: dict = {}             # capture time -> (x, y, yaw) believed then
+        self._hits: list = []             # the track's raw hits: (t, (x, y), nav)
+        self._phantoms: list = []         # offsets in the drone's frame of rejected targets
+        self.targets_rejected = 0
 
     def measurements(self, drone) -> list:
         """[(t_capture, [(x, y), ...], t_delivered)] of the newly delivered results, in
         capture order."""
-        out = []
+        out, self._navs = [], {}
         for r in drone.results(self.task):
             if not r.ok or r.detections is None or r.nav is None or self._lens is None:
                 continue
@@ -132,6 +141,7 @@ class _Perceiving(Policy):
                     p = ground_point(0.5 * (x0 + x1), 0.5 * (y0 + y1), r.nav, self._lens, self._z)
                     if p is not None:
                         pts.append(p)
+            self._navs[r.t_capture] = (r.nav[0], r.nav[1], yaw_of(r.nav[3:7]))
             out.append((r.t_capture, pts, r.t_delivered))
         out.sort(key=lambda m: m[0])
         return out
@@ -149,10 +159,20 @@ class _Perceiving(Policy):
                              f"max_age_s = {self.max_age_s:g} s: it cannot hold a track; use "
                              f"a faster link or task, or a longer lost_after_s")
             return
+        nav = self._navs.get(t_cap)
+        if self.judges and drone.stage not in ("pilot", "return"):
+            return              # a search acts on its plan or the way home (not judged climbing)
+        if self.judges and nav is not None and self._phantoms:
+            pts = [p for p in pts if not plausible.masked(p, nav, self._phantoms)]
+            if not pts:
+                return
         tr = self.tracker
         ref = tr.predict(t_cap)[:2] if tr.x is not None else drone.position[:2]
         best = min(pts, key=lambda p: math.dist(p, ref))
-        if tr.update(t_cap, best[0], best[1], t_delivered=t_del) and tr.hits >= SPEED_HITS \
+        hit = tr.update(t_cap, best[0], best[1], t_delivered=t_del)
+        if hit and nav is not None:
+            self._hits = (self._hits if tr.hits > 1 else []) + [(t_cap, best, nav)]
+        if hit and tr.hits >= SPEED_HITS \
                 and tr.x is not None and math.hypot(tr.x[2], tr.x[3]) > self._max_speed:
             v = math.hypot(tr.x[2], tr.x[3])
             self._reject(drone, "implausible", speed_mps=round(v, 2),
@@ -160,6 +180,29 @@ class _Perceiving(Policy):
                          why=f"the track moves at {v:.1f} m/s, faster than a {self.target} "
                              f"can ({self._max_speed:.1f} m/s): a false positive")
             tr.reset()
+
+    def plausible(self, drone) -> bool:
+        """The searches, at a confirmation: is the target plausible (``policy.plausible``)?
+        If not: an event ``target_rejected``, the tracker reset, the phantom remembered."""
+        hits = self._hits if len(self._hits) == self.tracker.hits else []
+        verdict = plausible.judge(hits, self._max_speed)
+        if verdict is None or verdict[0] == "wait":
+            return verdict is None
+        reason, info = verdict
+        self.targets_rejected += 1
+        _, p, nav = hits[-1]
+        if reason == "with_drone":
+            self._phantoms = [*self._phantoms, plausible.offset(p, nav)][-plausible.PHANTOMS:]
+        why = (f"the target moved {info['target_moved_m']:.1f} m as the drone moved "
+               f"{info['drone_moved_m']:.1f} m the same way: a box fixed in the image, not a "
+               f"{self.target}") if reason == "with_drone" else (
+               f"the target moved at {info['speed_mps']:.1f} m/s, faster than a {self.target} "
+               f"can ({info['max_speed_mps']:.1f} m/s)")
+        drone._run.event(drone.t, "target_rejected", policy=self.name, reason=reason,
+                         x=round(p[0], 2), y=round(p[1], 2), why=why, **info)
+        self.tracker.reset()
+        self._hits = []
+        return False
 
     def _reject(self, drone, reason: str, **info) -> None:
         """Count a rejection; an event for the first of each reason in a row."""
@@ -177,6 +220,8 @@ class _Perceiving(Policy):
         out.update(self.log.kpis(self, run))
         out["track_rejected_stale"] = float(self.rejected["stale"])
         out["track_rejected_implausible"] = float(self.rejected["implausible"])
+        if self.judges:
+            out["targets_rejected_implausible"] = float(self.targets_rejected)
         return out
 
 
@@ -233,6 +278,8 @@ class Follow(_Perceiving):
 class SearchThenOrbit(_Perceiving):
     """Fly the plan until a confirmed detection, then orbit it (module docstring)."""
 
+    judges = True
+
     modes = ("search", "orbit", "done")
 
     def __init__(self, task: str, *, target: str = "person", radius: float = 10.0,
@@ -264,7 +311,7 @@ class SearchThenOrbit(_Perceiving):
         if self._mode == "search":
             if tr.x is not None and not tr.confirmed and t - tr.last_delivered > self.max_age_s:
                 tr.reset()
-            if tr.confirmed and len(self.found) < self.find:
+            if tr.confirmed and len(self.found) < self.find and self.plausible(drone):
                 x, y = tr.predict(t)[:2]
                 if drone.orbit(x, y, self.radius, self.speed):
                     self.found.append((x, y))

@@ -251,6 +251,7 @@ class SharedSearch(_Perceiving):
     """One drone's part in a search together (module docstring)."""
 
     modes = ("search", "confirm")
+    judges = True
 
     def __init__(self, task: str, station: GroundStation, *, target: str = "person",
                  radius: float = 8.0, speed: float = 3.0, orbit_s: float = 20.0, confirm: int = 2,
@@ -292,16 +293,18 @@ class SharedSearch(_Perceiving):
         if self._mode is None:
             drone.mode("search")
         tr = self.tracker
+        job, new = self._job, False     # only a new target's report is judged (plausible.py)
         if tr.confirmed:
-            *p, vx, vy = tr.predict(t)
-            xy = tuple(p)
+            x, y, vx, vy = tr.predict(t)
+            near = job is not None and math.dist((x, y), job[1]) <= s.gate_m
+            new = not near and all(math.dist((x, y), q) > s.gate_m for q in self._sent)
+        if tr.confirmed and (not new or self.plausible(drone)):
             tr.reset()
-            job = self._job
-            if job is not None and math.dist(xy, job[1]) <= s.gate_m:
-                s.post(t, self.me, "confirm", xy, job[0])
-            elif all(math.dist(xy, p) > s.gate_m for p in self._sent):
-                self._sent.append(xy)
-                s.post(t, self.me, "report", xy, (vx, vy) if s.predict else (0.0, 0.0))
+            if new:
+                self._sent.append((x, y))
+                s.post(t, self.me, "report", (x, y), (vx, vy) if s.predict else (0.0, 0.0))
+            elif near and job is not None:
+                s.post(t, self.me, "confirm", (x, y), job[0])
         elif tr.x is not None and t - tr.last_delivered > self.max_age_s:
             tr.reset()
         job = self._todo.pop(0) if self._job is None and self._todo else None
@@ -316,6 +319,8 @@ class SharedSearch(_Perceiving):
                     speed = getattr(drone.plan_pilot, "speed", self.speed)
                     s.post(t, self.me, "handoff", drone.position[:2],
                            (ahead, 2 * away + self.orbit_s * speed))
+            else:                       # refused (outside the world or the fence)
+                s.post(t, self.me, "free", drone.position[:2])
         elif self._job is not None and t - self._job[2] >= self.orbit_s:
             s.post(t, self.me, "free", drone.position[:2])
             self._job = None
