@@ -34,7 +34,9 @@ OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "al
 #: the import-time MuJoCo/GL guard (``_mujoco.py``, see its docstring), and the
 #: sweep runner loading the batched backend, whose modules import JAX (the optional
 #: extra ``mjx``), only when ``backend="mjx"`` is asked for
-ALLOWED_LOCAL = {("_mujoco.py", "mujoco"), ("sweeps/runner.py", ".batched")}
+# shards.py asks JAX only after it set the XLA flags for the host devices (read at client start)
+ALLOWED_LOCAL = {("_mujoco.py", "mujoco"), ("sweeps/runner.py", ".batched"),
+                 ("sweeps/batched/shards.py", "jax")}
 #: loaded on first use, so that the pytest plugin costs a run that flies nothing almost
 #: nothing (``benchmarks/plugin_overhead.py``): (module, imported from, name) -> why.
 #: The core behind the fixtures (MuJoCo, ONNX Runtime, pandas), the sweep runner and

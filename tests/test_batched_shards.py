@@ -1,4 +1,4 @@
-"""The batch split over the CPUs (``sweeps/batched/shards.py``, issue 39): the same rows
+"""The batch split over the CPUs (``sweeps/batched/shards.py``): the same rows
 bit for bit with one shard, two, and the default (one per CPU), and the sweep says how
 many ran. Each case is a fresh process (the host devices are set once, before JAX's
 client starts)."""

@@ -1,4 +1,4 @@
-"""A backend never changes a verdict (issue 36, items 1-2): the batched backends fly
+"""A backend never changes a verdict: the batched backends fly
 what the mission asks or refuse it, and they see the crashes the per-flight core sees.
 
 The end reasons of ``jax`` and the core agree exactly, except at a knife edge: where the

@@ -1,4 +1,4 @@
-"""Issue 35: the searches judge a target before acting on it (policy/plausible.py). A box
+"""The searches judge a target before acting on it (policy/plausible.py). A box
 stuck at one pixel maps to a ground point that moves with the drone: SharedSearch and
 SearchThenOrbit reject it (an event, a KPI) instead of chasing it, and still find the
 real people around it."""
@@ -45,7 +45,7 @@ def fleet(stuck: bool):
 
 @pytest.mark.slow
 def test_a_box_stuck_at_one_pixel_sends_no_drone_of_a_shared_search_after_a_phantom():
-    # before the gate (issue 35's main): the stuck box was reported at every confirmation,
+    # before the gate: the stuck box was reported at every confirmation,
     # the drones were sent after it and no walker was found
     clean, res = fleet(False).run(), fleet(True).run()
     c, k = clean.kpis, res.kpis

@@ -1,4 +1,4 @@
-"""The searches' plausibility gate (issue 35): a target is judged before a search acts on it.
+"""The searches' plausibility gate: a target is judged before a search acts on it.
 
 ``SearchThenOrbit`` and ``SharedSearch`` act on a track at its confirmation (``confirm`` hits, 2
 by default), before the tracker's speed gate (``follow.SPEED_HITS`` = 3 hits) can judge it. So at

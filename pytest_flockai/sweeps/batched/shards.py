@@ -1,4 +1,4 @@
-"""The batch split over the CPUs the process may use (issue 39).
+"""The batch split over the CPUs the process may use.
 
 One XLA thread runs the batch fastest per CPU-second (``cpu_threads.py``), but a
 machine with several cores then leaves all but one idle. So on a CPU the batch is
