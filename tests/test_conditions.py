@@ -164,7 +164,7 @@ def test_hypothesis_finds_and_shrinks_a_failing_condition(pytester):
     """A deliberately tight recall budget: hypothesis finds imaging conditions that
     break it and prints the shrunk, minimal failing example."""
     pytester.makepyfile(test_robust=HYPOTHESIS_TEST.format(model=MODEL))
-    res = pytester.runpytest_inprocess("-p", "no:cacheprovider", "-q")
+    res = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-q")
     res.assert_outcomes(failed=1)
     out = res.stdout.str()
     assert ("Falsifying example" in out or "Failing test case" in out) and "cond=Conditions(" in out
