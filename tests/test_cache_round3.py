@@ -8,6 +8,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import cv2
 import numpy as np
 import onnx
 import pytest
@@ -68,13 +69,17 @@ def test_the_external_data_locations_of_every_initializer_are_keyed(tmp_path):
 
 def test_a_replayed_image_rewritten_under_its_old_mtime_changes_the_key(tmp_path):
     folder, _ = make_set(tmp_path, "coco", n=3)
+    img = Path(folder) / "f01.png"
+    pixels = cv2.imread(str(img), cv2.IMREAD_UNCHANGED)
+    stored = [cv2.IMWRITE_PNG_COMPRESSION, 0]   # stored deflate: the size is the pixels'
+    img.write_bytes(cv2.imencode(".png", pixels, stored)[1].tobytes())
     cam = lambda: fa.sensors.ReplayCamera(folder, rate_hz=1.0)  # noqa: E731
     before = flight_key(mission(sensors=[cam()]))
-    img = Path(folder) / "f01.png"
     st = img.stat()
-    data = bytearray(img.read_bytes())
-    other = (Path(folder) / "f02.png").read_bytes()
-    img.write_bytes(other if len(other) == len(data) else bytes(data[:-1]) + b"\0")
+    pixels[0, 0] = 255 - pixels[0, 0]
+    changed = cv2.imencode(".png", pixels, stored)[1].tobytes()
+    assert len(changed) == st.st_size          # same size, same mtime: only the bytes differ
+    img.write_bytes(changed)
     os.utime(img, ns=(st.st_atime_ns, st.st_mtime_ns))
     assert flight_key(mission(sensors=[cam()])) != before
 

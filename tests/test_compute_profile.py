@@ -10,7 +10,7 @@ import numpy as np
 import onnx
 import onnxruntime as ort
 import pytest
-from onnx import TensorProto, helper, numpy_helper
+from onnx_nets import conv_net
 
 import pytest_flockai as fa
 from pytest_flockai.cli import main
@@ -20,22 +20,7 @@ from pytest_flockai.errors import ConfigError
 
 
 def _net(tmp_path, name="net.onnx", width=16):
-    rng = np.random.default_rng(0)
-    w1 = numpy_helper.from_array(rng.standard_normal((width, 3, 3, 3)).astype(np.float32), "w1")
-    w2 = numpy_helper.from_array(rng.standard_normal((width, width, 3, 3)).astype(np.float32),
-                                 "w2")
-    nodes = [helper.make_node("Conv", ["x", "w1"], ["c1"], pads=[1] * 4),
-             helper.make_node("Relu", ["c1"], ["r1"]),
-             helper.make_node("Conv", ["r1", "w2"], ["c2"], pads=[1] * 4),
-             helper.make_node("GlobalAveragePool", ["c2"], ["y"])]
-    g = helper.make_graph(nodes, "net", [helper.make_tensor_value_info(
-        "x", TensorProto.FLOAT, ["n", 3, 64, 64])],
-        [helper.make_tensor_value_info("y", TensorProto.FLOAT, ["n", width, 1, 1])], [w1, w2])
-    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
-    m.ir_version = 8
-    p = tmp_path / name
-    onnx.save(m, str(p))
-    return p
+    return conv_net(tmp_path / name, width)
 
 
 @pytest.fixture(scope="module")

@@ -3,9 +3,8 @@ standing in for the drone's computer), used as a task's computer in flight, repr
 measured p50 and p95 within 5 %; the draws are seeded (same seed, same flight)."""
 
 import numpy as np
-import onnx
 import pytest
-from onnx import TensorProto, helper, numpy_helper
+from onnx_nets import conv_net
 
 import pytest_flockai as fa
 from pytest_flockai.cli import main
@@ -13,21 +12,7 @@ from pytest_flockai.errors import ConfigError
 
 
 def _net(path, width):
-    rng = np.random.default_rng(1)
-    w1 = numpy_helper.from_array(rng.standard_normal((width, 3, 3, 3)).astype(np.float32), "w1")
-    w2 = numpy_helper.from_array(rng.standard_normal((width, width, 3, 3)).astype(np.float32),
-                                 "w2")
-    nodes = [helper.make_node("Conv", ["x", "w1"], ["c1"], pads=[1] * 4),
-             helper.make_node("Relu", ["c1"], ["r1"]),
-             helper.make_node("Conv", ["r1", "w2"], ["c2"], pads=[1] * 4),
-             helper.make_node("GlobalAveragePool", ["c2"], ["y"])]
-    g = helper.make_graph(nodes, "net", [helper.make_tensor_value_info(
-        "x", TensorProto.FLOAT, [1, 3, 48, 48])],
-        [helper.make_tensor_value_info("y", TensorProto.FLOAT, None)], [w1, w2])
-    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
-    m.ir_version = 8
-    onnx.save(m, str(path))
-    return path
+    return conv_net(path, width, side=48, batch=1, seed=1)
 
 
 @pytest.fixture(scope="module")

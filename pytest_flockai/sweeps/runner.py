@@ -185,12 +185,12 @@ def backend_choice(base, n_variants: int, device=None) -> tuple[str, str]:
     reason given for "process")."""
     if device is None and n_variants < AUTO_MIN_VARIANTS:
         return "process", f"{n_variants} variants, fewer than {AUTO_MIN_VARIANTS} to batch"
-    if importlib.util.find_spec("jax") is None or importlib.util.find_spec("mujoco.mjx") is None:
-        return "process", "JAX or MJX is not installed"
-    try:
+    try:   # what the mission asks decides first: installing JAX would not change it
         _batched.check(base)
     except ConfigError as exc:
         return "process", str(exc)
+    if importlib.util.find_spec("jax") is None or importlib.util.find_spec("mujoco.mjx") is None:
+        return "process", "JAX or MJX is not installed"
     why = _batched.free_flight_unsupported(base)
     if why is None:
         return "jax", f"{n_variants} variants the free-flight batch flies"
