@@ -4,6 +4,8 @@ Reads ``pytest_flockai/compute/data/published_latency.csv`` and ``latency_source
 (each source assigned to the ``tuning`` or ``heldout`` half before any efficiency was
 chosen) and the networks' per-node costs (``data/networks/``), fits the few shared
 efficiencies on the tuning rows only (the procedure: ``pytest_flockai/compute/tuning.py``),
+chooses the rule for deployments without tuning rows by leaving each tuned group out in
+turn (``tuning.fallback_cv``, tuning rows only; about two minutes),
 then writes ``pytest_flockai/compute/data/latency_efficiencies.json``: the parameters, the
 fit's statistics, the tuning and held-out ratios predicted/published, and the held-out
 ranges per computer/runtime that ``predict_latency(...).band`` reports. The held-out rows
@@ -34,6 +36,8 @@ def main(argv=None) -> int:
         print("no usable tuning rows:", *skipped[:10], sep="\n  ")
         return 1
     table = tuning.tune(rows)
+    # the rule for deployments without tuning rows, chosen on the tuning half (about 2 min)
+    table["fallback"] = tuning.fallback_cv(rows)
     table["procedure"] = ("fitted on the tuning half only (benchmarks/latency_tune.py, "
                           "pytest_flockai/compute/tuning.py); held-out evaluated after the fit")
     table["rows"] = {"tuning": sum(r.half == "tuning" for r in rows),
@@ -48,6 +52,10 @@ def main(argv=None) -> int:
         print(f"{half:8s} n={al['n']:3d} median ratio {al['median_ratio']:.2f} "
               f"median |ln| {al['median_abs_ln']:.3f} worst {al['worst_ratio']:.2f} "
               f"within 2x {al['within_2x']}/{al['n']}")
+    fb = table["fallback"]
+    print("untuned deployments (leave-one-group-out on the tuning half, median |ln|): "
+          + ", ".join(f"{c['rule']['scale']}/{c['rule']['dispatch']} {c['median_abs_ln']:.3f}"
+                      for c in fb["candidates"]) + f"; chosen {fb['rule']}")
     print(f"wrote {a.out} ({len(skipped)} rows skipped)")
     return 0
 

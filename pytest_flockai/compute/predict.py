@@ -118,10 +118,21 @@ GATE_FUSED = {"tensorrt": ("Sigmoid", "HardSigmoid"), "openvino": ("Sigmoid", "H
               "edgetpu": ("Sigmoid", "HardSigmoid"), "ncnn": ("HardSigmoid",)}
 
 
+#: runtimes that fuse no activation into the convolution before it: eager PyTorch runs each
+#: module as its own kernel (``nn.ReLU`` after ``nn.Conv2d`` is a second kernel launch and
+#: a second pass over the tensor; fusing them takes ``torch.ao.quantization.fuse_modules``,
+#: TorchScript freezing or ``torch.compile``: PyTorch tutorials "Fusing Convolution and
+#: Batch Norm using Custom Function" and "(beta) Building a Convolution/Batch Norm fuser in
+#: FX", which state that eager mode runs them separately). Its gated activations (SiLU,
+#: hard-swish) are one kernel each, as ``GATE_FUSED``'s rule already counts.
+ACT_UNFUSED = frozenset(("pytorch",))
+
+
 def dispatched(nodes, runtime: str) -> list:
     """The nodes a runtime runs: the unfused ones, plus, where the runtime does not fuse a
     gated activation (``GATE_FUSED``), that activation's Mul as one element-wise pass over
-    its output (one read, one write, one op per element)."""
+    its output (one read, one write, one op per element), and, for the runtimes of
+    ``ACT_UNFUSED``, every other activation fused into a convolution as its own pass."""
     gates = {n.fused_into: n.op_type for n in nodes
              if n.fused_into and n.op_type in ("Sigmoid", "HardSigmoid")}
     fused = GATE_FUSED.get(runtime, ())
@@ -129,6 +140,9 @@ def dispatched(nodes, runtime: str) -> list:
     for n in nodes:
         if not n.fused_into:
             out.append(n)
+        elif (runtime in ACT_UNFUSED and n.kind == "elementwise"
+              and n.op_type not in ("Sigmoid", "HardSigmoid", "Mul")):
+            out.append(replace(n, fused_into=None))
         elif (n.op_type == "Mul" and n.fused_into in gates
               and gates[n.fused_into] not in fused):
             out.append(replace(n, in_elems=n.out_elems, macs=n.out_elems, fused_into=None))
@@ -187,24 +201,39 @@ def efficiencies(path=None) -> dict:
     return _load_table(str(p), p.stat().st_mtime)
 
 
+#: how a deployment without tuning rows gets its figures (the tuning file's ``fallback.rule``
+#: overrides this default; ``benchmarks/latency_tune.py`` chooses it by leaving each tuned
+#: group out of the fit in turn, on the tuning half only: ``tuning.fallback_cv``):
+#: ``scale``: "runtime" (the median scale of the same runtime and target at other
+#: precisions, else the target's median) or "target" (the target's median scale);
+#: ``dispatch``: "prior" (factor 1) or "target" (the median factor of the target's runtimes).
+FALLBACK = {"scale": "runtime", "dispatch": "prior"}
+
+
 def params_for(table: dict, dep: _rt.Deployment) -> dict:
     """The efficiencies for one deployment: the target's figures (tuned, else the prior)
-    with the group's ``scale`` (tuned for this runtime/target/precision, else the median of
-    the same runtime and target at other precisions, else the target's median, else 1), and
-    the dispatch cost times the runtime/target's tuned ``dispatch`` factor (else 1)."""
+    with the group's ``scale`` (tuned for this runtime/target/precision, else by the
+    ``FALLBACK`` rule, else 1), and the dispatch cost times the runtime/target's tuned
+    ``dispatch`` factor (else by the ``FALLBACK`` rule)."""
     tgt = {**PRIOR_TARGET[dep.target], **table.get("targets", {}).get(dep.target, {})}
+    rule = {**FALLBACK, **table.get("fallback", {}).get("rule", {})}
     groups = table.get("groups", {})
     g = groups.get(dep.key)
-    if g is None:          # the same runtime on this target at other precisions, else the target
+    if g is None:          # untuned: see FALLBACK
         rt = [v["scale"] for k, v in groups.items()
               if k.split("/")[:2] == [dep.runtime, dep.target]]
-        same = rt or [v["scale"] for k, v in groups.items() if k.split("/")[1] == dep.target]
+        tg = [v["scale"] for k, v in groups.items() if k.split("/")[1] == dep.target]
+        same = (rt or tg) if rule["scale"] == "runtime" else tg
         scale = float(np.median(same)) if same else 1.0
     else:
         scale = float(g["scale"])
-    d = table.get("dispatch", {}).get(f"{dep.runtime}/{dep.target}")
+    disp = table.get("dispatch", {})
+    d = disp.get(f"{dep.runtime}/{dep.target}")
     if d is not None:
         tgt["dispatch_s"] = tgt["dispatch_s"] * float(d["factor"])
+    elif rule["dispatch"] == "target":
+        same = [v["factor"] for k, v in disp.items() if k.split("/")[1] == dep.target]
+        tgt["dispatch_s"] = tgt["dispatch_s"] * (float(np.median(same)) if same else 1.0)
     wino = 1.0
     if f"{dep.runtime}/{dep.target}" in WINOGRAD:
         wino = float(table.get("winograd", {}).get("factor", PRIOR_WINOGRAD))
@@ -325,6 +354,6 @@ def _measured(model, dev) -> LatencyPrediction:
                              math.nan)
 
 
-__all__ = ["EFFICIENCIES", "KINDS", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
+__all__ = ["ACT_UNFUSED", "EFFICIENCIES", "FALLBACK", "KINDS", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
            "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
            "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]

@@ -26,6 +26,10 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
    at or below 1.
 4. Written: the parameters, the tuning statistics and, evaluated after the fit and never
    fed back, the held-out half's ranges per computer/runtime (the prediction's ``band``).
+5. The rule for deployments without tuning rows (``predict.FALLBACK``) is chosen on the
+   tuning half too (``fallback_cv``): each tuned runtime/target/precision is left out of the
+   fit in turn and its rows predicted as an untuned group would be, under each candidate
+   rule; the rule with the smallest median |ln(predicted/published)| over those rows wins.
 """
 
 from __future__ import annotations
@@ -37,7 +41,8 @@ from scipy.optimize import least_squares
 
 from . import runtimes as _rt
 from .devices import DEVICES
-from .predict import PRIOR_TARGET, PRIOR_WINOGRAD, WINOGRAD, dispatched, stream_gbs, winograd_3x3
+from .predict import (PRIOR_TARGET, PRIOR_WINOGRAD, WINOGRAD, dispatched, params_for, roofline,
+                      stream_gbs, winograd_3x3)
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "dispatch_s", "overhead_s")
@@ -153,4 +158,31 @@ def tune(rows) -> dict:
                     "success": bool(fit.success), "prior_weight": PRIOR_WEIGHT}}
 
 
-__all__ = ["BOUNDS", "PRIOR_WEIGHT", "TARGET_PARAMS", "tune"]
+#: the candidate rules for untuned deployments (``predict.FALLBACK``)
+FALLBACK_RULES = tuple({"scale": s, "dispatch": d} for s in ("runtime", "target")
+                       for d in ("prior", "target"))
+
+
+def fallback_cv(rows) -> dict:
+    """Leave-one-group-out on the tuning half: for each tuned runtime/target/precision,
+    refit without its rows and predict them under each rule of ``FALLBACK_RULES``.
+    Returns {"rule": the best rule, "candidates": [{rule, median_abs_ln, rows}, ...]}."""
+    tuning = [r for r in rows if r.half == "tuning"]
+    groups = sorted({r.group for r in tuning})
+    errs: list[list[float]] = [[] for _ in FALLBACK_RULES]
+    for g in groups:
+        table = tune([r for r in tuning if r.group != g])
+        for r in (r for r in tuning if r.group == g):
+            dev = DEVICES[r.computer]
+            dep = _rt.resolve(dev, r.runtime, r.precision, r.target or None)
+            for i, rule in enumerate(FALLBACK_RULES):
+                t = {**table, "fallback": {"rule": rule}}
+                secs = roofline(r.cost, dev, dep, params_for(t, dep))[0]
+                errs[i].append(abs(math.log(secs / r.latency_s)))
+    cands = [{"rule": rule, "median_abs_ln": float(np.median(e)), "rows": len(e)}
+             for rule, e in zip(FALLBACK_RULES, errs)]
+    best = min(cands, key=lambda c: c["median_abs_ln"])
+    return {"rule": best["rule"], "candidates": cands, "groups_left_out": len(groups)}
+
+
+__all__ = ["BOUNDS", "FALLBACK_RULES", "PRIOR_WEIGHT", "TARGET_PARAMS", "fallback_cv", "tune"]
