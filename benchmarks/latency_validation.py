@@ -22,6 +22,37 @@ from pytest_flockai.compute import predict, published
 MIN_ROWS, MEDIAN_BOUND = 8, math.log(1.25)
 
 
+def verdicts(s: dict) -> list[dict]:
+    """Per computer with at least ``MIN_ROWS`` held-out rows: the two criteria of the target
+    (median |ln| <= ln 1.25; every row within 2x) and PASS only when both hold."""
+    out = []
+    for name, st in s.get("heldout", {}).get("computer", {}).items():
+        if st["n"] < MIN_ROWS:
+            continue
+        med_ok = st["median_abs_ln"] <= MEDIAN_BOUND
+        all_ok = st["within_2x"] == st["n"]
+        out.append({"computer": name, "n": st["n"], "median_abs_ln": st["median_abs_ln"],
+                    "median_ok": med_ok, "worst_ratio": st["worst_ratio"],
+                    "within_2x": st["within_2x"], "within_2x_ok": all_ok,
+                    "verdict": "PASS" if med_ok and all_ok else "FAIL"})
+    return out
+
+
+def verdict_lines(s: dict) -> list[str]:
+    """The held-out target per computer, as Markdown."""
+    out = [f"| computer (held-out rows >= {MIN_ROWS}) | rows | median abs ln (<= "
+           f"{MEDIAN_BOUND:.3f}) | worst ratio | within 2x (all) | verdict |",
+           "|---|---|---|---|---|---|"]
+    for v in verdicts(s):
+        out.append(f"| {v['computer']} | {v['n']} | {v['median_abs_ln']:.3f} "
+                   f"{'ok' if v['median_ok'] else 'over'} | {v['worst_ratio']:.2f} | "
+                   f"{v['within_2x']}/{v['n']} {'ok' if v['within_2x_ok'] else 'not all'} | "
+                   f"**{v['verdict']}** |")
+    n_pass = sum(v["verdict"] == "PASS" for v in verdicts(s))
+    out.append(f"\n{n_pass} of {len(verdicts(s))} computers meet the held-out target.")
+    return out
+
+
 def table_lines(s: dict) -> list[str]:
     out = ["| half | by | name | rows | median ratio | median abs ln | worst ratio | within 2x | "
            "target met |", "|---|---|---|---|---|---|---|---|---|"]
@@ -31,7 +62,7 @@ def table_lines(s: dict) -> list[str]:
                 met = ""
                 if by == "computer" and st["n"] >= MIN_ROWS:
                     ok = st["median_abs_ln"] <= MEDIAN_BOUND and st["within_2x"] == st["n"]
-                    met = "yes" if ok else "no"
+                    met = "PASS" if ok else "FAIL"
                 out.append(f"| {half} | {by} | {name} | {st['n']} | {st['median_ratio']:.2f} | "
                            f"{st['median_abs_ln']:.3f} | {st['worst_ratio']:.2f} | "
                            f"{st['within_2x']}/{st['n']} | {met} |")
@@ -59,6 +90,11 @@ def main(argv=None) -> int:
     s = published.summary(rows, table)
     lines = table_lines(s)
     print("\n".join(lines))
+    print("\nTarget on the held-out half, per computer with at least "
+          f"{MIN_ROWS} held-out rows: median |ln(predicted/published)| <= ln 1.25 and no "
+          "row beyond 2x:")
+    vlines = verdict_lines(s)
+    print("\n".join(vlines))
     if a.rows:
         for r, q in zip(rows, published.ratios(rows, table)):
             print(f"{r.half:8s} {r.row_id:>6s} {r.computer:24s} {r.group:26s} "
@@ -66,18 +102,25 @@ def main(argv=None) -> int:
                   f"predicted/published {q:6.2f}")
     print("\nEnergy per inference against the published watt-meter figures "
           "(predicted latency x busy power, whole board):")
+    checked = []
     for e in published.energy_check(table, networks=Path(a.networks)):
         if "skipped" in e:
             print(f"  {e['id']}: skipped ({e['skipped']})")
-        else:
-            print(f"  {e['id']}: {e['computer']} {e['deployment']} {e['network']}: published "
-                  f"{e['published_j']:.3f} J, predicted {e['predicted_j']:.3f} J, ratio "
-                  f"{e['ratio']:.2f}")
+            continue
+        ok = 0.5 <= e["ratio"] <= 2.0
+        checked.append(ok)
+        idle = (f", above idle ratio {e['above_idle_ratio']:.2f}"
+                if "above_idle_ratio" in e else "")
+        print(f"  {e['id']}: {e['computer']} {e['deployment']} {e['network']}: published "
+              f"{e['published_j']:.3f} J, predicted {e['predicted_j']:.3f} J, ratio "
+              f"{e['ratio']:.2f}{idle}: {'within 2x' if ok else 'BEYOND 2x'}")
+    print(f"  energy within 2x of the published figure: {sum(checked)}/{len(checked)} rows "
+          f"({'PASS' if checked and all(checked) else 'FAIL'})")
     print(f"{len(rows)} rows used, {len(skipped)} skipped")
     for why in skipped:
         print("  skipped", why)
     if a.markdown:
-        text = "\n".join(lines) + "\n"
+        text = "\n".join(lines + [""] + vlines) + "\n"
         atomic_write(Path(a.markdown), lambda fh: fh.write(text))
     return 0
 

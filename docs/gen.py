@@ -160,7 +160,7 @@ def computers() -> str:
 def latency_validation() -> str:
     """Predicted / published latency per half and computer (benchmarks/latency_validation.py)."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    from latency_validation import table_lines
+    from latency_validation import table_lines, verdict_lines
 
     from pytest_flockai.compute import predict, published
 
@@ -169,7 +169,8 @@ def latency_validation() -> str:
         return "(no published rows with network summaries yet)\n"
     s = published.summary(rows, predict.efficiencies())
     keep = [ln for ln in table_lines(s) if "| computer/runtime |" not in ln]
-    return "\n".join(keep) + f"\n\n{len(rows)} rows used, {len(skipped)} skipped.\n"
+    return ("\n".join(keep) + f"\n\n{len(rows)} rows used, {len(skipped)} skipped.\n\n"
+            + "\n".join(verdict_lines(s)) + "\n")
 
 
 def limits() -> str:

@@ -41,8 +41,16 @@ from scipy.optimize import least_squares
 
 from . import runtimes as _rt
 from .devices import DEVICES
-from .predict import (PRIOR_TARGET, PRIOR_WINOGRAD, WINOGRAD, dispatched, params_for, roofline,
-                      stream_gbs, winograd_3x3)
+from .predict import (
+    PRIOR_TARGET,
+    PRIOR_WINOGRAD,
+    WINOGRAD,
+    dispatched,
+    params_for,
+    roofline,
+    stream_gbs,
+    winograd_3x3,
+)
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "dispatch_s", "overhead_s")
@@ -179,10 +187,11 @@ def fallback_cv(rows) -> dict:
                 t = {**table, "fallback": {"rule": rule}}
                 secs = roofline(r.cost, dev, dep, params_for(t, dep))[0]
                 errs[i].append(abs(math.log(secs / r.latency_s)))
-    cands = [{"rule": rule, "median_abs_ln": float(np.median(e)), "rows": len(e)}
-             for rule, e in zip(FALLBACK_RULES, errs)]
-    best = min(cands, key=lambda c: c["median_abs_ln"])
-    return {"rule": best["rule"], "candidates": cands, "groups_left_out": len(groups)}
+    med = [float(np.median(e)) for e in errs]
+    best = int(np.argmin(med))
+    cands = [{"rule": rule, "median_abs_ln": m, "rows": len(e)}
+             for rule, m, e in zip(FALLBACK_RULES, med, errs)]
+    return {"rule": FALLBACK_RULES[best], "candidates": cands, "groups_left_out": len(groups)}
 
 
 __all__ = ["BOUNDS", "FALLBACK_RULES", "PRIOR_WEIGHT", "TARGET_PARAMS", "fallback_cv", "tune"]
