@@ -91,12 +91,15 @@ def from_datasheet(name: str, t: dict) -> Device:
     deps = tuple(f"{r}/{k}" for r in t.get("runtimes", ()) for k in TARGET_ORDER.get(r, ())
                  if k in have)
     sources = tuple((k, str(v)) for k, v in _flat(t) if k.endswith("_source"))
+    est = [k.removesuffix("_source") for k, v in sources if v.startswith("estimate")]
+    src = f"{name}: compute/data/computers.toml" + (
+        f" (estimates, not measurements: {', '.join(est)})" if est else "")
     return Device(name, idle_w=_need(t, name, "power", "idle_w"),
                   active_w=_need(t, name, "power", "busy_w"),
                   macs_per_s=_need(t, name, "mac_rule", "macs_per_s"),
                   overhead_s=_need(t, name, "mac_rule", "overhead_s"),
                   memory_mb=_need(t, name, "", "memory_mb"),
-                  source=f"{name}: compute/data/computers.toml", units=tuple(units),
+                  source=src, units=tuple(units),
                   bandwidth_gbs=float(t.get("memory_bandwidth_gbs", 0.0)),
                   stream_gbs=float(t.get("memory_bandwidth_stream_gbs", 0.0)),
                   deployments=deps, mode=str(t.get("name", "")), sources=sources)
