@@ -118,13 +118,13 @@ GATE_FUSED = {"tensorrt": ("Sigmoid", "HardSigmoid"), "openvino": ("Sigmoid", "H
               "edgetpu": ("Sigmoid", "HardSigmoid"), "ncnn": ("HardSigmoid",)}
 
 
-#: runtimes that fuse no activation into the convolution before it: eager PyTorch runs each
-#: module as its own kernel (``nn.ReLU`` after ``nn.Conv2d`` is a second kernel launch and
-#: a second pass over the tensor; fusing them takes ``torch.ao.quantization.fuse_modules``,
-#: TorchScript freezing or ``torch.compile``: PyTorch tutorials "Fusing Convolution and
-#: Batch Norm using Custom Function" and "(beta) Building a Convolution/Batch Norm fuser in
-#: FX", which state that eager mode runs them separately). Its gated activations (SiLU,
-#: hard-swish) are one kernel each, as ``GATE_FUSED``'s rule already counts.
+#: runtimes that fuse no activation into the convolution before it: eager PyTorch calls
+#: each module in turn (``nn.ReLU`` after ``nn.Conv2d`` is a second kernel launch and a
+#: second pass over the tensor). Fusion in PyTorch is an explicit transformation of the
+#: model: ``torch.ao.quantization.quantize_fx.fuse_fx`` ("Fuse modules like conv+bn,
+#: conv+bn+relu etc", PyTorch API reference), ``torch.nn.utils.fusion.fuse_conv_bn_eval``,
+#: TorchScript freezing or ``torch.compile``. Its gated activations (SiLU, hard-swish) are
+#: one kernel each, as ``GATE_FUSED``'s rule already counts.
 ACT_UNFUSED = frozenset(("pytorch",))
 
 
