@@ -25,11 +25,11 @@ from pathlib import Path
 
 from . import cache as _cache
 from . import limits
-from . import report as _report
 from .airframe import blueprints
 from .compute import profiler as _profiler
 from .errors import ConfigError, FlockAIError
 from .reports import commands as _commands
+from .reports import files as _report
 
 __all__ = ["main"]
 

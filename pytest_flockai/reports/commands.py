@@ -5,9 +5,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .. import report as _report
 from ..errors import close_matches
 from . import compare as _compare
+from . import files as _report
 from . import history as _history
 
 
