@@ -39,10 +39,6 @@ ALIKE = {
     ("param", frozenset({"airframe/params", "sweeps/batched/params"})): "batched twin",
     # the pytest side of a concept is harness/<concept>: the fixture and options of it
     ("sweep", frozenset({"harness/sweeps", "sweeps"})): "harness/ is the pytest face of sweeps/",
-    # one result per thing flown, each beside the code that builds it: the flight's is
-    # below the cache layer (the cache stores it), the fleet's and the sweep's above it
-    ("result", frozenset({"result", "fleet/result", "sweeps/result"})):
-        "FlightResult, FleetResult, a sweep's DataFrame: each beside what builds it",
     # in packages others are reshaping now (compute/, app/, sweeps/batched): reported
     ("command", frozenset({"app/commands", "reports/commands"})): "app/ is being reshaped",
     ("link", frozenset({"app/link", "comm/link"})): "app/ is being reshaped",
