@@ -100,9 +100,13 @@ def _is_type_checking(node: ast.AST) -> bool:
 
 
 def _lazy_tables(module: str, tree: ast.Module) -> set[str]:
-    """Modules named in a PEP 562 table: a module-level dict whose values are relative
-    module names (``".store"``) or (module, attribute) pairs."""
-    found = set()
+    """Modules named in a PEP 562 table: in a module that calls ``import_module``, a
+    module-level dict whose values are relative module names (``".store"``) or
+    (module, attribute) pairs."""
+    found: set[str] = set()
+    if not any(isinstance(n, ast.Name) and n.id.endswith("import_module") or
+               isinstance(n, ast.alias) and n.name == "import_module" for n in ast.walk(tree)):
+        return found
     for node in tree.body:
         if isinstance(node, (ast.Assign, ast.AnnAssign)) and isinstance(node.value, ast.Dict):
             for v in node.value.values:
