@@ -45,6 +45,11 @@ ALIKE = {
     ("pilot", frozenset({"app/pilots", "control/pilots"})): "one meaning: a Pilot",
     ("datasheet", frozenset({"airframe/datasheet", "compute/datasheets"})):
         "one meaning: a published spec sheet",
+    # the radio model (comm/link) and the MAVLink socket (app/link): comm.link is also the
+    # public function fa.comm.link, which a module left at the old path would shadow once
+    # imported (the import binds the submodule over the package's attribute), and app/
+    # is being reshaped: rename app/link to mavlink there
+    ("link", frozenset({"app/link", "comm/link"})): "fa.comm.link is a public function",
     # running a MAVLink program (app/) and flying a sweep's variants (sweeps/); app/ is
     # being reshaped and sweeps.runner is a deep import users have, so both stay for now
     ("runner", frozenset({"app/runner", "sweeps/runner"})): "app/ is being reshaped",
@@ -280,8 +285,16 @@ SHIMS = [p for p in MODULES.values() if _is_shim(p)]
 
 @pytest.mark.parametrize("path", SHIMS, ids=lambda p: str(p.relative_to(PKG)))
 def test_a_shim_imports_nothing_of_the_package(path):
-    """A module left at an old path loads its new home only when a moved name is read."""
+    """A module left at an old path loads its new home only when a moved name is read, and
+    its name is no name its package binds: importing it would bind the module over that
+    name (``fa.comm.link`` is a function; a ``comm/link.py`` shim would shadow it)."""
     assert not EAGER[_dotted(path)] - {"pytest_flockai._deprecation"}, EAGER[_dotted(path)]
+    init = ast.parse((path.parent / "__init__.py").read_text())
+    bound = {a.asname or a.name for n in ast.walk(init) if isinstance(n, ast.ImportFrom)
+             for a in n.names} | {t.id for n in init.body if isinstance(n, ast.Assign)
+                                  for t in n.targets if isinstance(t, ast.Name)} \
+        | {n.name for n in init.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    assert path.stem not in bound, f"{path.parent.name}/__init__.py binds {path.stem!r}"
 
 
 @pytest.mark.parametrize("path", SHIMS, ids=lambda p: str(p.relative_to(PKG)))

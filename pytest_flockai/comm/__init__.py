@@ -1,5 +1,5 @@
 """Radio links between the drone and the ground station."""
 
-from .radio import LINKS, Link, Transfer, link, links
+from .link import LINKS, Link, Transfer, link, links
 
 __all__ = ["LINKS", "Link", "Transfer", "link", "links"]

@@ -40,7 +40,7 @@ import warnings
 import numpy as np
 
 from .. import _check
-from ..comm.radio import link as _link
+from ..comm.link import link as _link
 from ..compute import device as _device
 from ..compute.predict import LatencyFallbackWarning, mac_rule_seconds, predict_latency
 from ..compute.runtimes import check_names

@@ -16,7 +16,7 @@ from numbers import Integral
 from typing import Any
 
 from .. import _check, _io, limits
-from ..comm.radio import link as _link
+from ..comm.link import link as _link
 from ..compute import runtimes as _rt
 from ..compute.devices import Device
 from ..compute.latency import LATENCY_MODES, resolve_device

@@ -34,7 +34,7 @@ import time
 import numpy as np
 
 from .. import memo
-from ..comm.radio import link as _link
+from ..comm.link import link as _link
 from ..compute.latency import calibrate, compute_seconds, resolve_device, scale_to_device
 from ..errors import ConfigError
 from .events import DeviceClock, InferenceEvent

@@ -47,7 +47,7 @@ import math
 import numpy as np
 
 from .. import _check
-from ..comm.radio import link as _link
+from ..comm.link import link as _link
 from ..errors import ConfigError
 from .follow import _Perceiving
 from .scoring import MATCH_M
