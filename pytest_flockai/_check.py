@@ -120,3 +120,35 @@ def replace(spec: Any, where: str, changes: dict) -> Any:
             raise ConfigError(f"{where}.replace: {k} is not a {where} field"
                               f"{close_matches(k, known)}; allowed: {', '.join(known)}")
     return dataclasses.replace(spec, **changes)
+
+
+class FrozenSpec:
+    """A class that is not a dataclass (a sensor with per-flight state) but whose
+    constructor's arguments, ``SPEC``, are frozen like a Mission's fields once
+    ``_freeze()`` ran at the end of ``__init__``: assigning one raises, and
+    ``replace(**changes)`` builds a new object, checked again by the constructor."""
+
+    SPEC: tuple[str, ...] = ()
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in self.SPEC and self.__dict__.get("_frozen"):
+            raise dataclasses.FrozenInstanceError(
+                f"cannot assign to field {name!r}: a {type(self).__name__} is a frozen spec; "
+                f".replace({name}=...) returns a checked copy")
+        object.__setattr__(self, name, value)
+
+    def _freeze(self) -> None:
+        object.__setattr__(self, "_frozen", True)
+
+    def _spec_value(self, name: str) -> Any:
+        """The argument that gives ``name`` back to the constructor (override to convert)."""
+        return getattr(self, name)
+
+    def replace(self, **changes: Any) -> Any:
+        """A copy with ``changes`` (argument=value), checked again like a new one."""
+        where = type(self).__name__
+        for k in changes:
+            if k not in self.SPEC:
+                raise ConfigError(f"{where}.replace: {k} is not a {where} field"
+                                  f"{close_matches(k, self.SPEC)}; allowed: {', '.join(self.SPEC)}")
+        return type(self)(**{n: self._spec_value(n) for n in self.SPEC} | changes)

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 from . import kpis as _kpis
 from .errors import ConfigError, close_matches
 from .recording import publish_verdicts
-from .report import table as text_table
+from .reports.files import table as text_table
 
 if TYPE_CHECKING:
     from .result import FlightResult

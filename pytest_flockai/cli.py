@@ -5,7 +5,7 @@
 --splits``/``-k`` per job, or xdist ``--tx`` across hosts) into one report
 with the same schema; a test present in several inputs keeps its last entry.
 ``flockai blueprints`` lists the built-in drones. ``flockai compare`` and
-``flockai history`` compare runs across commits (``reports/commands.py``);
+``flockai history`` compare runs across commits (``reports/subcommands.py``);
 ``flockai cache info|clear|prune`` shows, empties and trims the flight cache (only
 files carrying the cache's own header are ever removed). ``flockai profile-device``
 times ONNX models on this computer (``compute/profiler.py``).
@@ -25,11 +25,11 @@ from pathlib import Path
 
 from . import cache as _cache
 from . import limits
-from . import report as _report
 from .airframe import blueprints
 from .compute import profiler as _profiler
 from .errors import ConfigError, FlockAIError
-from .reports import commands as _commands
+from .reports import files as _report
+from .reports import subcommands as _commands
 
 __all__ = ["main"]
 

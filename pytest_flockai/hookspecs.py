@@ -47,6 +47,6 @@ def pytest_flockai_json_report(report, config):
     """Inspect or extend the JSON report (a dict, schema ``pytest-flockai/1``)
     just before it is written, on the controller process. Modify it in place.
 
-    :param report: the report dict (see ``pytest_flockai.report``).
+    :param report: the report dict (see ``pytest_flockai.reports.files``).
     :param config: the pytest config.
     """

@@ -49,9 +49,9 @@ LAZY_LOADS = {
                                                              "MAVLink front-end (pymavlink)",
     ("harness/sweeps.py", "..sweeps", "runner"): "the flockai_sweep fixture: the core",
     ("harness/sweeps.py", "..sweeps", "executors"): "--flockai-sweep-executor given: the core",
-    ("harness/sweeps.py", "..sweeps", "envelope"): "after a sweep flew (loaded then)",
-    ("harness/recorder.py", "..sweeps", "envelope"): "after a sweep flew (loaded then)",
-    ("report.py", ".", "plots"): "pictures of --flockai-artifacts: NumPy, matplotlib",
+    ("harness/sweeps.py", "..sweeps", "envelope_files"): "after a sweep flew (loaded then)",
+    ("harness/recorder.py", "..sweeps", "envelope_files"): "after a sweep flew (loaded then)",
+    ("reports/files.py", "..", "plots"): "pictures of --flockai-artifacts: NumPy, matplotlib",
     ("harness/ci_reports.py", "..", "plots"): "pictures of the HTML report: NumPy, matplotlib",
     ("cache/key.py", "onnx", "load"): "an ONNX model's external-data files, keyed (0.2 s import)",
 }
@@ -66,10 +66,10 @@ SAME_LAYER = {
     ("fleet", "cache"), ("fleet", "mission"), ("fleet", "policy"), ("mission", "cache"),
     ("mission", "policy"),
     ("__init__", "sweeps"), ("__init__", "budgets"), ("__init__", "cli"), ("__init__", "plots"),
-    ("__init__", "reports"), ("__init__", "strategies"), ("__main__", "cli"), ("budgets", "report"), ("cli", "report"),
-    ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"), ("harness", "report"),
+    ("__init__", "reports"), ("__init__", "strategies"), ("__main__", "cli"), ("budgets", "reports"),
+    ("cli", "reports"), ("harness", "budgets"), ("harness", "plots"),
     ("harness", "reports"), ("harness", "sweeps"), ("plugin", "harness"), ("plugin", "hookspecs"),
-    ("report", "plots"), ("reports", "report"), ("strategies", "budgets"), ("sweeps", "budgets"),
+    ("reports", "plots"), ("strategies", "budgets"), ("sweeps", "budgets"),
     ("sweeps", "plots"),
 }
 

@@ -17,12 +17,13 @@ from pathlib import Path
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai import budgets, cli, report
+from pytest_flockai import budgets, cli
 from pytest_flockai.cache import FlightCache, default_key
 from pytest_flockai.cache.entry import CorruptEntry, read_entry, unseal
 from pytest_flockai.errors import ConfigError, WriteError
 from pytest_flockai.ml import OnnxModel, OpenCVModel, PythonModel
 from pytest_flockai.probes import EnergyProbe
+from pytest_flockai.reports import files as report
 
 ROOT = Path(__file__).resolve().parent.parent
 BLUEPRINT = ROOT / "pytest_flockai" / "airframe" / "blueprints" / "crazyflie-2-1.toml"

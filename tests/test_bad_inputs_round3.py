@@ -26,10 +26,11 @@ from labelled_sets import make_set
 from test_bad_inputs import CF, HOVER, Ctx, M
 
 import pytest_flockai as fa
-from pytest_flockai import cli, limits, report
+from pytest_flockai import cli, limits
 from pytest_flockai.cache import FlightCache, caching, flight_key
 from pytest_flockai.cache.entry import CorruptEntry, read_entry
 from pytest_flockai.errors import ConfigError, SimulationError
+from pytest_flockai.reports import files as report
 
 
 class C3(Ctx):

@@ -14,10 +14,10 @@ from pytest_flockai.cache import FlightCache, caching, flight_key, memo_key
 from pytest_flockai.cache import key as cache_key
 from pytest_flockai.cache.memo_store import MAGIC as MEMO_MAGIC
 from pytest_flockai.cache.store import entries
-from pytest_flockai.fleet.result import FleetResult
+from pytest_flockai.fleet.fleet_result import FleetResult
 from pytest_flockai.ml.envelope import envelope
 from pytest_flockai.ml.evaluation import FrameRecord, detection_kpis
-from pytest_flockai.ml.runner import TaskRunner
+from pytest_flockai.ml.task_runner import TaskRunner
 from pytest_flockai.sweeps import runner
 
 MODELS = Path(__file__).resolve().parent.parent / "fixtures" / "models"

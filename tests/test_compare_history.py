@@ -145,7 +145,8 @@ def test_the_gate_and_compare_apply_one_rule():
     """The plugin's baseline gate (report.regressions) and ``flockai compare`` call one
     function, so they cannot disagree: a regression in one is one in the other, and a
     family tolerance (``recall`` for ``det.recall``) counts in the gate as in compare."""
-    from pytest_flockai import kpis, report
+    from pytest_flockai import kpis
+    from pytest_flockai.reports import files as report
 
     assert cmp.classify is kpis.classify
     cases = [("energy_total_j", 100.0, v) for v in (100.0, 100.005, 101.0, 104.9, 105.2, 99.0)]

@@ -90,3 +90,24 @@ def test_fleet_and_fleet_drone_are_frozen_specs_too():
     later = fleet.replace(drones=[fd.replace(seed=5), fleet.drones[1]])
     assert later.seed == (5, 0) and later.missions[0].seed == 5 and fleet.seed == (0, 0)
     assert later.until == 2.0 and later.missions[1].until == 2.0
+
+
+def test_a_camera_is_a_frozen_spec_too():
+    """The camera's arguments are frozen as a Mission's are (its frames and truth stay
+    per-flight state); ``replace`` builds a new camera, checked again."""
+    cam = fa.sensors.Camera(320, 240, pitch_deg=-60.0, name="cam")
+    with pytest.raises(dataclasses.FrozenInstanceError, match="'pitch_deg'.*replace"):
+        cam.pitch_deg = 200.0
+    with pytest.raises(dataclasses.FrozenInstanceError, match="'conditions'"):
+        cam.conditions = fa.Conditions()
+    with pytest.raises(ValueError, match="read-only"):
+        cam.mount[2] = 1.0
+    assert cam.pitch_deg == -60.0 and cam.mount[2] == -0.05
+    with pytest.raises(ConfigError, match=r"Camera 'cam': pitch_deg = 200"):
+        cam.replace(pitch_deg=200.0)
+    with pytest.raises(ConfigError, match=r"fov is not a Camera field \(did you mean: fov_deg"):
+        cam.replace(fov=90.0)
+    wide = cam.replace(fov_deg=90.0, mount=(0.0, 0.0, -0.1))
+    assert (wide.fov_deg, wide.width, wide.name, wide.pitch_deg) == (90.0, 320, "cam", -60.0)
+    assert list(wide.mount) == [0.0, 0.0, -0.1] and cam.fov_deg == 60.0 and wide is not cam
+    assert wide.lens.focal_px != cam.lens.focal_px               # derived state rebuilt

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai.control.follow import ground_point
+from pytest_flockai.control.tracking import ground_point
 from pytest_flockai.world.actors import WALK_SPEED
 
 

@@ -19,7 +19,7 @@ from pytest_flockai.mission.assemble import Run
 from pytest_flockai.mission.plan import resolve
 from pytest_flockai.ml import OnnxModel, PythonModel
 from pytest_flockai.probes.telemetry import CHUNK_ROWS
-from pytest_flockai.report import safe_name as _safe
+from pytest_flockai.reports.files import safe_name as _safe
 
 CF = fa.drone("crazyflie-2-1")
 

@@ -16,8 +16,9 @@ from pathlib import Path
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai import budgets, report
+from pytest_flockai import budgets
 from pytest_flockai.errors import ConfigError
+from pytest_flockai.reports import files as report
 
 xmlschema = pytest.importorskip("xmlschema")
 SCHEMA = Path(__file__).parent / "schemas" / "junit-10.xsd"

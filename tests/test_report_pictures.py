@@ -10,7 +10,7 @@ import pytest
 import pytest_flockai as fa
 from pytest_flockai import plots
 from pytest_flockai.reports import history
-from pytest_flockai.sweeps import envelope
+from pytest_flockai.sweeps import envelope_files as envelope
 
 matplotlib = pytest.importorskip("matplotlib")
 import matplotlib.pyplot as plt  # noqa: E402

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai import report
 from pytest_flockai.errors import ConfigError, WriteError
+from pytest_flockai.reports import files as report
 
 pytest_plugins = ["pytester"]
 

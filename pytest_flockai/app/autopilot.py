@@ -18,9 +18,9 @@ import queue
 import time
 
 from .. import limits
-from ..control.follow import yaw_of
 from ..control.stages import DONE, PILOT, RETURN, TAKEOFF
 from ..control.stages import LANDING as LAND
+from ..control.tracking import yaw_of
 from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames

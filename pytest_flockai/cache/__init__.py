@@ -35,13 +35,11 @@ from typing import TYPE_CHECKING, Any
 
 from .. import memo as _memo
 from ..errors import ConfigError
+from .modes import MODES, VERIFY_FRACTION
 
 if TYPE_CHECKING:      # loaded on first use (see _LAZY)
     from .store import FlightCache, Lookup
 
-MODES = ("off", "read", "write", "readwrite", "verify")
-#: the share of hits ``verify`` flies again unless told
-VERIFY_FRACTION = 0.1
 
 #: public name -> its module in this package, imported on first use
 _LAZY = {"CacheWarning": ".store", "CorruptEntry": ".store", "FlightCache": ".store",

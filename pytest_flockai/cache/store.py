@@ -39,13 +39,13 @@ from .. import limits
 from .._io import atomic_write
 from ..errors import ConfigError, FlockAIError
 from ..result import FlightResult
-from . import MODES, VERIFY_FRACTION  # the light package module defines them
 from . import auth as _auth
 from . import disk as _disk
 from . import key as _key
 from . import memo_store as _memo_store
 from .auth import CacheWarning
 from .entry import MAGIC, CorruptEntry, NotAFile, NotAuthentic, read_entry, seal, unseal
+from .modes import MODES, VERIFY_FRACTION
 
 
 class CacheMismatch(FlockAIError):

@@ -13,7 +13,7 @@ drones); this package holds only what is fleet-specific:
 
 from .areas import strips, survey
 from .fleet import MAX_DRONES, PAD_CLEARANCE_M, Fleet, FleetDrone
+from .fleet_result import FleetResult
 from .offload import Offload
-from .result import FleetResult
 
 __all__ = ["MAX_DRONES", "PAD_CLEARANCE_M", "Fleet", "FleetDrone", "FleetResult", "Offload", "strips", "survey"]

@@ -25,8 +25,8 @@ from ..mission import Mission, sortie
 from ..mission.assemble import Flight
 from ..mission.plan import check_tasks, resolve
 from ..world import World
+from . import fleet_result
 from . import pads as _pads
-from . import result
 from .offload import Offload, OffloadStep, share_ground
 
 #: m: two pads closer than this are "one pad" (a drone's footprint is < 1 m)
@@ -212,10 +212,10 @@ class Fleet:
     def __repr__(self):
         return f"Fleet({[fd.name for fd in self.drones]!r})"
 
-    def run(self) -> result.FleetResult:
+    def run(self) -> fleet_result.FleetResult:
         """Fly every drone together (or take the fleet from the open flight cache); a
         ``SimulationError`` carries the partial FleetResult on ``.result``."""
-        return cast(result.FleetResult, sortie.run(self, _AllDrones, result.FleetResult))
+        return cast(fleet_result.FleetResult, sortie.run(self, _AllDrones, fleet_result.FleetResult))
 
 
 class _AllDrones:
@@ -228,18 +228,18 @@ class _AllDrones:
                              [fd.pad for fd in fleet.drones])
         runs = self.flight.runs
         self.off = OffloadStep(fleet.offload, runs) if fleet.offload is not None else None
-        self.sep = result.Separation()
+        self.sep = fleet_result.Separation()
         self.ground = share_ground(runs, fleet.shared_link) if fleet.remote else None
         self.steps: Sequence = [st for st in (self.off, self.sep) if st is not None]
 
-    def finished(self, wall_s: float) -> result.FleetResult:
+    def finished(self, wall_s: float) -> fleet_result.FleetResult:
         runs = self.flight.runs
         stats = {"min_separation_m": self.sep.min_m, "t_end": [r.t_end for r in runs],
                  "offload": self.off, "ground": self.ground}
-        return result.build(self.fleet, runs, stats, wall_s)
+        return fleet_result.build(self.fleet, runs, stats, wall_s)
 
-    def stopped(self, exc: SimulationError, wall_s: float) -> result.FleetResult:
-        return result.build(self.fleet, self.flight.runs, {"min_separation_m": math.inf}, wall_s)
+    def stopped(self, exc: SimulationError, wall_s: float) -> fleet_result.FleetResult:
+        return fleet_result.build(self.fleet, self.flight.runs, {"min_separation_m": math.inf}, wall_s)
 
 
 def _check_unique(drones) -> None:

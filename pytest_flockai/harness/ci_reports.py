@@ -21,9 +21,9 @@ from pathlib import Path
 
 import pytest
 
-from .. import report as _report
 from .._io import atomic_write
 from ..reports import compare as _compare
+from ..reports import files as _report
 from ..reports import history as _history
 from ..reports import html as _html
 from ..reports import markdown as _markdown

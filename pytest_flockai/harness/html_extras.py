@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import html as _html
 
-from .. import report as _report
+from ..reports import files as _report
 
 
 def active(config) -> bool:

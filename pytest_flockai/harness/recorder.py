@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from .. import report as _report
 from ..errors import ConfigError
+from ..reports import files as _report
 from .markers import Markers
 
 if TYPE_CHECKING:      # the core loads on first use
@@ -207,7 +207,9 @@ class TestState:
         if self.hypothesis is not None:
             out["hypothesis"] = self.hypothesis
         if self.sweep is not None:
-            from ..sweeps import envelope  # lazy: a sweep flew, so it is loaded already
+            from ..sweeps import (
+                envelope_files as envelope,  # lazy: a sweep flew, so it is loaded already
+            )
             out["sweep"] = envelope.summary(self.sweep, self.sweep_files)
         return _report.jsonable(out)
 

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from .. import report as _report
 from ..reports import compare as _compare
+from ..reports import files as _report
 from ..reports import scenario as _scenario
 from . import junit, signals, terminal
 from .options import DEFAULT_MAX_REGRESSION, MISSING_BASELINE, option, path_option

@@ -24,8 +24,8 @@ from pathlib import Path
 import pytest
 
 from .. import budgets as _budgets
-from .. import report as _report
 from ..errors import ConfigError
+from ..reports import files as _report
 from .ci_reports import PICTURE_PROPERTY
 from .options import option
 from .recorder import STATE
@@ -116,7 +116,7 @@ def check(item, st) -> str | None:
                            f"sweep checks its budgets on every variant; flight = {named[0]!r} is "
                            f"not allowed with @pytest.mark.{MARKER}")
     budgets = [x.budget for x in st.markers.budgets if x.flight is None]
-    from ..sweeps import envelope  # lazy: a sweep flew, so it is loaded already
+    from ..sweeps import envelope_files as envelope  # lazy: a sweep flew, so it is loaded already
     st.verdicts, broken, errors = [], [], []
     for _, row in df.iterrows():
         name = envelope.label(row, axes)
@@ -156,7 +156,7 @@ def write_envelope(item, st, artifacts) -> None:
     axes = df.attrs.get("axes", [])
     kpi = next((x.budget.kpi for x in st.markers.budgets), "flight_time_s")
     x, y = (axes + axes)[:2] if axes else ("", "")
-    from ..sweeps import envelope  # lazy: a sweep flew, so it is loaded already
+    from ..sweeps import envelope_files as envelope  # lazy: a sweep flew, so it is loaded already
     try:
         folder = Path(artifacts) / _report.safe_name(item.nodeid)   # the flights' folder
         folder.mkdir(parents=True, exist_ok=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from .. import budgets as _budgets
 from .. import kpis as _kpis
-from .. import report as _report
+from ..reports import files as _report
 
 HEADLINE_KPIS = ("flight_time_s", "energy_total_j", "mean_power_w", "battery_remaining",
                  "inference_latency_p50_s")

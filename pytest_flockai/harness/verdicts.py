@@ -9,9 +9,9 @@ import pytest
 
 from .. import budgets as _budgets
 from .. import kpis as _kpis
-from .. import report as _report
 from ..errors import ConfigError, close_matches
 from ..reports import compare as _compare
+from ..reports import files as _report
 from ..reports import scenario as _scenario
 from . import sweeps as _sweeps
 

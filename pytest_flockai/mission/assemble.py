@@ -22,9 +22,9 @@ from ..airframe.model import add_drone
 from ..airframe.rotor_drag import RotorDrag
 from ..clock import Clocked
 from ..comm.traffic import Heartbeats, Traffic
+from ..control.clocked import Control, Navigation
 from ..control.estimator import NavEstimator
 from ..control.stages import StageMachine, top_speed
-from ..control.steps import Control, Navigation
 from ..energy.integrator import EnergyIntegrator
 from ..ml.scheduler import DatasetRecorder, TaskScheduler, memory_utilization
 from ..probes.builtin import TaskProbe

@@ -19,7 +19,6 @@
 """
 
 from .analysis import analyse, write_coco_pair
-from .compare import compare_models
 from .dataset_eval import DatasetEvaluation, evaluate_dataset
 from .detections import Detections, parse_detections
 from .envelope import altitude_band
@@ -29,11 +28,12 @@ from .fiducial import MarkerDetector
 from .jpeg import decode_jpeg, encode_jpeg
 from .macs import MacReport, count_macs
 from .metrics import count_of, crowd_metrics
+from .model_choice import compare_models
 from .models import Model, OnnxModel, OpenCVModel, PythonModel
 from .oracle import Oracle, OracleFrame
-from .runner import DeviceClock, InferenceEvent, TaskRunner
 from .shipped import SHIPPED, shipped, shipped_path
 from .task import Task
+from .task_runner import DeviceClock, InferenceEvent, TaskRunner
 from .templates import Classifier, Clusterer, Counter, Detector, Regressor, Template
 
 __all__ = ["Classifier", "Clusterer", "Counter", "DatasetEvaluation", "Detections", "Detector",

@@ -25,8 +25,8 @@ from .analysis import analyse, write_coco_pair
 from .events import InferenceEvent
 from .gallery import worst_frames
 from .metrics import invalid_prediction
-from .scoring import Scorer
 from .task import Task
+from .task_scoring import Scorer
 
 
 class DatasetEvaluation:

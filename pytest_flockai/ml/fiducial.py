@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from ..errors import ConfigError
-from ..world.markers import DICTIONARIES, aruco_dictionary
+from ..world.aruco import DICTIONARIES, aruco_dictionary
 from .models import Model
 
 MACS_PER_PIXEL = 60

@@ -21,8 +21,8 @@ from .analysis import coco_pair
 from .gallery import worst_frames
 from .metrics import percentile
 from .oracle import OracleFrame, needs_pixels
-from .runner import DeviceClock, TaskRunner
 from .task_energy import task_energy_kpis
+from .task_runner import DeviceClock, TaskRunner
 
 #: frames a detection task's gallery shows
 GALLERY_FRAMES = 6

@@ -3,7 +3,7 @@
 A ``Task`` is a validated description: a model, on which sensor, how often,
 where (on board the drone or remotely on the ground station over a radio
 link), and how its predictions are scored against the simulator's truth
-(``evaluate``). ``ml.runner.TaskRunner`` executes it during a mission.
+(``evaluate``). ``ml.task_runner.TaskRunner`` executes it during a mission.
 """
 
 from __future__ import annotations

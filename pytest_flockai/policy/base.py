@@ -28,9 +28,9 @@ import math
 from .. import _check
 from .. import kpis as _kpis
 from ..clock import Clocked
-from ..control.follow import Goto, Resume, plan_left, yaw_of
 from ..control.pilots import Hover, Orbit, Pilot, Waypoints
 from ..control.stages import LANDING, PILOT, RETURN, STAGES, TAKEOFF
+from ..control.tracking import Goto, Resume, plan_left, yaw_of
 from ..errors import ConfigError, close_matches
 from ..ml.detections import parse_detections
 from ..ml.models import as_model
@@ -38,7 +38,7 @@ from ..ml.task import EXECUTIONS
 from . import attitude as _attitude
 from . import fence as _fence
 from . import reserved as _reserved
-from .views import Delivered, Link
+from .inputs import Delivered, Link
 
 #: built-in probes scored against the simulator's truth: no policy reads them
 TRUTH_PROBES = ("flight", "ml")

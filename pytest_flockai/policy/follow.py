@@ -1,7 +1,7 @@
 """Perception-driven policies: follow a target from a detector's boxes, search then orbit.
 
 ``Follow(task)`` flies the mission's own plan (mode ``search``) until the
-tracker (``control.follow.Tracker``) is confirmed by ``confirm`` detections of
+tracker (``control.tracking.Tracker``) is confirmed by ``confirm`` detections of
 the ``target`` class, then flies above the track (``follow``). A detection
 becomes a ground point through the camera model and the pose the drone believed
 it had when the frame was captured; results arrive when delivered (latency and
@@ -38,8 +38,8 @@ from __future__ import annotations
 import math
 
 from .. import _check
-from ..control.follow import Track, Tracker, ground_point, yaw_of
 from ..control.stages import PILOT
+from ..control.tracking import Track, Tracker, ground_point, yaw_of
 from ..errors import ConfigError
 from ..world.objects import CAR_HEIGHT, PERSON_HEIGHT
 from ..world.truth import CLASSES

@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 
 from .. import _check
-from ..control.follow import ground_point
+from ..control.tracking import ground_point
 from ..errors import ConfigError
-from ..world.markers import TOP_Z
+from ..world.aruco import TOP_Z
 from .base import Policy
 from .follow import _task_of
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 
 #: m: the least drone motion between a track's first and last hit for the "moves with the
-#: drone" rule to judge: 2.5 times the tracker's 1 m measurement noise (``control.follow``)
+#: drone" rule to judge: 2.5 times the tracker's 1 m measurement noise (``control.tracking``)
 BASELINE_M = 2.5
 #: m/s: the fastest a person walks: the highest mean maximum gait speed in Bohannon 1997
 #: (Age and Ageing 26(1), Table: men in their 40s, 253 cm/s; comfortable paces 127-146 cm/s)

@@ -10,10 +10,13 @@
 - ``markdown``: the job summary (``--flockai-md PATH``, ``GITHUB_STEP_SUMMARY``);
 - ``html``: the self-contained dashboard (``--flockai-html PATH``; ``html_assets``: its
   style and script; ``ml_gallery``: a detection task's worst frames);
-- ``commands``: the ``flockai compare`` and ``flockai history`` subcommands.
+- ``subcommands``: the ``flockai compare`` and ``flockai history`` subcommands;
+- ``files``: the files the plugin writes: the JSON report, the baseline, the
+  artifacts, and the text tables of the terminal summary;
+- ``commands``: the old path of ``subcommands``, kept as a shim that warns once.
 
-Everything here reads the plain data of the JSON report (``report.py``); none
-of it needs pytest.
+Everything here reads or writes the plain data of the JSON report; none of it needs
+pytest (the plugin's side is ``harness/``).
 """
 
 from importlib import import_module as _import_module

@@ -24,12 +24,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .. import kpis as _kpis
-from .. import report as _report
 from ..errors import close_matches
 from ..kpis import NOISE_REL as NOISE_REL  # the one regression rule, the gate's too
 from ..kpis import classify as classify
 from ..kpis import family as family
 from ..kpis import tolerance as tolerance
+from . import files as _report
 from . import scenario as _scenario
 
 

@@ -24,8 +24,8 @@ import subprocess
 from pathlib import Path
 
 from .. import kpis as _kpis
-from .. import report as _report
 from .._io import atomic_write
+from . import files as _report
 
 SCHEMA = "pytest-flockai-history/1"
 

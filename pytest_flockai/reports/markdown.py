@@ -10,7 +10,7 @@ its outcome, then the KPI table (headline KPIs and every budgeted one).
 
 from __future__ import annotations
 
-from .. import report as _report
+from . import files as _report
 from . import summary as _s
 from .compare import format_change
 

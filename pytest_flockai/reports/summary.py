@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 
 from .. import kpis as _kpis
-from .. import report as _report
 from . import compare as _compare
+from . import files as _report
 from . import scenario as _scenario
 
 HEADLINE = ("flight_time_s", "endurance_s", "energy_total_j", "mean_power_w", "battery_remaining",

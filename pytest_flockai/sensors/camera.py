@@ -167,8 +167,11 @@ class FrameRenderer:
             pass
 
 
-class Camera(Sensor):
+class Camera(_check.FrozenSpec, Sensor):
     """A rendered, gimballed camera: ``read(t, data)`` -> RGB frame, ``last_truth``.
+
+    A frozen spec like ``Mission``: its arguments cannot be assigned after construction;
+    ``camera.replace(pitch_deg=-45)`` returns a new Camera, checked again.
 
     width, height (pixels), fov_deg (vertical field of view), pitch_deg
     (gimbal pitch, -90 straight down) as in a blueprint's [camera] section
@@ -182,6 +185,8 @@ class Camera(Sensor):
     """
 
     on_demand = True
+    SPEC = ("width", "height", "fov_deg", "pitch_deg", "rate_hz", "name", "power_w", "world",
+            "occlusion", "mount", "body_name", "objects", "conditions")
 
     def __init__(self, width: int = 320, height: int = 240, fov_deg: float = 60.0,
                  pitch_deg: float = -90.0, rate_hz: float = 1.0, *, name: str = "camera",
@@ -195,7 +200,9 @@ class Camera(Sensor):
         self.fov_deg = _check.number("fov_deg", fov_deg, where=w, minimum=1.0, maximum=170.0)
         self.pitch_deg = _check.number("pitch_deg", pitch_deg, where=w, minimum=-90.0, maximum=90.0)
         self.mount = np.array(_check.vector("mount", mount, 3, where=w))
+        self.mount.flags.writeable = False     # part of the frozen spec
         self.body_name = body_name
+        self._mounted_on = body_name           # the body add_to_spec put it on (a fleet's prefix)
         self.world = world                     # yours; else each flight's (bind_world)
         self._flight_world = None
         self._actors = None                    # this flight's moving actors (world.actors)
@@ -212,6 +219,10 @@ class Camera(Sensor):
         self.frames = 0
         self._renderer: FrameRenderer | None = None
         self.body: DroneBody | None = None
+        self._freeze()
+
+    def _spec_value(self, name: str) -> Any:
+        return tuple(self.mount) if name == "mount" else getattr(self, name)
 
     @classmethod
     def from_blueprint(cls, camera, **kw) -> Camera:
@@ -230,7 +241,7 @@ class Camera(Sensor):
     def add_to_spec(self, spec, body_name: str | None = None) -> None:
         """Add a body-fixed MuJoCo camera (the gimbal at rest) and size the framebuffer."""
         body_name = body_name or self.body_name
-        self.body_name = body_name
+        self._mounted_on = body_name
         body = spec.body(body_name)
         if body is None:
             raise ConfigError(f"Camera {self.name!r}: body_name = {body_name!r} is not a body "
@@ -248,7 +259,7 @@ class Camera(Sensor):
 
     def bind(self, model, data, rng):
         super().bind(model, data, rng)
-        self.body = DroneBody(model, self.body_name, f"Camera {self.name!r}")
+        self.body = DroneBody(model, self._mounted_on, f"Camera {self.name!r}")
         world = self.world if self.world is not None else self._flight_world
         if world is not None:
             self._points = world.truth_points()

@@ -55,7 +55,7 @@ from . import executors as _executors
 from . import progress as _progress
 from . import worker as _worker
 from .batched import params as _batched
-from .result import SweepResult
+from .sweep_result import SweepResult
 from .worker import Outcome, row_of
 
 BACKENDS = ("process", "mjx", "jax", "auto")

@@ -25,8 +25,8 @@ import numpy as np
 
 from .. import _check, limits
 from ..errors import ConfigError
+from . import aruco as _aruco
 from . import figures as _fig
-from . import markers as _markers
 from .objects import CAR_HEIGHT, CAR_VERTS, PERSON_HEIGHT, ObjectTable, _rotate
 
 WALK_SPEED = 1.4        # m/s, Bohannon 1997 / Mohler et al. 2007 (module docstring)
@@ -119,7 +119,7 @@ class Car(Actor):
 
 
 class Marker(Actor):
-    """An ArUco marker lying still at (x, y) (``world.markers``): ``size_m`` the side of
+    """An ArUco marker lying still at (x, y) (``world.aruco``): ``size_m`` the side of
     its black square, ``marker_id`` in ``dictionary``, turned by ``yaw_deg``. It is drawn
     in rendered frames and is no object of the detection truth."""
 
@@ -130,7 +130,7 @@ class Marker(Actor):
         super().__init__([(x, y)], 1.0, name=name or f"marker{marker_id}")
         where = f"Marker {self.name!r}"
         self.size_m = _check.positive("size_m", size_m, where=where)
-        self.dictionary = _check.choice("dictionary", dictionary, _markers.DICTIONARIES, where=where)
+        self.dictionary = _check.choice("dictionary", dictionary, _aruco.DICTIONARIES, where=where)
         if isinstance(marker_id, bool) or not isinstance(marker_id, (int, np.integer)) or \
                 not 0 <= marker_id < 50:
             raise ConfigError(f"{where}: marker_id = {marker_id!r} is not allowed; expected an "
@@ -303,7 +303,7 @@ class ActorSet:
         """One mesh geom per actor and material in the world body (no collisions), and
         each marker's textured slab."""
         for i, m in enumerate(self.markers):
-            _markers.add_marker(spec, f"marker{i}", m.centre, m.size_m, m.dictionary, m.marker_id,
+            _aruco.add_marker(spec, f"marker{i}", m.centre, m.size_m, m.dictionary, m.marker_id,
                                 m.yaw_deg)
         for i, a in enumerate(self.actors):
             for part, (v, f) in self._shape[a.kind].items():
