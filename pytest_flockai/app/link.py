@@ -261,7 +261,7 @@ class Link:
                     "SET_POSITION_TARGET_GLOBAL_INT", "MISSION_SET_CURRENT"):
             self.app_id = (msg.get_srcSystem(), msg.get_srcComponent())
             if self.sim_running:
-                self.inbox.put(msg)
+                self.inbox.put((time.monotonic(), msg))     # acted on by its arrival
             else:
                 self.ap.off_flight(msg)
         elif kind.startswith("PARAM_"):
