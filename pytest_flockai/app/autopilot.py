@@ -160,9 +160,10 @@ class Autopilot(Policy, Commands):
         step whose paced wall time follows its arrival, computed then (its COMMAND_ACK
         goes out then). The steps in between, which the app cannot see, are computed
         late, in one burst when the next of those comes: the thread sleeps until the
-        next telemetry, a message's arrival, the app check or the deadline (at 1x 10
-        wake-ups a second, the telemetry's rate, instead of one per 40 ms step). Never
-        more than ``SLEEP_MIN_S`` early; falling behind is measured as ``lag``."""
+        next telemetry, a message's arrival or the deadline (at 1x 10 wake-ups a second,
+        the telemetry's rate, instead of one per 40 ms step; the app's exit is checked
+        at those, every 0.25 to 0.5 s). Never more than ``SLEEP_MIN_S`` early; falling
+        behind is measured as ``lag``."""
         inbox, pend, w0, spd = self.link.inbox, self._pending, self._w0, self.speed
         assert w0 is not None
         wk = w0 + t / spd
@@ -171,14 +172,17 @@ class Autopilot(Policy, Commands):
             w_tel = wk
         elif math.isinf(nt):
             w_tel = math.inf
-        else:                                   # the first step at or after the telemetry
-            w_tel = w0 + (t + math.ceil((nt - t) / PERIOD_S - 1e-6) * PERIOD_S) / spd
+        else:                   # the first step at or after the telemetry (t >= nt there)
+            k = math.ceil((nt - t) / PERIOD_S - 1e-6)
+            if round(t + k * PERIOD_S, 9) < nt:       # 1.4 < 1.4000000000000001: one more
+                k += 1
+            w_tel = w0 + (t + k * PERIOD_S) / spd
         while True:
             while not inbox.empty():
                 pend.append(inbox.get())
             now = time.monotonic()
             until = max(wk, min(w_tel, pend[0][0] if pend else math.inf,
-                                self._next_poll, self.deadline))
+                                self._next_poll + 0.25, self.deadline))
             ahead = until - now
             if ahead <= SLEEP_MIN_S:            # fewer, longer sleeps: each is a wake-up
                 if ahead < 0.0:
