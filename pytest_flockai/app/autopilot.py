@@ -3,12 +3,15 @@ the app commands a take-off, turns the app's MAVLink commands into the stage mac
 and the pilots' actions, streams telemetry from what the drone estimates, and paces
 the simulated clock at ``speed`` times the wall clock.
 
-Every 40 ms of simulated time (25 Hz) it waits for the wall
-clock (``speed``: simulated seconds per wall second; falling behind is measured as
-``lag``), acts on the commands the link received and acknowledges each (COMMAND_ACK:
-ACCEPTED, DENIED where PX4 refuses, UNSUPPORTED where nothing is emulated), steps the
-mission, and sends the telemetry that is due. Its per-flight state lives on the bound
-copy (``Run.policies``), as for every policy.
+Every 40 ms of simulated time (25 Hz) it acts on the commands the link received
+and acknowledges each (COMMAND_ACK: ACCEPTED, DENIED where PX4 refuses, UNSUPPORTED
+where nothing is emulated), steps the mission, and sends the telemetry that is due.
+What the app sees is on the paced clock (``speed``: simulated seconds per wall second;
+falling behind is measured as ``lag``): a step that sends telemetry, or the first step
+after a message arrived, is computed at its paced wall time; the steps in between run
+late, in one burst (``_pace``), so the simulation wakes at the telemetry's rate, not
+at every step. Its per-flight state lives on the bound copy (``Run.policies``), as for
+every policy.
 """
 
 from __future__ import annotations
