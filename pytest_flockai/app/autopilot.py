@@ -234,8 +234,8 @@ class Autopilot(Policy, Commands):
             if now - w0 >= self._next_tel:      # the stream rates, on the wall clock
                 self._telemetry(now - w0, t)
                 self.link.flush()
-            self.wall = now
             if self._pending:
+                self.wall = now
                 self.handle(t, self._pending.popleft()[1])
                 continue
             wait = min(self._next_tel - (now - w0), self._next_poll - now, self.deadline - now)
@@ -243,6 +243,7 @@ class Autopilot(Policy, Commands):
                 _, msg = inbox.get(timeout=max(0.0, wait))
             except queue.Empty:
                 continue
+            self.wall = time.monotonic()        # the clock of the offboard setpoints' age
             self.handle(t, msg)
         self._w0 = time.monotonic() - t / self.speed     # paced again from here
         self._due = dict.fromkeys(self._due, t)
