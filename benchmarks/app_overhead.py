@@ -1,61 +1,138 @@
 """CPU cost of the MAVLink front-end (pytest_flockai.app) against the same flight flown
-by a Policy: the mission program of tests/apps (3 waypoints, return to launch) flown by
-the app at ``--speed``, and the same waypoints flown by ``Mission(Waypoints, policies=
-[a Policy doing nothing at the autopilot's period])`` on the drone's estimate. CPU seconds of this
-process (the app's own process is not counted) per simulated second, best of ``--runs``.
+by a Policy. Three flights per round, interleaved, each ``--rounds`` times:
 
-    PYTHONPATH=$PWD python benchmarks/app_overhead.py --speed 20 --runs 3
+- ``policy``: the waypoints of tests/apps/mavsdk_mission.py (3 waypoints, 5 m/s) flown
+  by ``Mission(Waypoints, policies=[a Policy doing nothing at the autopilot's 25 Hz])``
+  on the drone's estimate, as fast as it computes (no pacing);
+- ``paced``: the same flight with that Policy pacing the simulated clock at ``--speed``
+  times the wall clock exactly as the autopilot does (the cost of real time alone);
+- ``app``: tests/apps/mavsdk_mission.py flown by ``fa.app.run(..., speed=--speed)``.
+
+Figures: CPU seconds of THIS process (the simulator and the front-end, all its threads:
+``time.process_time``) per simulated second. The app's own process (and what it reaped)
+is reported apart (``app CPU``: RUSAGE_CHILDREN). The load average is printed with every
+round: the figures are only comparable within one run on one machine.
+
+``--against DIR`` runs every round twice, in fresh interpreters, alternating this
+checkout and the package in ``DIR`` (e.g. ``git archive`` of an older commit): a
+before/after comparison under the same load.
+
+    PYTHONPATH=$PWD python benchmarks/app_overhead.py --speed 20 --rounds 3
+    PYTHONPATH=$PWD python benchmarks/app_overhead.py --speed 1 --rounds 1 --against /tmp/old
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import resource
+import statistics
+import subprocess
 import sys
 import time
 
-import pytest_flockai as fa
-from pytest_flockai.app.autopilot import PERIOD_S
-from pytest_flockai.control.pilots import Waypoints
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 APP = os.path.join(HERE, "..", "tests", "apps", "mavsdk_mission.py")
+KINDS = ("policy", "paced", "app")
 
 
-class Idle(fa.Policy):
-    def decide(self, t, drone):
-        pass
+def _flights(speed: float) -> dict:
+    """One round in this interpreter: {kind: (CPU s, simulated s, wall s, app CPU s)}."""
+    import pytest_flockai as fa
+    from pytest_flockai.app import autopilot
+    from pytest_flockai.control.pilots import Waypoints
 
+    nap = getattr(autopilot, "SLEEP_MIN_S", 0.005)
 
-def policy_flight(drone):
+    class Idle(fa.Policy):
+        def __init__(self, pace: float):
+            super().__init__("idle", period_s=autopilot.PERIOD_S)
+            self.pace = pace
+
+        def start(self, run):
+            self.w0 = None
+
+        def decide(self, t, drone):
+            if self.pace <= 0:
+                return
+            now = time.monotonic()
+            if self.w0 is None:
+                self.w0 = now - t / self.pace
+            ahead = self.w0 + t / self.pace - now
+            if ahead > nap:
+                time.sleep(ahead)
+
+    drone = fa.drone("dji-mavic-2-pro")
     pts = [(0.0, 20.0, 10.0), (15.0, 20.0, 10.0), (15.0, 0.0, 8.0)]
-    m = fa.Mission(drone, Waypoints(pts, 5.0), fly_on="estimate",
-                   policies=[Idle(period_s=PERIOD_S)])
-    c0 = time.process_time()
-    res = m.run()
-    return time.process_time() - c0, res.scenario["sim_time_s"]
+    out = {}
+    for kind in KINDS:
+        ch0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        c0, w0 = time.process_time(), time.perf_counter()
+        if kind == "app":
+            r = fa.app.run([sys.executable, APP], drone, speed=speed, timeout_s=300)
+            assert r.exit_code == 0, r.output
+            sim = r.result.scenario["sim_time_s"]
+        else:
+            m = fa.Mission(drone, Waypoints(pts, 5.0), fly_on="estimate",
+                           policies=[Idle(speed if kind == "paced" else 0.0)])
+            sim = m.run().scenario["sim_time_s"]
+        cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+        ch1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        app_cpu = (ch1.ru_utime + ch1.ru_stime) - (ch0.ru_utime + ch0.ru_stime)
+        out[kind] = (cpu, sim, wall, app_cpu)
+    return out
 
 
-def app_flight(drone, speed):
-    c0 = time.process_time()
-    r = fa.app.run([sys.executable, APP], drone, speed=speed, timeout_s=300)
-    assert r.exit_code == 0, r.output
-    return time.process_time() - c0, r.result.scenario["sim_time_s"], r.wall_s
+def _round_in(path: str, speed: float) -> dict:
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([path, os.environ.get("PYTHONPATH", "")]))
+    p = subprocess.run([sys.executable, os.path.abspath(__file__), "--speed", str(speed),
+                        "--one-round"], env=env, capture_output=True, text=True, check=True)
+    return json.loads(p.stdout.strip().splitlines()[-1])
 
 
-def main():
+def _load() -> str:
+    return "load average " + " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--speed", type=float, default=20.0)
-    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--against", default=None, help="a directory holding another pytest_flockai")
+    ap.add_argument("--one-round", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
-    drone = fa.drone("dji-mavic-2-pro")
-    pol = min(c / s for c, s in (policy_flight(drone) for _ in range(a.runs)))
-    runs = [app_flight(drone, a.speed) for _ in range(a.runs)]
-    app = min(c / s for c, s, _ in runs)
-    print(f"policy flight: {pol * 1000:.1f} ms CPU per simulated s")
-    print(f"app flight at {a.speed:g}x: {app * 1000:.1f} ms CPU per simulated s "
-          f"(wall {min(w for *_, w in runs):.1f} s)")
-    print(f"front-end overhead: {100 * (app / pol - 1):+.0f} %")
+    if a.one_round:
+        print(json.dumps(_flights(a.speed)))
+        return
+    sides = {"this": os.path.abspath(os.path.join(HERE, ".."))}
+    if a.against:
+        sides["against"] = os.path.abspath(a.against)
+    rows: dict = {s: [] for s in sides}
+    print(f"speed {a.speed:g}x, {a.rounds} round(s); {_load()}")
+    for i in range(a.rounds):
+        for side, path in sides.items():
+            r = _round_in(path, a.speed) if a.against else _flights(a.speed)
+            rows[side].append(r)
+            ms = {k: 1000 * r[k][0] / r[k][1] for k in KINDS}
+            print(f"round {i + 1} {side:7s}: policy {ms['policy']:.2f}, paced {ms['paced']:.2f}, "
+                  f"app {ms['app']:.2f} ms CPU per simulated s (app flight {r['app'][1]:.1f} "
+                  f"simulated s in {r['app'][2]:.1f} wall s; the app's own process "
+                  f"{r['app'][3]:.2f} CPU s); {_load()}", flush=True)
+    for side, rs in rows.items():
+        per = {k: [1000 * r[k][0] / r[k][1] for r in rs] for k in KINDS}
+        best = {k: min(v) for k, v in per.items()}
+        med = {k: statistics.median(v) for k, v in per.items()}
+        print(f"{side} ({sides[side]}):")
+        for k in KINDS:
+            print(f"  {k:6s} best {best[k]:6.2f}  median {med[k]:6.2f} ms CPU per simulated s")
+        print(f"  front-end overhead over the policy flight: best {100 * (best['app'] / best['policy'] - 1):+.0f} %, "
+              f"median {100 * (med['app'] / med['policy'] - 1):+.0f} %")
+        print(f"  over the paced policy flight (same pacing): best "
+              f"{100 * (best['app'] / best['paced'] - 1):+.0f} %, median "
+              f"{100 * (med['app'] / med['paced'] - 1):+.0f} %")
+        print(f"  pacing alone (paced over policy): best "
+              f"{100 * (best['paced'] / best['policy'] - 1):+.0f} %")
 
 
 if __name__ == "__main__":

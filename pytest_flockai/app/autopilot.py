@@ -3,12 +3,15 @@ the app commands a take-off, turns the app's MAVLink commands into the stage mac
 and the pilots' actions, streams telemetry from what the drone estimates, and paces
 the simulated clock at ``speed`` times the wall clock.
 
-Every 40 ms of simulated time (25 Hz) it waits for the wall
-clock (``speed``: simulated seconds per wall second; falling behind is measured as
-``lag``), acts on the commands the link received and acknowledges each (COMMAND_ACK:
-ACCEPTED, DENIED where PX4 refuses, UNSUPPORTED where nothing is emulated), steps the
-mission, and sends the telemetry that is due. Its per-flight state lives on the bound
-copy (``Run.policies``), as for every policy.
+Every 40 ms of simulated time (25 Hz) it acts on the commands the link received
+and acknowledges each (COMMAND_ACK: ACCEPTED, DENIED where PX4 refuses, UNSUPPORTED
+where nothing is emulated), steps the mission, and sends the telemetry that is due.
+What the app sees is on the paced clock (``speed``: simulated seconds per wall second;
+falling behind is measured as ``lag``): a step that sends telemetry, or the first step
+after a message arrived, is computed at its paced wall time; the steps in between run
+late, in one burst (``_pace``), so the simulation wakes at the telemetry's rate, not
+at every step. Its per-flight state lives on the bound copy (``Run.policies``), as for
+every policy.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from __future__ import annotations
 import math
 import queue
 import time
+from collections import deque
 
 from .. import limits
 from ..control.stages import DONE, PILOT, RETURN, TAKEOFF
@@ -31,8 +35,10 @@ from .pilots import Setpoint
 
 #: s of simulated time between the autopilot's steps (25 Hz: commands, setpoints, telemetry)
 PERIOD_S = 0.04
-#: s of wall time the simulation may run ahead of the paced clock before it sleeps
-SLEEP_MIN_S = 0.005
+#: s of wall time the simulation may run ahead of the paced clock before it sleeps: each
+#: sleep costs a wake-up on cold caches, so at speeds above 1 the steps run in bursts of
+#: this length (10 ms of wall time: 0.2 s of simulated time at 20x, one step at 1x)
+SLEEP_MIN_S = 0.010
 #: s of wall time without a setpoint after which OFFBOARD falls back to HOLD (PX4's
 #: COM_OF_LOSS_T default is 1 s)
 OFFBOARD_LOSS_S = 1.0
@@ -64,6 +70,8 @@ class Autopilot(Policy, Commands):
         self.lag_sum = 0.0
         self.n_steps = 0
         self._w0: float | None = None
+        self.wall = 0.0                     # the paced wall time of this step (monotonic s)
+        self._pending: deque = deque()      # (arrival, message) not acted on yet
         self._next_poll = 0.0
         self._app_gone = False
         self.rates = dict(RATES)
@@ -121,21 +129,14 @@ class Autopilot(Policy, Commands):
     # -- the simulation's step -------------------------------------------------------------
     def decide(self, t: float, drone) -> None:
         self.t_last = t
-        now = time.monotonic()
         if self._w0 is None:
-            self._w0 = now - t / self.speed
-        ahead = self._w0 + t / self.speed - now
-        if ahead > 0.0:
-            if ahead > SLEEP_MIN_S:           # fewer, longer sleeps: each costs a wake-up
-                self.link.flush()             # what this burst computed, in one datagram
-                time.sleep(ahead)
-                now += ahead
-        else:
-            self.lag_max = max(self.lag_max, -ahead)
-            self.lag_sum -= ahead
+            self._w0 = time.monotonic() - t / self.speed
+        now = self._pace(t)
         self.n_steps += 1
         if self.stages.grounded:
             self._preflight(t)
+            now = time.monotonic()
+        self.wall = self._w0 + t / self.speed
         if now >= self.deadline:
             self.run.event(t, "app_timeout")
             self.run.stop("app_timeout")
@@ -143,10 +144,10 @@ class Autopilot(Policy, Commands):
         if now >= self._next_poll:
             self._next_poll = now + 0.25
             self._check_app(t)
-        inbox = self.link.inbox
-        while not inbox.empty():
-            self.handle(t, inbox.get())
-        self._modes(t, now)
+        pend = self._pending
+        while pend and pend[0][0] <= self.wall:  # the rest arrived after this step
+            self.handle(t, pend.popleft()[1])
+        self._modes(t, self.wall)
         if self.mission_active:
             self.mission_step(t)
         if t >= self._next_tel:
@@ -154,6 +155,51 @@ class Autopilot(Policy, Commands):
         link = self.link
         if link.pending and now - link.queued_at >= SLEEP_MIN_S:   # not sleeping: behind
             link.flush()
+
+    def _pace(self, t: float) -> float:
+        """Wait until step ``t`` is to be computed on the paced clock; return the wall
+        time (time.monotonic()). What the app sees is on time: a step that sends
+        telemetry is computed at its paced wall time, and a message acts at the first
+        step whose paced wall time follows its arrival, computed then (its COMMAND_ACK
+        goes out then). The steps in between, which the app cannot see, are computed
+        late, in one burst when the next of those comes: the thread sleeps until the
+        next telemetry, a message's arrival or the deadline (at 1x 10 wake-ups a second,
+        the telemetry's rate, instead of one per 40 ms step; the app's exit is checked
+        at those, every 0.25 to 0.5 s). Never more than ``SLEEP_MIN_S`` early; falling
+        behind is measured as ``lag``."""
+        inbox, pend, w0, spd = self.link.inbox, self._pending, self._w0, self.speed
+        assert w0 is not None
+        wk = w0 + t / spd
+        nt = self._next_tel
+        if nt <= t:
+            w_tel = wk
+        elif math.isinf(nt):
+            w_tel = math.inf
+        else:                   # the first step at or after the telemetry (t >= nt there)
+            k = math.ceil((nt - t) / PERIOD_S - 1e-6)
+            if round(t + k * PERIOD_S, 9) < nt:       # 1.4 < 1.4000000000000001: one more
+                k += 1
+            w_tel = w0 + (t + k * PERIOD_S) / spd
+        while True:
+            while not inbox.empty():
+                pend.append(inbox.get())
+            now = time.monotonic()
+            until = max(wk, min(w_tel, pend[0][0] if pend else math.inf,
+                                self._next_poll + 0.25, self.deadline))
+            ahead = until - now
+            if ahead <= SLEEP_MIN_S:            # fewer, longer sleeps: each is a wake-up
+                if ahead < 0.0:
+                    self.lag_max = max(self.lag_max, -ahead)
+                    self.lag_sum -= ahead
+                return now
+            self.link.flush()                   # what this burst computed, in one datagram
+            if pend:                            # a message acts at this step: on time
+                time.sleep(ahead)
+                continue
+            try:
+                pend.append(inbox.get(timeout=ahead))
+            except queue.Empty:
+                pass
 
     def _telemetry(self, clock: float, t: float) -> None:
         """Queue the messages due at ``clock`` (s; each stream on its own grid of 1/rate
@@ -188,10 +234,16 @@ class Autopilot(Policy, Commands):
             if now - w0 >= self._next_tel:      # the stream rates, on the wall clock
                 self._telemetry(now - w0, t)
                 self.link.flush()
+            if self._pending:
+                self.wall = now
+                self.handle(t, self._pending.popleft()[1])
+                continue
+            wait = min(self._next_tel - (now - w0), self._next_poll - now, self.deadline - now)
             try:
-                msg = inbox.get(timeout=max(0.0, min(0.05, self._next_tel - (now - w0))))
+                _, msg = inbox.get(timeout=max(0.0, wait))
             except queue.Empty:
                 continue
+            self.wall = time.monotonic()        # the clock of the offboard setpoints' age
             self.handle(t, msg)
         self._w0 = time.monotonic() - t / self.speed     # paced again from here
         self._due = dict.fromkeys(self._due, t)
@@ -233,6 +285,7 @@ class Autopilot(Policy, Commands):
         self.link.flush()
         self.link.snap = self.snapshot(t)
         self.link.sim_running = False
+        self.link.wake()
 
     # -- flying ----------------------------------------------------------------------------
     def fly(self, t: float, pilot) -> None:

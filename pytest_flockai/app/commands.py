@@ -8,7 +8,6 @@ MISSION_ITEM_REACHED as PX4 reports them)."""
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -47,6 +46,7 @@ class Commands:
     mi: int
     leg: Any
     t_last: float
+    wall: float
     commands: int
     denied: int
     unsupported: int
@@ -283,14 +283,14 @@ class Commands:
                 pos = g.to_world(msg.lat_int * 1e-7, msg.lon_int * 1e-7, rel)
             if not m & M.POSITION_TARGET_TYPEMASK_VX_IGNORE:
                 vel = (msg.vy, msg.vx, -msg.vz)
-        self.setpoint = (pos, vel, yaw, time.monotonic())
+        self.setpoint = (pos, vel, yaw, self.wall)
         if self.mode == "OFFBOARD" and self.sp_pilot is not None:
             self.sp_pilot.set(pos, vel, yaw)
 
     def offboard(self, t) -> int:
         """Enter OFFBOARD: PX4 refuses it without a recent setpoint; on the pad, armed,
         the setpoints fly the take-off."""
-        if self.setpoint is None or time.monotonic() - self.setpoint[3] > 1.0:
+        if self.setpoint is None or self.wall - self.setpoint[3] > 1.0:
             return DENIED
         if self.st.stage in (DONE, LAND) or (self.stages.grounded and not self.armed):
             return DENIED

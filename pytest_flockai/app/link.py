@@ -195,8 +195,17 @@ class Link:
     def start(self) -> None:
         self._thread.start()
 
+    def wake(self) -> None:
+        """Wake the thread from its wait (an empty datagram to its own socket): the
+        flight ended (stream the last state from now) or the link closes."""
+        try:
+            self.sock.sendto(b"", self.sock.getsockname())
+        except OSError:
+            pass
+
     def close(self) -> None:
         self._stop.set()
+        self.wake()
         if self._thread.is_alive():
             self._thread.join(timeout=2.0)
         self.sock.close()
@@ -220,13 +229,15 @@ class Link:
                 wake = min(wake, self._up["resend"])
             if not self.sim_running and self.snap is not None:
                 wake = min(wake, next_tel)
-            self.sock.settimeout(min(0.25, max(0.005, wake - now)))   # no idle wake-ups
+            self.sock.settimeout(max(0.005, wake - now))   # wakes for what is due only
             try:
                 data = self.sock.recv(65535)
             except TimeoutError:
                 continue
             except OSError:
                 return
+            if not data:                    # ``wake``: the flight ended or the link closes
+                continue
             try:
                 msgs = self.mav.parse_buffer(data) or []
             except Exception:               # a malformed datagram: skip it, as PX4 does
@@ -250,7 +261,7 @@ class Link:
                     "SET_POSITION_TARGET_GLOBAL_INT", "MISSION_SET_CURRENT"):
             self.app_id = (msg.get_srcSystem(), msg.get_srcComponent())
             if self.sim_running:
-                self.inbox.put(msg)
+                self.inbox.put((time.monotonic(), msg))     # acted on by its arrival
             else:
                 self.ap.off_flight(msg)
         elif kind.startswith("PARAM_"):
