@@ -323,3 +323,6 @@ def test_queued_telemetry_goes_out_in_order_in_datagrams_an_app_can_read():
     assert max(sizes) <= MAX_DATAGRAM and len(sizes) < 61      # batched, within the MTU
     assert [g.time_boot_ms for g in got[:60]] == list(range(60))
     assert got[60].get_type() == "COMMAND_ACK"                # after what was queued
+    # one sequence number per message, as an autopilot sends (an app counts gaps as loss)
+    assert [g.get_seq() for g in got] == [i % 256 for i in range(61)]
+    assert parser.total_receive_errors == 0

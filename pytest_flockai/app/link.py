@@ -8,8 +8,8 @@ MAV_MISSION_UNSUPPORTED and named in an event). Commands and setpoints go to the
 simulation (``inbox``), which acts on them at its next step and acknowledges them.
 Before the flight starts and after it ended the thread answers commands itself and
 keeps streaming the last state, so an app that waits for "landed" or "disarmed"
-still sees them. It records what the app last sent and asked for: a hung app's
-failure names it (``diagnosis``).
+still sees them. It records what the app last sent and asked for: a hung app's failure
+names it (``diagnosis``). Each message carries the next sequence number (``_pack``).
 """
 
 from __future__ import annotations
@@ -19,9 +19,8 @@ import socket
 import threading
 import time
 
-from pymavlink.dialects.v20 import common as mavlink
+from pymavlink.dialects.v20 import common as M
 
-M = mavlink
 SENSORS = (M.MAV_SYS_STATUS_SENSOR_3D_GYRO | M.MAV_SYS_STATUS_SENSOR_3D_ACCEL
            | M.MAV_SYS_STATUS_SENSOR_3D_MAG | M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE
            | M.MAV_SYS_STATUS_SENSOR_GPS | M.MAV_SYS_STATUS_PREARM_CHECK)
@@ -85,26 +84,31 @@ class Link:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._serve, name="flockai-mavlink", daemon=True)
 
-    # -- sending -----------------------------------------------------------------------
     def send(self, msg) -> None:
         """Send ``msg`` now, after the telemetry queued before it (one datagram)."""
         with self._lock:
-            self._out.append(msg.pack(self.mav))
+            self._out.append(self._pack(msg))
             self._flush()
 
     def queue(self, msgs) -> None:
-        """Pack ``msgs`` for the next datagram (``flush``): telemetry computed in one
-        burst of simulated steps between two paced sleeps reaches the app at the same
-        instant whether it is sent in one datagram or in several, so it goes in one."""
+        """Pack ``msgs`` for the next datagram (``flush``): telemetry of one burst of
+        simulated steps reaches the app at one instant however it is sent."""
         with self._lock:
             if not self._out:
                 self.queued_at = time.monotonic()
             for m in msgs:
-                buf = m.pack(self.mav)
+                buf = self._pack(m)
                 if self._out_n + len(buf) > MAX_DATAGRAM:
                     self._flush()
                 self._out.append(buf)
                 self._out_n += len(buf)
+
+    def _pack(self, msg) -> bytes:
+        """``msg`` packed with the next sequence number (``pack`` does not advance it)."""
+        buf = msg.pack(self.mav)
+        self.mav.seq = (self.mav.seq + 1) % 256
+        self.mav.total_packets_sent += 1
+        return buf
 
     @property
     def pending(self) -> bool:
