@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parent.parent
 DASK = Path(sys.executable).with_name("dask")
 START_S = 90.0        # the slowest start seen on a loaded 2-core machine was ~15 s
 STOP_S = 10.0
+NO_WAIT_S = 3.0       # how long a sweep here waits for a worker when none is left
 
 
 def _base(**kw):
@@ -196,9 +197,6 @@ def short_wait():
         yield
 
 
-NO_WAIT_S = 3.0
-
-
 def test_a_variant_that_kills_its_worker_costs_no_innocent_row(cluster, short_wait):
     """The innocent variants beside a variant that kills its worker get their real
     rows; the killer flies once more, alone, and its row names the two dead workers."""
@@ -244,3 +242,8 @@ def test_a_sweep_whose_every_worker_dies_returns_with_rows_saying_why(cluster, s
     flew = errors[~killers] == ""
     assert flew.any(), errors.tolist()               # the first variant flew before any death
     assert (errors[~killers][~flew].str.startswith("not flown: no Dask worker left")).all()
+    # a sweep sent to the cluster that has no worker now waits NO_WAIT_S, then says so
+    t0 = time.monotonic()
+    empty = fa.sweep(_base(), executor=cluster.client, payload_kg=[0.0, 0.004])
+    assert NO_WAIT_S <= time.monotonic() - t0 < 30
+    assert empty["error"].str.startswith("not flown: no Dask worker left").all()
