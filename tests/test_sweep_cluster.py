@@ -220,6 +220,23 @@ def test_a_variant_that_kills_its_worker_costs_no_innocent_row(cluster, short_wa
     assert sum(w.poll() is not None for w in cluster.workers) == 2
 
 
+def test_an_innocent_variant_in_the_killers_task_flies_again_alone(cluster, short_wait):
+    """Two variants per task: the innocent one that flew in the same task as the
+    killer flies again alone and gets its real row; the killer costs two workers."""
+    cluster.ensure_workers(3)
+    axes = dict(payload_kg=[0.0, 0.001, 0.002, 0.003, 0.004])
+    with caching(None):
+        df = fa.sweep(_base(components=[ExitOn(0.002)]), executor=cluster.address,
+                      batch_size=2, **axes)
+        reference = fa.sweep(_base(), workers=1, **axes)
+    guilty = df["payload_kg"] == 0.002
+    errors = df["error"].fillna("")
+    assert errors[~guilty].eq("").all(), errors.tolist()
+    pd.testing.assert_frame_equal(df[~guilty], reference[~guilty])
+    assert errors[guilty].item().endswith("died under it (2 tries)"), errors.tolist()
+    assert sum(w.poll() is None for w in cluster.workers) == 1
+
+
 def test_a_sweep_whose_every_worker_dies_returns_with_rows_saying_why(cluster, short_wait):
     """Variants that kill every worker: the sweep waits NO_WAIT_S for a worker,
     then returns; the row that flew first is kept, the others say why they have none."""
