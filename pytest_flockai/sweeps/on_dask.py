@@ -124,14 +124,17 @@ class _Run:
         held it died); False when no worker is left."""
         if self.blob is not None and self.blob.status == "finished":
             return True
-        if not self.workers_left():
-            return False
-        try:
-            self.blob = self.client.scatter(self.blob_bytes, broadcast=True, hash=False,
-                                            timeout=self.wait_s)
-        except TimeoutError:
-            return self._ensure_blob() if self.workers_left() else False
-        return True
+        for _ in range(2):                      # a worker may leave while it is sent
+            if not self.workers_left():
+                return False
+            try:
+                self.blob = self.client.scatter(self.blob_bytes, broadcast=True, hash=False,
+                                                timeout=self.wait_s)
+                return True
+            except TimeoutError:
+                pass
+        self.gone = True
+        return False
 
     def workers_left(self) -> bool:
         """Whether the cluster has a worker, waiting up to ``wait_s`` for one to join."""
