@@ -8,8 +8,10 @@ four workers down, and with none left the sweep's tasks would wait for a worker
 for ever. The sweep bounds both, whatever the scheduler's settings:
 
 - Each task carries a ticket, a ``distributed.Event`` that the task sets when it
-  starts flying (and clears when it is done). A task that Dask runs again after its
-  worker died finds its ticket set and flies nothing (``Lost``); a task that fails
+  starts flying and clears when it is done (a lost task's ticket stays set until the
+  sweep ends, and its future is released at once, so that Dask does not compute it
+  again). A task that Dask runs again after its worker died finds its ticket set and
+  flies nothing (``Lost``); a task that fails
   with ``KilledWorker`` or is cancelled (the base mission, scattered to the workers,
   was lost with the last worker that held it) counts as started when its ticket is set.
 - The variants of a task whose worker died while it flew fly again, once
@@ -90,6 +92,8 @@ def fly(client, job, plan: list, todo: list, sink, batch_size: int, submit_kw=No
     except BaseException:
         run.cancel()
         raise
+    finally:
+        run.clear_tickets()
 
 
 class _Run:
@@ -107,6 +111,7 @@ class _Run:
         self.deaths: dict = defaultdict(list)   # variant -> workers that died under it
         self.requeues: dict = defaultdict(int)
         self.seen: set = set()                  # worker addresses seen during the sweep
+        self.tickets: list[str] = []            # to clear when the sweep ends
 
     # -- sending -----------------------------------------------------------------------------------
     def submit(self, ids: list) -> None:
@@ -162,6 +167,7 @@ class _Run:
             for f in done:
                 if f in self.pending:           # not given up while taking another
                     self._take(f, *self.pending.pop(f))
+                    f.release()                 # else Dask may compute it again
             if not done and self.pending and not self.workers_left():
                 self.give_up([])
 
@@ -255,10 +261,17 @@ class _Run:
             return False
 
     def _clear(self, ticket: str) -> None:
-        try:
-            self.Event(ticket, client=self.client).clear()
-        except Exception:                       # noqa: BLE001 - the scheduler forgets it anyway
-            pass
+        """Clear ``ticket`` when the sweep ends: until then a task whose answer was lost
+        with its worker (and that Dask computes again) must still find it set."""
+        self.tickets.append(ticket)
+
+    def clear_tickets(self) -> None:
+        for ticket in self.tickets:
+            try:
+                self.Event(ticket, client=self.client).clear()
+            except Exception:                   # noqa: BLE001 - best effort on the way out
+                pass
+        self.tickets = []
 
     def _died_under(self, key) -> str | None:
         """The worker that died with ``key`` in flight, from the scheduler's events of
