@@ -237,14 +237,18 @@ def test_an_innocent_variant_in_the_killers_task_flies_again_alone(cluster, shor
     assert sum(w.poll() is None for w in cluster.workers) == 1
 
 
-def test_a_sweep_whose_every_worker_dies_returns_with_rows_saying_why(cluster, short_wait):
+def test_a_sweep_whose_every_worker_dies_returns_with_rows_saying_why(cluster, short_wait,
+                                                                      tmp_path):
     """Variants that kill every worker: the sweep waits NO_WAIT_S for a worker,
     then returns; the row that flew first is kept, the others say why they have none."""
     cluster.ensure_workers(2)
     axes = dict(payload_kg=[0.0, 0.002], mission_seed=[0, 1, 2])
+    # the killers wait 1.5 s before they exit: a result finished before is back by then
+    # (a result still on a worker when it dies is lost with it)
+    killer = [MarkAndWait(0.002, tmp_path, wait_s=1.5), ExitOn(0.002)]
     t0 = time.monotonic()
     with caching(None):
-        df = fa.sweep(_base(components=[ExitOn(0.002)]), executor=cluster.address, **axes)
+        df = fa.sweep(_base(components=killer), executor=cluster.address, **axes)
     took = time.monotonic() - t0
     assert took < 90, took                           # bounded: flights + a few NO_WAIT_S
     assert len(df) == 6 and all(w.poll() is not None for w in cluster.workers)
@@ -257,7 +261,7 @@ def test_a_sweep_whose_every_worker_dies_returns_with_rows_saying_why(cluster, s
                              r"joined tcp://127\.0\.0\.1:\d+ within 3 s)").all(), reasons.tolist()
     assert (df.loc[killers, "end_reason"] == "error").all()
     flew = errors[~killers] == ""
-    assert flew.any(), errors.tolist()               # the first variant flew before any death
+    assert flew.iloc[0], errors.tolist()             # the first variant flew before any death
     assert (errors[~killers][~flew].str.startswith("not flown: no Dask worker left")).all()
     # a sweep sent to the cluster that has no worker now waits NO_WAIT_S, then says so
     t0 = time.monotonic()
