@@ -14,14 +14,14 @@
   of yours, ``distributed.Client(...).get_executor()``), a Dask
   ``distributed.Client``, or a scheduler address (``"tcp://host:8786"``: a
   client is opened for the sweep and closed after it). Variants go in batches
-  of ``batch_size`` per task; results come back as each task finishes. A task
-  that fails without an answer (Dask's ``KilledWorker`` after a variant killed
-  its workers ``allowed-failures`` times) has its variants flown again one per
-  task once, then each is a row with the error; a task the cluster cancelled
-  (``CancelledError``: a worker died under it) is flown again alone once even in a
-  batch of one, then its row says ``"worker died: ..."``. A pool of yours that breaks
-  cannot be restarted by the sweep: every variant not back is a row
-  ``"worker died: BrokenProcessPool: ..."``.
+  of ``batch_size`` per task; results come back as each task finishes. On a Dask
+  cluster (``on_dask.py``) a variant whose worker died under it flies again once,
+  alone, then its row says ``"worker died: ..."`` naming the workers; when no
+  worker is left the sweep waits a bounded time for one, then the variants not back
+  are rows ``"not flown: no Dask worker left (...)"``. On another executor a task that
+  fails without an answer has its variants flown again one per task once, then each
+  is a row with the error. A pool of yours that breaks cannot be restarted by the
+  sweep: every variant not back is a row ``"worker died: BrokenProcessPool: ..."``.
 
 Every path returns the rows finished when it is interrupted (``KeyboardInterrupt``):
 the caller marks the others ``interrupted``.
@@ -38,6 +38,7 @@ from contextlib import contextmanager
 
 from ..errors import ConfigError
 from ..recording import recording
+from . import on_dask as _on_dask
 from . import worker as _worker
 
 #: s between checks of a sweep's futures (a wait is also where an interrupt lands)
@@ -215,11 +216,14 @@ def fly_on(executor: Executor, job, plan: list, todo: list, sink: Sink, batch_si
            client=None) -> None:
     """Fly ``todo`` on ``executor`` in batches, each result taken as it finishes. With
     a Dask ``client`` the base goes to the workers once (``scatter``), not with
-    every task."""
+    every task, and dying workers cost no innocent row (``on_dask.py``)."""
+    if client is not None:
+        # distributed's ClientExecutor keeps its submit options as _kwargs (no public name)
+        _on_dask.fly(client, job, plan, todo, sink, batch_size,
+                     getattr(executor, "_kwargs", None))
+        return
     pending: dict = {}
     blob = None
-    if client is not None:
-        blob, job = client.scatter(job.blob, broadcast=True, hash=False), job.without_blob()
 
     def submit(ids: list, retried: bool) -> None:
         try:
@@ -248,8 +252,8 @@ def _take(f, ids, retried, plan, sink, submit) -> None:
     try:
         answer = f.result()
     except Exception as exc:             # noqa: BLE001 - a task lost, not a variant's error
-        # a task the cluster cancelled (Dask: a worker died under it, or under data it
-        # needed) was no variant's fault: flown again, alone, even a batch of one
+        # a task the executor cancelled was no variant's fault: flown again, alone,
+        # even a batch of one
         lost = isinstance(exc, CancelledError)
         if (len(ids) > 1 or lost) and not retried and not isinstance(exc, BrokenExecutor):
             for i in ids:
@@ -258,7 +262,7 @@ def _take(f, ids, retried, plan, sink, submit) -> None:
         name = type(exc).__name__
         text = _worker.describe(exc)[0]
         if lost:
-            text = "worker died: the cluster lost the task twice (a worker died under it)"
+            text = "not flown: the executor cancelled its task twice"
         elif name in ("KilledWorker", "BrokenProcessPool"):
             text = f"worker died: {text}"
         else:
