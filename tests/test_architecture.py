@@ -27,10 +27,11 @@ LAYERS = [
      "plugin", "__init__", "sweeps"},
 ]
 PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
-#: function-level imports that are fine: optional extras, GL backends loaded on demand, and
+#: function-level imports that are fine: optional extras (dask and distributed: the
+#: "dask" extra), GL backends loaded on demand, and
 #: scipy.stats (a dependency, but ~1 s to import: only the Latin-hypercube design needs it)
 OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
-            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats", "distributed"}
+            "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats", "distributed", "dask"}
 #: the import-time MuJoCo/GL guard (``_mujoco.py``, see its docstring), and the
 #: sweep runner loading the batched backend, whose modules import JAX (the optional
 #: extra ``mjx``), only when ``backend="mjx"`` is asked for
