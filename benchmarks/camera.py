@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 
 import pytest_flockai as fa
-from pytest_flockai.airframe.model import build_spec
+from pytest_flockai.airframe.mjspec import build_spec
 from pytest_flockai.sensors import Camera
 
 

@@ -18,7 +18,7 @@ import tracemalloc
 import mujoco
 
 import pytest_flockai as fa
-from pytest_flockai.airframe.model import build_model
+from pytest_flockai.airframe.mjspec import build_model
 
 
 def mission(seconds: float, blueprint: str = "dji-mavic-2-pro", probes: bool = True):

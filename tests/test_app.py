@@ -300,7 +300,7 @@ def test_do_orbit_from_pymavlink_sets_direction_and_yaw_behaviour(radius, yaw_mo
 def test_queued_telemetry_goes_out_in_order_in_datagrams_an_app_can_read():
     from pymavlink.dialects.v20 import common as M
 
-    from pytest_flockai.app.link import MAX_DATAGRAM, Link
+    from pytest_flockai.app.mavlink_udp import MAX_DATAGRAM, Link
 
     rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     rx.bind(("127.0.0.1", 0))

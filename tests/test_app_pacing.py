@@ -13,7 +13,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai.app import autopilot as ap_mod
-from pytest_flockai.app import link as link_mod
+from pytest_flockai.app import mavlink_udp as link_mod
 
 pytest.importorskip("pymavlink")
 HOP = [sys.executable, os.path.join(os.path.dirname(__file__), "apps", "pymavlink_hop.py")]

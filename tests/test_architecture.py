@@ -46,7 +46,7 @@ LAZY_LOADS = {
     ("harness/fixtures.py", "..airframe", "drone"): "the drone fixture: the core",
     ("harness/fixtures.py", "..control.pilots", "Hover"): "the pilot fixture: the core",
     ("harness/fixtures.py", "..mission", "Mission"): "the mission fixture: the core",
-    ("harness/fixtures.py", "..app.runner", "marker_flight"): "the flockai_app marker: the "
+    ("harness/fixtures.py", "..app.launch", "marker_flight"): "the flockai_app marker: the "
                                                              "MAVLink front-end (pymavlink)",
     ("harness/sweeps.py", "..sweeps", "runner"): "the flockai_sweep fixture: the core",
     ("harness/sweeps.py", "..sweeps", "executors"): "--flockai-sweep-executor given: the core",

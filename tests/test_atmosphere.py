@@ -6,7 +6,7 @@ import math
 import pytest
 
 import pytest_flockai as fa
-from pytest_flockai.airframe.model import build_model
+from pytest_flockai.airframe.mjspec import build_model
 from pytest_flockai.physics import RHO_SEA_LEVEL
 
 

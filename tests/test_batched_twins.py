@@ -24,7 +24,7 @@ from pytest_flockai.control.trajectory import Leg, waypoint_path
 from pytest_flockai.energy import Motors
 from pytest_flockai.energy.battery import Circuit
 from pytest_flockai.energy.factory import flight_energy_model
-from pytest_flockai.energy.model import Meter
+from pytest_flockai.energy.tree import Meter
 from pytest_flockai.mission.plan import resolve
 from pytest_flockai.world.wind import Wind
 
@@ -224,7 +224,7 @@ def test_body_drag_twin_is_mujocos_fluid_ellipsoid():
     projected-area arithmetic)."""
     import mujoco
 
-    from pytest_flockai.airframe.model import build_spec
+    from pytest_flockai.airframe.mjspec import build_spec
     m = fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover())
     _, num, _ = P.variant(m)
     model = build_spec(m.drone, None, physics_dt=0.002).compile()
@@ -260,7 +260,7 @@ def test_variant_params_are_the_core_objects_exports():
 
 
 def _free_model(name):
-    from pytest_flockai.airframe.model import build_spec
+    from pytest_flockai.airframe.mjspec import build_spec
     spec = build_spec(fa.drone(name), None, physics_dt=0.002)
     spec.option.density = 0.0                   # the batch applies the drag itself
     return spec.compile()

@@ -12,7 +12,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai import ConfigError
-from pytest_flockai.airframe.model import build_spec
+from pytest_flockai.airframe.mjspec import build_spec
 from pytest_flockai.sensors import Camera, ReplayCamera, SensorSuite, export_dataset, render_views
 
 CROWD = (60.0, 40.0, 50, 5.0)
@@ -119,7 +119,7 @@ def test_frame_shows_the_figures_where_the_truth_says(flight):
 def test_frames_render_only_on_request_and_camera_code_needs_no_gl():
     code = ("import sys, numpy as np, mujoco, pytest_flockai as fa\n"
             "from pytest_flockai.sensors import Camera, GPS, SensorSuite\n"
-            "from pytest_flockai.airframe.model import build_spec\n"
+            "from pytest_flockai.airframe.mjspec import build_spec\n"
             "w = fa.World.urban(seed=1, people=20)\n"
             "cam = Camera()\n"
             "spec = build_spec(fa.drone('dji-mavic-2-pro'), w, physics_dt=0.002)\n"

@@ -8,7 +8,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai import SimulationError
-from pytest_flockai.airframe.model import build_model
+from pytest_flockai.airframe.mjspec import build_model
 from pytest_flockai.physics import RHO_SEA_LEVEL
 
 
@@ -210,7 +210,7 @@ def test_the_same_mission_flown_twice_is_identical():
 
 @pytest.mark.parametrize("axis", [0, 1, 2])
 def test_body_drag_is_half_rho_cda_v_squared_along_each_axis(axis):
-    """airframe/model.py: MuJoCo's ellipsoid fluid model, set up so the drag along
+    """airframe/mjspec.py: MuJoCo's ellipsoid fluid model, set up so the drag along
     each body axis is 1/2 rho (Cd A) |v| v with the blueprint's Cd*A."""
     d = fa.drone("dji-mavic-2-pro")
     m = build_model(d, None, physics_dt=0.002)

@@ -45,19 +45,6 @@ ALIKE = {
     ("pilot", frozenset({"app/pilots", "control/pilots"})): "one meaning: a Pilot",
     ("datasheet", frozenset({"airframe/datasheet", "compute/datasheets"})):
         "one meaning: a published spec sheet",
-    # the radio model (comm/link) and the MAVLink socket (app/link): comm.link is also the
-    # public function fa.comm.link, which a module left at the old path would shadow once
-    # imported (the import binds the submodule over the package's attribute), and app/
-    # is being reshaped: rename app/link to mavlink there
-    ("link", frozenset({"app/link", "comm/link"})): "fa.comm.link is a public function",
-    # running a MAVLink program (app/) and flying a sweep's variants (sweeps/); app/ is
-    # being reshaped and sweeps.runner is a deep import users have, so both stay for now
-    ("runner", frozenset({"app/runner", "sweeps/runner"})): "app/ is being reshaped",
-    # the MuJoCo model (airframe/model), the energy model (energy/model) and the ML models
-    # (ml/models): three meanings; airframe/model is imported by sweeps/batched, which is
-    # being reshaped, so its rename waits for that
-    ("model", frozenset({"airframe/model", "energy/model", "ml/models"})):
-        "sweeps/batched imports airframe/model",
 }
 
 

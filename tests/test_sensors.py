@@ -8,7 +8,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai import ConfigError
-from pytest_flockai.airframe.model import build_spec
+from pytest_flockai.airframe.mjspec import build_spec
 from pytest_flockai.mission import seed_sequence
 from pytest_flockai.sensors import (
     GPS,

@@ -11,7 +11,7 @@ does its own way: the contact solver (MJX's JAX Newton solver against MuJoCo's C
 solver) at take-off from the pad and at touchdown, where a landing detected one
 physics step later moves the flight time by 2-4 ms of 3.5 s (1e-3), and the
 fluid ellipsoid's added mass (a thousandth of the drag ellipsoid's, see
-airframe/model.py), which the batched drag leaves out. The flight book counts
+airframe/mjspec.py), which the batched drag leaves out. The flight book counts
 phases in 20 ms ticks, so one tick of 3.5 s is 0.6 %: 1 % keeps a tick of margin.
 """
 

@@ -8,7 +8,7 @@ import pytest
 
 import pytest_flockai as fa
 from pytest_flockai import ConfigError
-from pytest_flockai.airframe.model import build_spec
+from pytest_flockai.airframe.mjspec import build_spec
 from pytest_flockai.world import urban as U
 from pytest_flockai.world.truth import gimbal_pose, occluded, visible_people
 

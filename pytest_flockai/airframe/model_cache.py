@@ -27,7 +27,7 @@ from collections.abc import Callable
 
 from .._mujoco import mujoco
 from ..physics import RHO_SEA_LEVEL
-from .model import world_spec
+from .mjspec import world_spec
 
 #: at most this many compiled models are kept
 MAX_ENTRIES = 8
@@ -51,7 +51,7 @@ def world_key(world) -> tuple:
 
 def compiled(name: str, world, add_drones: Callable[[mujoco.MjSpec], None], *,
              physics_dt: float, rho: float = RHO_SEA_LEVEL) -> mujoco.MjModel:
-    """The model of ``world`` (``airframe.model.world_spec``) with what ``add_drones(spec)``
+    """The model of ``world`` (``airframe.mjspec.world_spec``) with what ``add_drones(spec)``
     adds (the drones and their sensors): a copy of the cached one when this process
     built it before, else built, compiled and cached."""
     rest = world_spec(name, None, physics_dt=physics_dt, rho=rho)

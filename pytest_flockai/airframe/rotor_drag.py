@@ -55,7 +55,7 @@ def h_force(blade_drag: float, diameter_m: float, kf: float, rho: float, thrust_
 
 def hubs(drone) -> list[tuple[float, float, float]]:
     """Body-frame (x, y, h) of every rotor hub: the layout's arm ends at the height of the
-    top of the body above the centre of mass (airframe/model.py)."""
+    top of the body above the centre of mass (airframe/mjspec.py)."""
     h = 0.5 * drone.airframe.body_size_m[2]
     return [(x, y, h) for x, y, _ in drone.rotor_layout()]
 

@@ -9,6 +9,6 @@ try:
 except ImportError as exc:        # pragma: no cover - depends on the installed extras
     raise ImportError("pytest_flockai.app needs pymavlink: pip install 'pytest-flockai[app]'") from exc
 
-from .runner import AppError, AppResult, run  # noqa: E402
+from .launch import AppError, AppResult, run  # noqa: E402
 
 __all__ = ["AppError", "AppResult", "run"]

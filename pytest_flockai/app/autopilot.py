@@ -29,7 +29,7 @@ from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames
 from .commands import Commands
-from .link import RATES, Link, M
+from .mavlink_udp import RATES, Link, M
 from .pilots import Setpoint
 
 #: s of simulated time between the autopilot's steps (25 Hz: commands, setpoints, telemetry)

@@ -15,7 +15,7 @@ from ..control.pilots import Waypoints
 from ..control.stages import DONE, TAKEOFF
 from ..control.stages import LANDING as LAND
 from . import frames
-from .link import RATES, M, name_of
+from .mavlink_udp import RATES, M, name_of
 from .pilots import ORBIT_YAW, AppOrbit, Leg, Setpoint
 
 A, DENIED, UNSUP = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED

@@ -5,8 +5,8 @@ for the rotors' power and ``model.py`` for the composition (inspect, replace, re
 """
 
 from .components import Component, Constant, RadioLinear, RadioStates, SoC, Usage
-from .model import EnergyModel, Group
 from .rotors import HoverPower, Motors
+from .tree import EnergyModel, Group
 
 __all__ = ["Component", "Constant", "EnergyModel", "Group", "HoverPower", "Motors",
            "RadioLinear", "RadioStates", "SoC", "Usage"]

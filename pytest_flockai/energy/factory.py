@@ -11,7 +11,7 @@ and the blueprint's own computer stays on board, idle, as ``proc.soc_blueprint``
 from __future__ import annotations
 
 from .components import Constant, SoC
-from .model import Group
+from .tree import Group
 
 
 def flight_energy_model(base, *, extra_sensors=(), device=None, blueprint_device: str = "none"):

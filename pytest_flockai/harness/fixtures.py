@@ -107,7 +107,7 @@ def flight(request: pytest.FixtureRequest, mission: Mission) -> FlightResult:
     mark = request.node.get_closest_marker("flockai_app")
     if mark is None:
         return mission.run()
-    from ..app.runner import marker_flight
+    from ..app.launch import marker_flight
     return marker_flight(request, mission, mark)
 
 

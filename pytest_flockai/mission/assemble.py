@@ -18,7 +18,7 @@ import numpy as np
 
 from .._mujoco import mujoco
 from ..airframe import model_cache
-from ..airframe.model import add_drone
+from ..airframe.mjspec import add_drone
 from ..airframe.rotor_drag import RotorDrag
 from ..clock import Clocked
 from ..comm.traffic import Heartbeats, Traffic

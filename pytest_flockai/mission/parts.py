@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from ..control.controller import CascadedController
 from ..energy.factory import flight_energy_model
-from ..energy.model import Meter
+from ..energy.tree import Meter
 from ..physics import G
 from .plan import FlightPlan
 

@@ -1,7 +1,7 @@
 """Body drag, Dryden wind, the energy integrator (motors, computer, radio,
 battery circuit) and the flight book in ``jax.numpy``, for one variant.
 
-The branch-free twins of ``airframe/model.py``'s fluid ellipsoid (MuJoCo's
+The branch-free twins of ``airframe/mjspec.py``'s fluid ellipsoid (MuJoCo's
 blunt drag, which MJX lacks: MJX implements only the inertia-box fluid model),
 ``world/wind.py`` (``WindSampler``), ``energy/components.py`` (``Constant``,
 ``SoC``, ``RadioLinear``, ``RadioStates``),

@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...airframe.model import build_spec
+from ...airframe.mjspec import build_spec
 from ...airframe.rotor_drag import h_coefficient, hubs
 from ...control.controller import ControllerParams
 from ...control.pilots import Hover, Waypoints, ZigZag
@@ -231,7 +231,7 @@ def variant(m, plan=None, physics: str = "mjx", derive: bool = True) -> tuple[tu
     num = VariantParams(
         ctrl=ctrl.batch_params(), motors=motors, battery=meter.battery.batch_params(),
         wind=_wind(plan), energy=leaves, pilot=pilot, mission=_mission(plan, drone, meter, ctrl),
-        # the fluid ellipsoid (airframe/model.py) and the rotors' H-force
+        # the fluid ellipsoid (airframe/mjspec.py) and the rotors' H-force
         # (airframe/rotor_drag.py RotorDrag; blade_drag 0: none)
         aero=AeroParams(rho=rho, size=sizes, c_blunt=c_blunt,
                         h_c=h_coefficient(drone.rotor.blade_drag, drone.rotor.diameter_m,

@@ -86,7 +86,7 @@ def step(m: RigidModel, d: RigidData, ctrl, xfrc) -> RigidData:
 
 
 #: sliding friction of the drone's box on the ground: MuJoCo takes the larger of the two
-#: geoms' (the floor's 1.0 in ``airframe/model.py``, the box's MuJoCo default 1.0)
+#: geoms' (the floor's 1.0 in ``airframe/mjspec.py``, the box's MuJoCo default 1.0)
 MU_GROUND = 1.0
 
 

@@ -9,7 +9,7 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
-from ...airframe.model import AERO_SCALE, drag_ellipsoid
+from ...airframe.mjspec import AERO_SCALE, drag_ellipsoid
 from ...errors import ConfigError
 from ...physics import RHO_SEA_LEVEL, G
 
@@ -118,7 +118,7 @@ def free_body_of(model, aero_size, c_blunt: float, check: bool = True) -> FreeBo
 
 def free_body(drone, physics_dt: float, rho: float) -> FreeBody | None:
     """The ``FreeBody`` of ``drone`` computed from its blueprint without building and
-    compiling its MuJoCo model, with ``airframe/model.py``'s formulas (``add_drone``:
+    compiling its MuJoCo model, with ``airframe/mjspec.py``'s formulas (``add_drone``:
     mass and inertia explicit at the body origin, one site per rotor on the hull's top,
     gear (0, 0, 1, 0, 0, -spin km/kf), filter time constant, thrust range [0, max thrust
     scaled with rho], hull box, fluid ellipsoid); MuJoCo's compile copies these numbers.
