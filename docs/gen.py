@@ -8,7 +8,6 @@ replaced by ``TABLES[NAME]()``. Also runnable: ``python docs/gen.py kpis``."""
 
 from __future__ import annotations
 
-import ast
 import subprocess
 import sys
 from pathlib import Path
@@ -95,15 +94,10 @@ def cli() -> str:
 
 
 def layers() -> str:
-    """The import layers, read from tests/test_architecture.py's own list."""
-    tree = ast.parse((ROOT / "tests" / "test_architecture.py").read_text())
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "LAYERS" for t in node.targets):
-            layers_ = ast.literal_eval(node.value)
-            break
-    else:
-        raise RuntimeError("tests/test_architecture.py has no LAYERS list")
-    rows = [[str(i), " ".join(f"`{m}`" for m in sorted(layer))] for i, layer in enumerate(layers_)]
+    """The import layers (``pytest_flockai/_layers.py``, which the architecture test reads)."""
+    from pytest_flockai._layers import LAYERS
+
+    rows = [[str(i), " ".join(f"`{m}`" for m in sorted(layer))] for i, layer in enumerate(LAYERS)]
     return _md(["layer", "modules and packages (each imports only from its layer or below)"], rows)
 
 

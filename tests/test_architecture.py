@@ -2,8 +2,8 @@
 or the layers below it, the core never imports pytest, and imports sit at
 module level (a function-level import is allowed only for an optional
 dependency or a platform backend). Within a layer, a package may import another
-only where SAME_LAYER says so. The docs' architecture page prints LAYERS
-(docs/gen.py reads it from this file)."""
+only where SAME_LAYER says so. LAYERS is data, in
+pytest_flockai/_layers.py; the docs' architecture page prints it (docs/gen.py)."""
 
 import ast
 import re
@@ -11,21 +11,11 @@ from pathlib import Path
 
 import pytest
 
+from pytest_flockai._layers import LAYERS as _LAYERS
+
 PKG = Path(__file__).resolve().parent.parent / "pytest_flockai"
 
-#: bottom to top; a name is a top-level module or subpackage of pytest_flockai
-LAYERS = [
-    {"errors", "physics", "phases", "clock", "_check", "_io", "kpis", "recording", "result",
-     "limits", "memo", "_mujoco", "notebook", "_xp", "_deprecation"},
-    {"compute", "world"},
-    {"energy", "sensors"},
-    {"comm", "airframe"},
-    {"control", "ml", "probes"},
-    {"mission", "cache", "fleet", "policy"},
-    {"app"},
-    {"budgets", "report", "strategies", "plots", "cli", "__main__", "hookspecs", "harness", "reports",
-     "plugin", "__init__", "sweeps"},
-]
+LAYERS = list(_LAYERS)
 PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
 #: function-level imports that are fine: optional extras (dask and distributed: the
 #: "dask" extra), GL backends loaded on demand, and
@@ -80,7 +70,7 @@ def _layer_of(name: str) -> int:
         if name in layer:
             return i
     raise AssertionError(f"pytest_flockai.{name} is in no layer: add it to LAYERS in "
-                         f"tests/test_architecture.py and to the README's architecture section")
+                         f"pytest_flockai/_layers.py")
 
 
 def _modules():

@@ -1,5 +1,5 @@
 """The package's import graph, module by module, read with ``ast`` (nothing is imported):
-no cycle between modules, no import up the layers (``LAYERS`` in test_architecture.py,
+no cycle between modules, no import up the layers (``LAYERS`` in pytest_flockai/_layers.py,
 printed on docs/explanation/architecture.md), and no two modules or packages in
 different homes named alike (``report.py`` beside ``reports/``, ``markers`` meaning the
 plugin's marks in one package and ArUco tags in another).
