@@ -73,7 +73,7 @@ def fly(base, plan: list[dict], device: str | None = None, physics: str = "mjx")
     with jax.enable_x64(True):
         for key, members in groups.items():
             t1, c1 = time.perf_counter(), time.process_time()
-            k = shards.split(n_shards, len(members))
+            k = max(1, min(n_shards, len(members)))
             LAST_TIMINGS["jax_cpu_shards"] = max(LAST_TIMINGS["jax_cpu_shards"], k)
             out = _fly_group(key, members, devs[:k], physics)
             LAST_TIMINGS["batch_s"] += time.perf_counter() - t1

@@ -11,10 +11,7 @@ worker processes here (no second JAX start, no compile or cache load per process
 copies of the variants' numbers).
 
 ``$FLOCKAI_JAX_CPU_SHARDS`` overrides the count: a whole number >= 1 (``1``: the
-unsharded batch); empty or unset: one per CPU, but no shard of fewer than
-``MIN_VARIANTS`` variants (``split``): a small batch's tick costs about as much in wall
-time on one thread as on two, and two cost more CPU (64 Crazyflies: 0.09 s wall either
-way, 0.09 against 0.14-0.18 CPU-s). Variants are independent (no reduction
+unsharded batch); empty or unset: one per CPU. Variants are independent (no reduction
 across the batch), so the rows are the same bit for bit whatever the count
 (``tests/test_batched_shards.py``). On a GPU, and when JAX's client was started
 before with fewer CPU devices, fewer shards run; ``df.attrs["jax_cpu_shards"]`` says
@@ -29,8 +26,6 @@ from ...errors import ConfigError
 
 ENV = "FLOCKAI_JAX_CPU_SHARDS"
 FLAG = "--xla_force_host_platform_device_count"
-#: the fewest variants a shard gets unless ``$FLOCKAI_JAX_CPU_SHARDS`` asks for the split
-MIN_VARIANTS = 128
 
 
 def cpus() -> int:
@@ -76,12 +71,3 @@ def count(device: str | None) -> int:
     if device not in (None, "cpu") or (device is None and jax.default_backend() != "cpu"):
         return 1
     return max(1, min(wanted(), len(jax.devices("cpu"))))
-
-
-def split(available: int, variants: int) -> int:
-    """Shards a batch of ``variants`` runs in on ``available`` devices: as many as asked in
-    ``$FLOCKAI_JAX_CPU_SHARDS`` (at most one per variant); by default one per device with
-    at least ``MIN_VARIANTS`` variants each."""
-    if os.environ.get(ENV, "").strip():
-        return max(1, min(available, variants))
-    return max(1, min(available, variants // MIN_VARIANTS))
