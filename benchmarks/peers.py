@@ -15,9 +15,8 @@ simulated per wall second and per CPU-second, with the load average beside every
   control=Control.state)`` at its defaults (500 Hz first-principles dynamics), one
   state set-point at 1 m and ``sim.step(500 x seconds)``: one compiled call, XLA's pool
   over every CPU. Also **one thread per shard**, the way our batch runs: as many
-  crazyflow processes as our batch may have shards (``FLOCKAI_JAX_CPU_SHARDS``, default
-  one per CPU; by default our batch has no shard under 128 variants, so N = 64 runs in
-  one), each pinned to its own CPU (so XLA starts one thread) with N / shards
+  crazyflow processes as our batch has shards (``FLOCKAI_JAX_CPU_SHARDS``, default one
+  per CPU), each pinned to its own CPU (so XLA starts one thread) with N / shards
   worlds, started together; wall = the slowest, CPU = the sum. Also ``--cf-loop``: a
   Python loop of 100 Hz set-points, ``sim.step(5)`` each.
 - **PyFlyt** and **rotorpy** (optional, ``--peers``): single-drone Python loops, N
