@@ -26,6 +26,8 @@ import math
 import pickle
 from numbers import Integral, Real
 
+import numpy as np
+
 from ..airframe.drone import derived_from_datasheet, resolve_override
 from ..errors import ConfigError, close_matches
 from ..mission.plan import check_until, resolve
@@ -149,6 +151,32 @@ def _wind(base: Wind | None, speed, direction) -> Wind:
     a = math.radians(direction)
     kw = ({} if base is None else {"gust_std": base.gust_std, "gust_tau_s": base.gust_tau_s})
     return Wind((speed * math.cos(a), speed * math.sin(a), mean[2]), **kw)
+
+
+#: (base mission's pickle, axis, value) checked by earlier sweeps in this process: a
+#: repeated sweep of the same base does not apply each value again
+_PASSED: set = set()
+_PASSED_MAX = 65536
+_PLAIN = (int, float, str, bool, np.integer, np.floating, np.bool_)
+
+
+def check_values(base, name: str, values) -> None:
+    """``check_value`` for each distinct value of one axis, skipping plain values (numbers,
+    strings) an earlier call checked on a base mission with the same pickle."""
+    try:
+        key = pickle.dumps(base, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:           # noqa: BLE001 - not picklable: every value checked
+        key = None
+    for value in {repr(v): v for v in values}.values():
+        memo = (key, name, type(value), repr(value)) if (
+            key is not None and isinstance(value, _PLAIN)) else None
+        if memo is not None and memo in _PASSED:
+            continue
+        check_value(base, name, value)
+        if memo is not None:
+            if len(_PASSED) >= _PASSED_MAX:
+                _PASSED.clear()
+            _PASSED.add(memo)
 
 
 def check_value(base, name: str, value) -> None:

@@ -114,8 +114,7 @@ def sweep(base_mission: Mission, *, samples: int | None = None, method: str = "g
         _axes.check_name(name)
     plan, to_check = design.variants(axes, method, samples, seed)
     for name, values in to_check.items():
-        for v in {repr(v): v for v in values}.values():
-            _axes.check_value(base_mission, name, v)
+        _axes.check_values(base_mission, name, values)
     if budgets is not None and not isinstance(budgets, dict):
         raise ConfigError(f"sweep: budgets = {budgets!r} is not allowed; expected a dict "
                           f"{{kpi: '<op> <number> [unit]'}}")

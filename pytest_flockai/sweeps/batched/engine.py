@@ -39,10 +39,6 @@ from . import rows as _rows
 
 #: s of simulated time per compiled chunk (the host checks for the end between chunks)
 CHUNK_S = 2.0
-#: XLA options of the chunk: XLA's CPU fusion emitters generate code that depends on the
-#: batch's size (an element can round differently in a batch of 16 and one of 32), which
-#: would make the rows depend on the shard count (``shards.py``); the classic emitters do not
-COMPILER_OPTIONS: dict = {"xla_cpu_use_fusion_emitters": False}
 _END = {name: i for i, name in enumerate(P.END_REASONS)}
 #: wall (and CPU) seconds of the last ``fly`` in this process: the variants' numbers and
 #: models (``variants_s``) and the batches (``batch_s``: states, compile or load, chunks);
@@ -198,15 +194,23 @@ def _chunk_fn(diff_idx, treedef, nsub, ctrl_dt, book_dt, book_every, kinds, pkin
             lambda a, b: _sel(a["end"] != 0, a, b))(old, s), lambda: s)  # keeps its state
 
     def run(shared, dvals, p, s, noise):
-        return jax.lax.scan(lambda st, n: (tick(shared, dvals, p, st, n), None), s, noise)[0]
-    return jax.jit(run, compiler_options=COMPILER_OPTIONS if cpu else {})
+        # the chunk's ticks until every variant of the shard has ended: an ended variant
+        # keeps its state, so the ticks left out would change no row (a flight that ends
+        # early in a chunk no longer pays for the rest of it)
+        def more(c):
+            return (c[0] < noise.shape[0]) & jnp.any(c[1]["end"] == 0)
+
+        def one(c):
+            return c[0] + 1, tick(shared, dvals, p, c[1], noise[c[0]])
+        return jax.lax.while_loop(more, one, (jnp.zeros((), jnp.int32), s))[1]
+    return jax.jit(run, compiler_options=compile_cache.options(cpu))
 
 
 @functools.lru_cache(maxsize=16)
 def _finish_fn(kinds, cpu=True):
     """``_finish`` on the batch, compiled (op by op it costs ~0.1 s of dispatch)."""
     return jax.jit(jax.vmap(lambda p1, s1: _finish(p1, s1, kinds)),
-                   compiler_options=COMPILER_OPTIONS if cpu else {})
+                   compiler_options=compile_cache.options(cpu))
 
 
 def _variants(base, plan, physics, rows, groups) -> None:
