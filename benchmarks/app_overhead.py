@@ -1,12 +1,12 @@
 """CPU cost of the MAVLink front-end (pytest_flockai.app) against the same flight flown
 by a Policy. Three flights per round, interleaved, each ``--rounds`` times:
 
-- ``policy``: the waypoints of tests/apps/mavsdk_mission.py (3 waypoints, 5 m/s) flown
+- ``policy``: the waypoints of tests/app/apps/mavsdk_mission.py (3 waypoints, 5 m/s) flown
   by ``Mission(Waypoints, policies=[a Policy doing nothing at the autopilot's 25 Hz])``
   on the drone's estimate, as fast as it computes (no pacing);
 - ``paced``: the same flight with that Policy pacing the simulated clock at ``--speed``
   times the wall clock exactly as the autopilot does (the cost of real time alone);
-- ``app``: tests/apps/mavsdk_mission.py flown by ``fa.app.run(..., speed=--speed)``.
+- ``app``: tests/app/apps/mavsdk_mission.py flown by ``fa.app.run(..., speed=--speed)``.
 
 Figures: CPU seconds of THIS process (the simulator and the front-end, all its threads:
 ``time.process_time``) per simulated second. The app's own process (and what it reaped)

@@ -1,6 +1,6 @@
 """Tables of the docs site generated from the code, so they cannot drift: the
 plugin's options and ini keys, its markers, the KPI registry, the CLI's help,
-the import layers (from tests/test_architecture.py), a drone's stepping order
+the import layers (from tests/project/test_architecture.py), a drone's stepping order
 (``mission/steps.py``), the blueprints, the computers and the resource limits.
 
 Used by the mkdocs hook (docs/hooks.py): a page line ``<!-- gen:NAME -->`` is

@@ -13,7 +13,7 @@ picture is older than the code it shows)::
   scenario 1-B (``example_tests/scenarios.py``);
 - ``docs/img/conditions.png`` and ``figures.png`` come from ``conditions_figure.py``.
 
-``tests/test_dashboard_browser.py`` runs the same suite and checks its dashboard in
+``tests/reports/test_dashboard_browser.py`` runs the same suite and checks its dashboard in
 the browser.
 """
 

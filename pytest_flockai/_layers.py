@@ -1,8 +1,8 @@
 """The package's import layers, bottom to top: each top-level module or subpackage of
 ``pytest_flockai`` imports only from its own layer or the layers below it (same-layer
-imports between two names are each a decision, listed in tests/test_architecture.py).
+imports between two names are each a decision, listed in tests/project/test_architecture.py).
 
-Data only: tests/test_architecture.py and tests/test_layout.py enforce it, and the docs'
+Data only: tests/project/test_architecture.py and tests/project/test_layout.py enforce it, and the docs'
 architecture page prints it (docs/gen.py). A new top-level name must be placed here.
 """
 

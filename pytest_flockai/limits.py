@@ -44,7 +44,7 @@ MAX_PEOPLE = 3_000
 #: ``traffic(n)`` are checked before a path is drawn). Each adds mesh geoms to the flight's
 #: MuJoCo model as a world's person does (MAX_PEOPLE), and each frame's object truth tests
 #: every actor in view: at 3,000 walkers all in one 90-degree view, 0.74 s and a 154 MiB
-#: peak per frame (tests/test_reliability_round3.py, the grid-culled occlusion test)
+#: peak per frame (tests/project/test_reliability_round3.py, the grid-culled occlusion test)
 MAX_ACTORS = 3_000
 #: mean spurious boxes per frame of an ``Oracle(false_positives=...)``: drawn per frame,
 #: each a detection row. Detectors cap their output well below it (COCO's evaluation

@@ -1,5 +1,11 @@
 """Shared test configuration: pytester, and the test groups.
 
+The folders mirror the package: ``tests/<package>/`` tests ``pytest_flockai/<package>/``,
+``tests/test_<module>.py`` a top-level module, ``tests/project/`` the repository-wide
+checks (layers, public API, docs, README, packaging, the bad-input corpora). Helpers
+shared by several folders (``labelled_sets``, ``onnx_nets``, ``sweep_faults``, ``golden/``)
+sit here, importable from every folder (this file's folder is on ``sys.path``).
+
 Groups are markers (registered in pyproject.toml), set in the test files themselves
 (``pytestmark = pytest.mark.slow`` for a whole file, ``@pytest.mark.slow`` for one test,
 ``pytest.param(..., marks=pytest.mark.slow)`` for one parametrization), so a renamed test

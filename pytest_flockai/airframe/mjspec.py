@@ -14,7 +14,7 @@ against the air velocity (``opt.wind``, which the mission updates with the
 gusts): a massless, non-colliding ellipsoid whose projected areas along the
 body axes equal the blueprint's Cd*A, with only the blunt-drag coefficient
 set. MuJoCo's blunt drag is rho * C * A_proj * |v| * v, so C = 0.5 gives
-1/2 rho (Cd A) |v| v along each axis (checked in tests/test_flight.py).
+1/2 rho (Cd A) |v| v along each axis (checked in tests/mission/test_flight.py).
 The ellipsoid model also adds added-mass forces, proportional to the
 ellipsoid's volume: a drone is not an ellipsoidal hull, and at 10 m/s the
 resulting Munk moment rivals the Mavic's control authority. Drag scales with

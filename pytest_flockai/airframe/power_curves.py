@@ -1,6 +1,6 @@
 """Published electrical power against airspeed of small quadrotors in steady level flight,
 the check of the forward-flight power curve (``benchmarks/forward_flight.py
---curve``, ``tests/test_power_curve.py``).
+--curve``, ``tests/energy/test_power_curve.py``).
 
 Each curve is (airspeed m/s, total electrical power W) read off the paper's figure; the
 readings are those of the drone_awe project's validation set

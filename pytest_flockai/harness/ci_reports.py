@@ -101,7 +101,7 @@ class ReportsPlugin:
         return out
 
     def _flight_pictures(self, name, result) -> list[dict]:
-        from .. import plots  # lazy: numpy, and matplotlib (see tests/test_architecture.py)
+        from .. import plots  # lazy: numpy, and matplotlib (see tests/project/test_architecture.py)
         gallery = _ml_gallery.pictures(name, result)      # drawn with OpenCV, no matplotlib
         if not plots.available():
             return gallery
@@ -181,7 +181,7 @@ class ReportsPlugin:
 
 def _pictures_missing() -> str | None:
     """Why the dashboard has no flight pictures (matplotlib missing), or None."""
-    from .. import plots  # lazy (tests/test_architecture.py)
+    from .. import plots  # lazy (tests/project/test_architecture.py)
     if plots.available():
         return None
     return ("No flight-path or energy pictures: matplotlib is not installed "

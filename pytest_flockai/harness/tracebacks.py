@@ -7,7 +7,7 @@ handler (pytest-timeout's ``method="signal"``, a SIGALRM of the user's own) has
 a traceback entry with ``tb_lineno`` None, and pytest (8.0 to 9.2) crashes with
 an INTERNALERROR formatting it ("unsupported operand type(s) for -: 'NoneType'
 and 'int'"), so the session ends without a result for the test. Seen in our CI
-about once in 20 runs of ``tests/test_rerun_timeout.py``.
+about once in 20 runs of ``tests/harness/test_rerun_timeout.py``.
 
 ``RepairPlugin`` wraps setup, call and teardown and gives every such entry the
 line of the nearest instruction before it that has one (``co_lines``).

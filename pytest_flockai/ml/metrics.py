@@ -76,7 +76,7 @@ class SortedValues:
     flight (the probes read the latency percentiles every sample: recomputing them over
     every inference so far made a 30-minute 5 Hz task quadratic). ``percentile`` gives
     ``percentile()``'s number bit for bit: NumPy's linear method, step for step
-    (``tests/test_ml_metrics.py`` checks it against NumPy)."""
+    (``tests/ml/test_latency_percentiles.py`` checks it against NumPy)."""
 
     def __init__(self) -> None:
         self._v: list[float] = []

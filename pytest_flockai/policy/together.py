@@ -32,7 +32,7 @@ error of one fix (box noise and the nav estimate at 20 m altitude); ``walk_mps``
 comfortable walking pace (Bohannon 1997, Age and Ageing 26(1): 127-146 cm/s, adults 20-79), the
 farthest a person is likely to have gone since the fix; ``gate_max_m`` (default 0, a fixed gate)
 caps that growth: a growing gate also merges two people who pass each other
-(tests/test_fleet_search.py).
+(tests/fleet/test_fleet_search.py).
 
 Fleet KPIs (scored against the truth after the flight): ``fleet.targets_found`` (distinct people
 within 5 m of a confirmed target), ``fleet.time_to_find_all_s`` (first plan start to the last

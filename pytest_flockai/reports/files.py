@@ -313,7 +313,7 @@ def write_artifacts(directory: Path, nodeid: str, flight: str, result) -> Path:
         # a detection task's frames as COCO files (pycocotools, FiftyOne): truth and results
         write_json_atomic(folder / f"{name}.{safe_name(task)}.truth.json", truth)
         write_json_atomic(folder / f"{name}.{safe_name(task)}.results.json", predictions)
-    from .. import plots  # lazy: numpy, and matplotlib (see tests/test_architecture.py)
+    from .. import plots  # lazy: numpy, and matplotlib (see tests/project/test_architecture.py)
     if plots.available():
         _picture(plots.energy_figure, result, folder / f"{name}.energy.png")
         _picture(plots.path_figure, result, folder / f"{name}.path.png")

@@ -1,6 +1,6 @@
 """Golden fleets: short fleet flights whose KPIs, end reasons, event counts and
 telemetry sums are recorded in ``tests/golden/fleet_golden.json``
-(``tests/test_fleet_golden.py`` flies them again and compares).
+(``tests/mission/test_fleet_golden.py`` flies them again and compares).
 
 Recorded before the fleet loop was made faster, so they prove that
 speeding it up did not move behaviour. ``python tests/golden/fleet_scenarios.py``

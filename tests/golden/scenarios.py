@@ -3,7 +3,7 @@
 remote, camera truth, battery reserve, time limits).
 
 ``python tests/golden/scenarios.py`` records their KPIs, end reasons and event
-counts into ``tests/golden/golden.json``; ``tests/test_golden.py`` flies them again
+counts into ``tests/golden/golden.json``; ``tests/mission/test_golden.py`` flies them again
 and compares. The file was recorded before the flight loop was reshaped into
 clocked components, so it proves that reshaping did not move
 behaviour. Re-record only for an intended change of behaviour, and say why in

@@ -16,7 +16,7 @@ cores); nothing else in the process is touched. ``$FLOCKAI_JAX_CPU_THREADS`` cho
 (the default) or ``all`` (XLA's own pool). When JAX was started before (a user's own
 JAX code, an earlier ``jax.devices()``), its client is left as it is and ``mode()``
 says so; results are the same either way (the batch has no reduction across
-variants that a thread split could reorder: ``tests/test_sweep_batched.py``).
+variants that a thread split could reorder: ``tests/sweeps/test_sweep_batched.py``).
 """
 
 from __future__ import annotations

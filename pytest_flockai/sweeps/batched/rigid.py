@@ -23,7 +23,7 @@ pad, touchdown). That is not MuJoCo's soft contact, which lets the box sink a
 fraction of a millimetre and decelerates it over a few milliseconds: a touchdown is
 seen a step or two earlier. Where contacts matter beyond that (a world with
 obstacles), the batched path stays on MJX. Checked against C MuJoCo step by step in
-``tests/test_batched_twins.py``.
+``tests/sweeps/test_batched_twins.py``.
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ copies of the variants' numbers).
 ``$FLOCKAI_JAX_CPU_SHARDS`` overrides the count: a whole number >= 1 (``1``: the
 unsharded batch); empty or unset: one per CPU. Variants are independent (no reduction
 across the batch), so the rows are the same bit for bit whatever the count
-(``tests/test_batched_shards.py``). On a GPU, and when JAX's client was started
+(``tests/sweeps/test_batched_shards.py``). On a GPU, and when JAX's client was started
 before with fewer CPU devices, fewer shards run; ``df.attrs["jax_cpu_shards"]`` says
 how many did.
 """

@@ -1,0 +1,101 @@
+"""Rules of the latency model that come from runtime behaviour and from the tuning half:
+eager PyTorch runs activations as passes of their own, a deployment without tuning rows
+takes the rule the tuning file records, the datasheets carry every figure a Device needs,
+and the validation script's verdict follows the two criteria of the held-out target."""
+
+import copy
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from pytest_flockai.compute import datasheets, runtimes
+from pytest_flockai.compute.devices import DEVICES
+from pytest_flockai.compute.graph import NetworkCost, NodeCost
+from pytest_flockai.compute.predict import dispatched, params_for, predict_latency
+from pytest_flockai.errors import ConfigError
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+import latency_validation  # noqa: E402
+
+
+def conv_relu(n=4, side=56, ch=64) -> NetworkCost:
+    """n x (3x3 Conv, ReLU fused into it) on a side x side x ch activation."""
+    el = side * side * ch
+    nodes = []
+    for i in range(n):
+        nodes.append(NodeCost(f"c{i}", "Conv", "conv", el * ch * 9, ch * ch * 9, el, el, None))
+        nodes.append(NodeCost(f"r{i}", "Relu", "elementwise", el, 0, el, el, f"c{i}"))
+    return NetworkCost(tuple(nodes), "conv-relu")
+
+
+def test_eager_pytorch_runs_each_activation_as_its_own_pass():
+    cost = conv_relu()
+    assert len(dispatched(cost.nodes, "tensorrt")) == 4
+    assert len(dispatched(cost.nodes, "onnxruntime")) == 4
+    eager = dispatched(cost.nodes, "pytorch")
+    assert len(eager) == 8 and sum(n.op_type == "Relu" for n in eager) == 4
+    dev = DEVICES["jetson-orin-nano"]
+    pt = predict_latency(cost, dev, runtime="pytorch", precision="fp16")
+    assert len(pt.per_node) == 8 and sum(k == "elementwise" for _, k, _, _ in pt.per_node) == 4
+
+
+def test_untuned_deployment_follows_the_recorded_rule():
+    dev = DEVICES["jetson-nano-10w"]
+    dep = runtimes.resolve(dev, "pytorch", "fp16")
+    table = {"groups": {"pytorch/gpu/fp32": {"scale": 4.0}, "tensorrt/gpu/fp16": {"scale": 1.0},
+                        "tensorrt/gpu/fp32": {"scale": 2.0}, "ncnn/cpu/fp32": {"scale": 9.0}},
+             "dispatch": {"tensorrt/gpu": {"factor": 0.5}, "ncnn/gpu": {"factor": 2.5},
+                          "ncnn/cpu": {"factor": 9.0}}}
+    by_runtime = params_for({**table, "fallback": {"rule": {"scale": "runtime",
+                                                            "dispatch": "prior"}}}, dep)
+    by_target = params_for({**table, "fallback": {"rule": {"scale": "target",
+                                                           "dispatch": "target"}}}, dep)
+    assert by_runtime["scale"] == 4.0                  # PyTorch's own scale at fp32
+    assert by_target["scale"] == 2.0                   # median of the GPU groups 4, 1, 2
+    ort = runtimes.resolve(dev, "onnxruntime", "fp32", "gpu")
+    base = params_for({}, ort)["dispatch_s"]
+    prior = params_for({**table, "fallback": {"rule": {"scale": "target",
+                                                       "dispatch": "prior"}}}, ort)
+    target = params_for({**table, "fallback": {"rule": {"scale": "target",
+                                                        "dispatch": "target"}}}, ort)
+    assert prior["dispatch_s"] == pytest.approx(base)
+    assert target["dispatch_s"] == pytest.approx(base * 1.5)   # median of 0.5 and 2.5 (GPU)
+
+
+def test_datasheet_without_a_figure_is_refused_naming_it():
+    with datasheets.COMPUTERS.open("rb") as fh:
+        t = tomllib.load(fh)["computers"]["jetson-nano-10w"]
+    dev = datasheets.from_datasheet("jetson-nano-10w", t)
+    assert dev == DEVICES["jetson-nano-10w"]
+    assert dev.macs_per_s == t["mac_rule"]["macs_per_s"] and dev.idle_w == t["power"]["idle_w"]
+    for table, key in (("mac_rule", "macs_per_s"), ("power", "busy_w"), ("", "memory_mb")):
+        bad = copy.deepcopy(t)
+        del (bad[table] if table else bad)[key]
+        with pytest.raises(ConfigError, match=f"jetson-nano-10w.*{key}"):
+            datasheets.from_datasheet("jetson-nano-10w", bad)
+
+
+def test_every_estimated_figure_says_so():
+    with datasheets.COMPUTERS.open("rb") as fh:
+        comps = tomllib.load(fh)["computers"]
+    for name, t in comps.items():
+        for key in ("macs_per_s", "overhead_s"):
+            assert t["mac_rule"][f"{key}_source"].startswith("estimate"), (name, key)
+        for key in ("idle_w", "busy_w"):
+            assert key in t["power"] and t["power"][f"{key}_source"], (name, key)
+
+
+def _stats(n, med, worst, within):
+    return {"n": n, "median_ratio": 1.0, "median_abs_ln": med, "worst_ratio": worst,
+            "within_2x": within}
+
+
+def test_verdict_needs_both_criteria_and_eight_rows():
+    s = {"heldout": {"computer": {"a": _stats(10, 0.20, 1.9, 10), "b": _stats(10, 0.25, 1.5, 10),
+                                  "c": _stats(10, 0.10, 2.3, 9), "d": _stats(7, 0.1, 1.1, 7)}}}
+    v = {x["computer"]: x["verdict"] for x in latency_validation.verdicts(s)}
+    assert v == {"a": "PASS", "b": "FAIL", "c": "FAIL"}
+    text = "\n".join(latency_validation.verdict_lines(s))
+    assert "1 of 3 computers" in text
