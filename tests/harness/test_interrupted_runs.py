@@ -42,11 +42,19 @@ def test_b_long():
 '''
 
 
+def _default_sigint():
+    """The child takes Ctrl-C as a shell's foreground job would, whatever this process
+    inherited (a job started with ``&`` by a non-interactive shell ignores SIGINT, and
+    an ignored signal stays ignored across exec)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(pytester, *args):
     pytester.makepyfile(test_cut=TESTS)
     cmd = [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-p", "no:randomly",
            "--flockai-json", "r.json", "--junitxml", "j.xml", *args]
-    return subprocess.Popen(cmd, cwd=pytester.path, stdout=subprocess.PIPE,
+    return subprocess.Popen(cmd, cwd=pytester.path, preexec_fn=_default_sigint,
+                            stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
 
 

@@ -27,6 +27,14 @@ ROOT = Path(__file__).resolve().parents[2]
 PAYLOADS = [0.0, 0.002, 0.004]
 
 
+
+def _default_sigint():
+    """The child takes Ctrl-C as a shell's foreground job would, whatever this process
+    inherited (a job started with ``&`` by a non-interactive shell ignores SIGINT, and
+    an ignored signal stays ignored across exec)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _base(*components):
     return fa.Mission(fa.drone("crazyflie-2-1"), fa.pilots.Hover(altitude=1.0, duration=1.0),
                       components=list(components))
@@ -178,7 +186,8 @@ if __name__ == "__main__":
     script = tmp_path / "ctrl_c.py"
     script.write_text(code)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "tests"), str(ROOT / "tests" / "project")]))
-    proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+    proc = subprocess.Popen([sys.executable, str(script)], preexec_fn=_default_sigint,
+                            stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)
     try:
         deadline = time.monotonic() + 120
