@@ -22,6 +22,7 @@ base, so a value no mission could take fails before anything flies.
 from __future__ import annotations
 
 import copy
+import hashlib
 import math
 import pickle
 from numbers import Integral, Real
@@ -153,7 +154,7 @@ def _wind(base: Wind | None, speed, direction) -> Wind:
     return Wind((speed * math.cos(a), speed * math.sin(a), mean[2]), **kw)
 
 
-#: (base mission's pickle, axis, value) checked by earlier sweeps in this process: a
+#: (digest of the base mission's pickle, axis, value) checked by earlier sweeps in this process: a
 #: repeated sweep of the same base does not apply each value again
 _PASSED: set = set()
 _PASSED_MAX = 65536
@@ -164,7 +165,7 @@ def check_values(base, name: str, values) -> None:
     """``check_value`` for each distinct value of one axis, skipping plain values (numbers,
     strings) an earlier call checked on a base mission with the same pickle."""
     try:
-        key = pickle.dumps(base, protocol=pickle.HIGHEST_PROTOCOL)
+        key = hashlib.sha256(pickle.dumps(base, protocol=pickle.HIGHEST_PROTOCOL)).digest()
     except Exception:           # noqa: BLE001 - not picklable: every value checked
         key = None
     for value in {repr(v): v for v in values}.values():

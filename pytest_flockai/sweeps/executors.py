@@ -215,19 +215,18 @@ def _terminate(pool) -> None:
 def fly_on(executor: Executor, job, plan: list, todo: list, sink: Sink, batch_size: int,
            client=None) -> None:
     """Fly ``todo`` on ``executor`` in batches, each result taken as it finishes. With
-    a Dask ``client`` the base goes to the workers once (``scatter``), not with
-    every task, and dying workers cost no innocent row (``on_dask.py``)."""
+    a Dask ``client`` the sweep is ``on_dask.fly``'s (the base scattered to the workers
+    once, dying workers costing no innocent row)."""
     if client is not None:
         # distributed's ClientExecutor keeps its submit options as _kwargs (no public name)
         _on_dask.fly(client, job, plan, todo, sink, batch_size,
                      getattr(executor, "_kwargs", None))
         return
     pending: dict = {}
-    blob = None
 
     def submit(ids: list, retried: bool) -> None:
         try:
-            f = executor.submit(_worker.run_batch, job, [(i, plan[i]) for i in ids], blob)
+            f = executor.submit(_worker.run_batch, job, [(i, plan[i]) for i in ids])
         except (BrokenExecutor, RuntimeError) as exc:    # broken, or shut down
             for i in ids:
                 sink(i, _worker.failed(plan[i], f"not flown: {_worker.describe(exc)[0]}"))

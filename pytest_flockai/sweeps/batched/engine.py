@@ -21,6 +21,7 @@ import functools
 import gc
 import math
 import time
+from types import SimpleNamespace
 from typing import cast
 
 import jax
@@ -127,8 +128,9 @@ def _fly_group(key, members, devs, physics) -> list[dict]:
         # outputs: uncommitted inputs would compile the chunk a second time
         p_np = setup.stack(nums[sl], to_jax=False)
         s = setup.init_states(p_np, setup.data(members[sl], dev, physics), w_g[sl], nu)
-        parts.append([sl, dev, put(tuple(leaves)), put(setup.to_jax(setup.take(dvals, sl))),
-                      put(setup.to_jax(p_np)), put(setup.to_jax(s)), False])
+        parts.append(SimpleNamespace(sl=sl, dev=dev, shared=put(tuple(leaves)), p=put(
+            setup.to_jax(p_np)), dv=put(setup.to_jax(setup.take(dvals, sl))),
+            s=put(setup.to_jax(s)), ended=False))
     chunk_ticks = max(1, int(round(CHUNK_S / ctrl_dt)))
     t_end = max(num.mission.t_end for num in nums)
     t = 0.0
@@ -137,16 +139,16 @@ def _fly_group(key, members, devs, physics) -> list[dict]:
         for b, smp in enumerate(samplers):
             if smp is not None:
                 noise[:, b, :] = smp.rng.standard_normal(3 * chunk_ticks).reshape(chunk_ticks, 3)
-        live = [part for part in parts if not part[6]]   # a shard whose variants all ended
-        for part in live:                   # keeps its state; dispatched: they run at once
-            sl, dev, shared, dv, p, s, _ = part
-            part[5] = step(shared, dv, p, s, jax.device_put(noise[:, sl], dev))
+        live = [part for part in parts if not part.ended]   # a shard whose variants all
+        for part in live:                   # ended keeps its state; dispatched: run at once
+            part.s = step(part.shared, part.dv, part.p, part.s,
+                          jax.device_put(noise[:, part.sl], part.dev))
         t += chunk_ticks * ctrl_dt
         for part in live:
-            part[6] = bool(jnp.all(part[5]["end"] != 0))
-        if all(part[6] for part in parts) or t > t_end + 2 * CHUNK_S:
+            part.ended = bool(jnp.all(part.s["end"] != 0))
+        if all(part.ended for part in parts) or t > t_end + 2 * CHUNK_S:
             break
-    out = [_finish_fn(kinds, cpu)(part[4], part[5]) for part in parts]
+    out = [_finish_fn(kinds, cpu)(part.p, part.s) for part in parts]
     host = jax.device_get(out)
     s = jax.tree_util.tree_map(lambda *xs: np.concatenate(xs), *host) if len(host) > 1 else host[0]
     return _rows.rows(s, nums[:real], tops, book_dt)
