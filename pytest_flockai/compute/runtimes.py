@@ -68,12 +68,23 @@ class Deployment:
 TF32_BY_DEFAULT = frozenset(("tensorrt", "pytorch", "onnxruntime"))
 
 
+#: CPU runtimes that run an fp32 model in fp16 on a CPU with fp16 arithmetic (Armv8.2-A
+#: and later: the Raspberry Pi 5's Cortex-A76, the Orins' Cortex-A78AE), unless told not to:
+#: ncnn (its defaults ``use_fp16_arithmetic`` / ``use_fp16_storage`` are true, ncnn
+#: ``src/option.cpp``) and OpenVINO's CPU plugin from 2024.0 on ("On platforms that natively
+#: support half-precision calculations (bfloat16 or float16), the half-precision type (bf16
+#: or f16) is automatically used instead of f32 ... float16 data type enables the
+#: armv8.2-a+fp16 extension on ARM64 CPUs": OpenVINO documentation, "CPU Device", section
+#: "Floating Point Data Types Specifics"; its ``execution_mode`` hint defaults to
+#: PERFORMANCE; the 2023.3 page lists f32 only for Arm).
+FP16_ON_ARMV82 = frozenset(("ncnn", "openvino"))
+
+
 def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
     """(precision the arithmetic runs at, bytes per stored element) of a deployment.
 
-    - ncnn on a CPU with fp16 arithmetic (Armv8.2: Cortex-A76, A78AE) computes and stores in
-      fp16 when asked for fp32: its defaults ``use_fp16_arithmetic`` / ``use_fp16_storage``
-      are true (ncnn ``src/option.cpp``);
+    - ncnn and OpenVINO on a CPU with fp16 arithmetic (Armv8.2: Cortex-A76, A78AE) compute
+      and store in fp16 when asked for fp32 (``FP16_ON_ARMV82``);
     - ONNX Runtime's CPU provider runs an fp16 model in fp32: it implements few operators in
       fp16 and casts to fp32 around the others (ONNX Runtime docs, "Float16 and mixed
       precision models"; the CPU provider's kernels are fp32);
@@ -83,7 +94,7 @@ def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
     p = dep.precision
     if dep.runtime == "onnxruntime" and dep.target == "cpu" and p == "fp16":
         return "fp32", float(BYTES["fp32"])
-    if (dep.runtime == "ncnn" and dep.target == "cpu" and p == "fp32"
+    if (dep.runtime in FP16_ON_ARMV82 and dep.target == "cpu" and p == "fp32"
             and "fp16" in unit.precisions):
         return "fp16", float(BYTES["fp16"])
     if (p == "fp32" and dep.target == "gpu" and dep.runtime in TF32_BY_DEFAULT
@@ -173,6 +184,6 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
     return Deployment(runtime, target, precision, None if threads is None else int(threads))
 
 
-__all__ = ["BYTES", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
+__all__ = ["BYTES", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
            "TF32_BY_DEFAULT", "Deployment", "check_names", "compute_precision", "peak_macs",
            "resolve"]

@@ -99,3 +99,17 @@ def test_verdict_needs_both_criteria_and_eight_rows():
     assert v == {"a": "PASS", "b": "FAIL", "c": "FAIL"}
     text = "\n".join(latency_validation.verdict_lines(s))
     assert "1 of 3 computers" in text
+
+
+def test_openvino_and_ncnn_run_fp32_models_in_fp16_only_on_armv82_cores():
+    """Pi 5 (Cortex-A76, Armv8.2 FP16): ncnn and OpenVINO compute an fp32 request at the fp16
+    rate with 2-byte elements; ONNX Runtime does not. Pi 4 (Cortex-A72, Armv8.0): all fp32."""
+    pi5, pi4 = DEVICES["raspberry-pi-5"], DEVICES["raspberry-pi-4"]
+    for name in ("openvino", "ncnn"):
+        dep = runtimes.resolve(pi5, name, "fp32", "cpu")
+        assert runtimes.compute_precision(dep, pi5.unit("cpu")) == ("fp16", 2.0)
+        assert runtimes.peak_macs(dep, pi5.unit("cpu")) == pi5.unit("cpu").peak_macs("fp16")
+        dep4 = runtimes.resolve(pi4, name, "fp32", "cpu")
+        assert runtimes.compute_precision(dep4, pi4.unit("cpu")) == ("fp32", 4.0)
+    ort = runtimes.resolve(pi5, "onnxruntime", "fp32", "cpu")
+    assert runtimes.compute_precision(ort, pi5.unit("cpu")) == ("fp32", 4.0)
