@@ -8,9 +8,12 @@ roofline: the slower of
 
 - compute: ``macs / (peak[precision] * eff[target][kind] * scale[runtime/target/precision])``
   (``kind``: conv, dwconv, matmul, elementwise, pool, data), and
-- memory: ``bytes / (stream_gbs * mem[target])``, bytes = (weights + inputs + outputs) x the
-  precision's element size, ``stream_gbs`` the board's measured STREAM bandwidth where
-  published, else ``STREAM_OF_PEAK`` of the DRAM peak,
+- memory: ``activation bytes / (stream_gbs * mem[target]) + weight bytes / (stream_gbs *
+  mem_weights[target])``, activation bytes = (inputs + outputs) and weight bytes = weights,
+  each x the precision's element size (two efficiencies: weights are streamed once from
+  DRAM, activations are written and read back through the caches and the runtime's layout
+  changes), ``stream_gbs`` the board's measured STREAM bandwidth where published, else
+  ``STREAM_OF_PEAK`` of the DRAM peak,
 
 with dense 3x3 stride-1 convolutions' compute divided by a tuned Winograd speed-up on the
 runtimes of ``WINOGRAD``, and a gated activation (SiLU, hard-swish) its own element-wise
@@ -53,17 +56,18 @@ from .measured import is_measured
 EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
 KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
 #: untuned priors (used where the tuning file has no figure): dense convolution runs at a
-#: fraction of peak, depthwise far below it (low arithmetic intensity); memory (``mem``) as
+#: fraction of peak, depthwise far below it (low arithmetic intensity); memory (``mem`` for
+#: activations, ``mem_weights`` for weights, the same prior) as
 #: a fraction of the sustained STREAM bandwidth (``stream_gbs``), set so that the prior
 #: keeps its earlier value as a fraction of the DRAM peak (0.4 / 0.73, 0.5 / 0.73,
 #: 0.3 / 0.73); a few microseconds per kernel dispatch at 1 GHz.
 PRIOR_TARGET = {
     "cpu": {"conv": 0.5, "dwconv": 0.15, "matmul": 0.5, "elementwise": 0.25, "pool": 0.25,
-            "data": 0.25, "mem": 0.55, "dispatch_s": 20e-6, "overhead_s": 1e-3},
+            "data": 0.25, "mem": 0.55, "mem_weights": 0.55, "dispatch_s": 20e-6, "overhead_s": 1e-3},
     "gpu": {"conv": 0.4, "dwconv": 0.05, "matmul": 0.4, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.68, "dispatch_s": 10e-6, "overhead_s": 1e-3},
+            "data": 0.1, "mem": 0.68, "mem_weights": 0.68, "dispatch_s": 10e-6, "overhead_s": 1e-3},
     "npu": {"conv": 0.5, "dwconv": 0.2, "matmul": 0.3, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.41, "dispatch_s": 5e-6, "overhead_s": 2e-3},
+            "data": 0.1, "mem": 0.41, "mem_weights": 0.41, "dispatch_s": 5e-6, "overhead_s": 2e-3},
 }
 
 
@@ -245,6 +249,7 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
     unit = dev.unit(dep.target)
     peak = _rt.peak_macs(dep, unit)
     bw = stream_gbs(dev) * 1e9 * prm["mem"]
+    bw_w = stream_gbs(dev) * 1e9 * prm["mem_weights"]
     nbytes = _rt.compute_precision(dep, unit)[1]
     clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
     dispatch = prm["dispatch_s"] / clock
@@ -255,7 +260,8 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
         tc = n.macs / (peak * eff) if n.macs else 0.0
         if prm.get("winograd", 1.0) != 1.0 and winograd_3x3(n):
             tc /= prm["winograd"]
-        tm = (n.weight_elems + n.in_elems + n.out_elems) * nbytes / bw if bw > 0 else 0.0
+        tm = ((n.in_elems + n.out_elems) * nbytes / bw + n.weight_elems * nbytes / bw_w
+              if bw > 0 else 0.0)
         t = max(tc, tm) + dispatch
         total += t
         per.append((n.name, n.kind, t, "compute" if tc >= tm else "memory"))

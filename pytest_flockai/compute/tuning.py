@@ -8,7 +8,9 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
    datasheet: peaks, clock, bandwidth):
 
    - per target (cpu, gpu, npu): depthwise and matrix-product efficiency relative to dense
-     convolution, the memory efficiency (fraction of the DRAM peak), the dispatch cost per
+     convolution, two memory efficiencies (fractions of the sustained bandwidth: one for
+     activations, read and written through the caches, one for weights, streamed once from
+     DRAM), the dispatch cost per
      node and the per-inference overhead (both at 1 GHz, scaled by the unit's clock);
    - per runtime/target/precision with tuning rows: one scale of the compute efficiency;
    - per runtime/target with tuning rows: one factor on the dispatch cost (how much a
@@ -53,8 +55,8 @@ from .predict import (
 )
 
 PRIOR_WEIGHT = 0.1
-TARGET_PARAMS = ("dwconv", "matmul", "mem", "dispatch_s", "overhead_s")
-BOUNDS = {"dwconv": (0.01, 4.0), "matmul": (0.01, 4.0), "mem": (0.02, 1.0),
+TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s")
+BOUNDS = {"dwconv": (0.01, 4.0), "matmul": (0.01, 4.0), "mem": (0.02, 1.0), "mem_weights": (0.02, 1.0),
           "dispatch_s": (1e-7, 2e-3), "overhead_s": (1e-6, 0.2)}
 _KIND = {"conv": 0, "dwconv": 1, "matmul": 2, "elementwise": 3, "pool": 4, "data": 5}
 
@@ -74,8 +76,9 @@ class _Compiled:
         self.clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
         self.kind = np.array([_KIND[n.kind] for n in nodes], dtype=int)
         self.macs = np.array([float(n.macs) for n in nodes])
-        self.bytes = np.array([float(n.weight_elems + n.in_elems + n.out_elems)
-                               for n in nodes]) * _rt.compute_precision(dep, unit)[1]
+        size = _rt.compute_precision(dep, unit)[1]
+        self.wbytes = np.array([float(n.weight_elems) for n in nodes]) * size
+        self.abytes = np.array([float(n.in_elems + n.out_elems) for n in nodes]) * size
         self.wino = np.array([winograd_3x3(n) for n in nodes], dtype=bool)
         self.uses_wino = self.rt in WINOGRAD and bool(self.wino.any())
         self.n = len(nodes)
@@ -89,7 +92,8 @@ class _Compiled:
         tc = self.macs / (self.peak * eff[self.kind])
         if self.uses_wino:
             tc = np.where(self.wino, tc / wino, tc)
-        tm = self.bytes / (self.bw * tgt["mem"]) if self.bw > 0 else 0.0 * self.bytes
+        tm = (self.abytes / (self.bw * tgt["mem"]) + self.wbytes / (self.bw * tgt["mem_weights"])
+              if self.bw > 0 else 0.0 * self.abytes)
         return float(np.sum(np.maximum(tc, tm)) + (self.n * tgt["dispatch_s"] * dispatch
                                                    + tgt["overhead_s"]) / self.clock)
 
