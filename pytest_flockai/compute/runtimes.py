@@ -88,6 +88,11 @@ def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
     - ONNX Runtime's CPU provider runs an fp16 model in fp32: it implements few operators in
       fp16 and casts to fp32 around the others (ONNX Runtime docs, "Float16 and mixed
       precision models"; the CPU provider's kernels are fp32);
+    - eager PyTorch's fp16 convolutions on a GPU without tensor cores (the Jetson Nano's
+      Maxwell) run at the fp32 rate with fp16 storage: its cuDNN convolution descriptor sets
+      the math type to float for half data (PyTorch ``aten/src/ATen/cudnn/Descriptors.h``,
+      ``ConvolutionDescriptor::set``: ``if (dataType == CUDNN_DATA_HALF) mathType =
+      CUDNN_DATA_FLOAT``), and only tensor-op math brings half-precision rates;
     - fp32 on a GPU with tensor cores runs TF32 (half the fp16 tensor rate) with the
       runtimes of ``TF32_BY_DEFAULT``; element size stays 4 bytes.
     """
@@ -97,6 +102,9 @@ def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
     if (dep.runtime in FP16_ON_ARMV82 and dep.target == "cpu" and p == "fp32"
             and "fp16" in unit.precisions):
         return "fp16", float(BYTES["fp16"])
+    if (dep.runtime == "pytorch" and dep.target == "gpu" and p == "fp16"
+            and getattr(unit, "tensor_cores", 0) == 0):
+        return "fp32", float(BYTES["fp16"])
     if (p == "fp32" and dep.target == "gpu" and dep.runtime in TF32_BY_DEFAULT
             and getattr(unit, "tensor_cores", 0) > 0 and "fp16" in unit.precisions):
         return "tf32", float(BYTES["fp32"])

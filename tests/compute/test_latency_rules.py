@@ -113,3 +113,18 @@ def test_openvino_and_ncnn_run_fp32_models_in_fp16_only_on_armv82_cores():
         assert runtimes.compute_precision(dep4, pi4.unit("cpu")) == ("fp32", 4.0)
     ort = runtimes.resolve(pi5, "onnxruntime", "fp32", "cpu")
     assert runtimes.compute_precision(ort, pi5.unit("cpu")) == ("fp32", 4.0)
+
+
+def test_eager_pytorch_fp16_runs_at_the_fp32_rate_without_tensor_cores():
+    """PyTorch's cuDNN convolutions compute half data in float: on the Nano's Maxwell GPU
+    (no tensor cores) fp16 keeps 2-byte storage but the fp32 rate; TensorRT fp16 gets the
+    fp16 rate; on the Orin (tensor cores) PyTorch fp16 is not slowed to fp32."""
+    nano, orin = DEVICES["jetson-nano-10w"], DEVICES["jetson-orin-nano"]
+    gpu = nano.unit("gpu")
+    pt = runtimes.resolve(nano, "pytorch", "fp16", "gpu")
+    assert runtimes.compute_precision(pt, gpu) == ("fp32", 2.0)
+    assert runtimes.peak_macs(pt, gpu) == gpu.peak_macs("fp32") < gpu.peak_macs("fp16")
+    trt = runtimes.resolve(nano, "tensorrt", "fp16", "gpu")
+    assert runtimes.compute_precision(trt, gpu) == ("fp16", 2.0)
+    pt_orin = runtimes.resolve(orin, "pytorch", "fp16", "gpu")
+    assert runtimes.compute_precision(pt_orin, orin.unit("gpu")) == ("fp16", 2.0)
