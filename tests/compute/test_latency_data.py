@@ -19,11 +19,12 @@ CLASSIFIERS = {"resnet18", "resnet50", "resnet101", "mobilenet_v1", "mobilenet_v
                "mobilenet_v3_large", "efficientnet_b0", "efficientnet_lite0", "squeezenet1_1", "inception_v3",
                "inception_v4", "vgg16", "densenet121", "googlenet", "shufflenet_v2", "alexnet"}
 DETECTORS = {"yolov8n", "yolov8s", "yolov8m", "yolov8l", "yolo11n", "yolo11s", "yolo11m", "yolov5nu", "yolov5su",
-             "ssd_mobilenet_v1", "ssd_mobilenet_v2", "ssdlite_mobilenet_v3", "yolo11l", "yolov5n"}
+             "ssd_mobilenet_v1", "ssd_mobilenet_v2", "ssdlite_mobilenet_v3", "yolo11l", "yolov5n", "yolo26n", "yolo26s",
+             "yolo26m", "yolo26l"}
 NETWORKS = CLASSIFIERS | DETECTORS
 LATENCY_COLUMNS = ["row_id", "source_id", "computer", "runtime", "target", "precision", "network", "input",
                    "latency_ms", "table", "row", "notes"]
-SOURCE_COLUMNS = ["source_id", "document", "publisher", "year", "where", "half"]
+SOURCE_COLUMNS = ["source_id", "document", "publisher", "year", "where", "half", "added"]
 ENERGY_COLUMNS = ["energy_id", "source_id", "computer", "runtime", "target", "precision", "network", "input",
                   "latency_ms", "power_w", "idle_w", "energy_j", "measured_at", "table", "row", "notes"]
 
@@ -140,3 +141,15 @@ def test_published_energy_figures(sources, computers):
         for col in ("power_w", "idle_w", "energy_j"):
             assert not e[col] or float(e[col]) > 0, (e["energy_id"], col)
         assert e["measured_at"].strip(), e["energy_id"]
+
+
+def test_sources_added_later_take_their_half_from_the_digest_of_their_id(sources):
+    """Sources added after the first split are halved by rule, not by choice: tuning when the
+    SHA-256 of the source id is even, held out when odd (decided before any prediction)."""
+    import hashlib
+    assert {s["added"] for s in sources.values()} <= {"2026-11", "2026-11-27"}
+    later = [s for s in sources.values() if s["added"] != "2026-11"]
+    assert later
+    for s in later:
+        even = int(hashlib.sha256(s["source_id"].encode()).hexdigest(), 16) % 2 == 0
+        assert s["half"] == ("tuning" if even else "heldout"), s["source_id"]
