@@ -234,7 +234,7 @@ def test_fleet_offload_times_the_ground_inference_with_the_layer_model(tmp_path)
 
 
 #: ``added`` months (latency_sources.csv) of the sources latency_efficiencies.json was tuned on
-TUNED_ON = {"2026-11"}
+TUNED_ON = {"2026-11", "2026-11-27"}
 
 
 @pytest.mark.slow
