@@ -12,6 +12,7 @@ target on the held-out half: for each computer with at least 8 rows, median
 from __future__ import annotations
 
 import argparse
+import csv
 import math
 import sys
 from pathlib import Path
@@ -50,6 +51,35 @@ def verdict_lines(s: dict) -> list[str]:
                    f"**{v['verdict']}** |")
     n_pass = sum(v["verdict"] == "PASS" for v in verdicts(s))
     out.append(f"\n{n_pass} of {len(verdicts(s))} computers meet the held-out target.")
+    return out
+
+
+def added_by_source(path=None) -> dict[str, str]:
+    """``source_id -> added`` (the date a source joined the table, ``latency_sources.csv``)."""
+    with open(path or published.SOURCES, encoding="utf-8", newline="") as fh:
+        return {r["source_id"]: r.get("added", "") for r in csv.DictReader(fh)}
+
+
+def fresh_lines(rows, table, added: dict[str, str]) -> list[str]:
+    """The rows of the sources added last, per half and computer: the held-out ones among
+    them were never seen by a revision of the model made before they were added."""
+    if not added:
+        return []
+    last = max(added.values())
+    new = [r for r in rows if added.get(r.source_id) == last]
+    if not new:
+        return []
+    s = published.summary(new, table)
+    out = [f"Rows of the sources added on {last} ({len(new)} rows):",
+           "| half | computer | rows | median abs ln | worst ratio | within 2x |",
+           "|---|---|---|---|---|---|"]
+    for half, v in s.items():
+        for name, st in v.get("computer", {}).items():
+            out.append(f"| {half} | {name} | {st['n']} | {st['median_abs_ln']:.3f} | "
+                       f"{st['worst_ratio']:.2f} | {st['within_2x']}/{st['n']} |")
+        al = v["all"]
+        out.append(f"| {half} | all | {al['n']} | {al['median_abs_ln']:.3f} | "
+                   f"{al['worst_ratio']:.2f} | {al['within_2x']}/{al['n']} |")
     return out
 
 
@@ -95,6 +125,10 @@ def main(argv=None) -> int:
           "row beyond 2x:")
     vlines = verdict_lines(s)
     print("\n".join(vlines))
+    fresh = fresh_lines(rows, table, added_by_source())
+    if fresh:
+        print()
+        print("\n".join(fresh))
     if a.rows:
         for r, q in zip(rows, published.ratios(rows, table)):
             print(f"{r.half:8s} {r.row_id:>6s} {r.computer:24s} {r.group:26s} "

@@ -41,9 +41,9 @@ def test_compute_energy_leaves_the_drone_and_radio_energy_arrives_when_remote(fl
     # on board: each inference's compute time at the Pi's active-over-idle power
     on = sum(e["compute_s"] for e in near) * (PI4.active_w - PI4.idle_w)
     assert k["near.compute_energy_j"] == pytest.approx(on, rel=1e-9)
-    # far: JPEG encoding only (~1 ms a frame); near: the inference (~3 ms on the Pi 4 with
+    # far: JPEG encoding only (~1 ms a frame); near: the inference (~2 ms on the Pi 4 with
     # ONNX Runtime, the layer model of compute.predict_latency)
-    assert k["near.compute_energy_j"] > 2 * k["far.compute_energy_j"] > 0
+    assert k["near.compute_energy_j"] > 1.5 * k["far.compute_energy_j"] > 0
     sent = sum(e["tx_bytes"] for e in inf if e["task"] == "far")
     assert sent > 10 * sum(e["tx_bytes"] for e in near)                      # frames, not counts
     assert k["far.radio_energy_j"] > 10 * k["near.radio_energy_j"] > 0
