@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -45,10 +45,32 @@ class Row:
     input: str
     latency_s: float
     cost: object = None          # a NetworkCost (None: no per-node summary for it)
+    #: the CPU clock the source states the board ran at, where it differs from the datasheet
+    cpu_clock_ghz: float | None = None
 
     @property
     def group(self) -> str:
         return f"{self.runtime}/{self.target}/{self.precision}"
+
+    @property
+    def device(self):
+        """The computer as measured: its datasheet, with the CPU at ``cpu_clock_ghz`` when
+        the source states another clock (peaks scale with the clock)."""
+        return at_cpu_clock(DEVICES[self.computer], self.cpu_clock_ghz)
+
+
+def at_cpu_clock(dev, clock_ghz: float | None):
+    """``dev`` with its CPU unit at ``clock_ghz`` (its peaks scaled by the clock ratio);
+    ``dev`` itself when ``clock_ghz`` is None or the datasheet's clock."""
+    if not clock_ghz:
+        return dev
+    units = []
+    for u in dev.units:
+        if u.kind == "cpu" and u.clock_ghz > 0 and u.clock_ghz != clock_ghz:
+            k = clock_ghz / u.clock_ghz
+            u = replace(u, clock_ghz=clock_ghz, peak=tuple((p, v * k) for p, v in u.peak))
+        units.append(u)
+    return replace(dev, units=tuple(units))
 
 
 def _read_csv(path: Path) -> list[dict]:
@@ -91,15 +113,23 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
         except ConfigError as e:
             skipped.append(f"{rid}: {e}")
             continue
+        clock = (r.get("cpu_clock_ghz") or "").strip()
+        try:
+            ghz = float(clock) if clock else None
+        except ValueError:
+            ghz = -1.0
+        if ghz is not None and not (0.1 <= ghz <= 10.0):
+            raise ConfigError(f"{table.name}: row {rid}: cpu_clock_ghz = {clock!r} is not "
+                              f"allowed; expected a clock in GHz between 0.1 and 10, or empty")
         rows.append(Row(rid, r["source_id"], half, r["computer"], r["runtime"],
                         r["target"], r["precision"], r["network"], r["input"],
-                        float(r["latency_ms"]) / 1e3, costs[key]))
+                        float(r["latency_ms"]) / 1e3, costs[key], ghz))
     return rows, skipped
 
 
 def predict_row(row: Row, table: dict) -> float:
     """Predicted seconds of one row with the efficiency table ``table``."""
-    dev = DEVICES[row.computer]
+    dev = row.device
     dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
     return roofline(row.cost, dev, dep, params_for(table, dep))[0]
 
@@ -193,5 +223,5 @@ def energy_check(table: dict, path: Path = ENERGY, networks: Path = NETWORKS) ->
     return out
 
 
-__all__ = ["ENERGY", "NETWORKS", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
+__all__ = ["ENERGY", "NETWORKS", "at_cpu_clock", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
            "predict_row", "ratios", "summary"]

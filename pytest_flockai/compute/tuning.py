@@ -42,7 +42,6 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from . import runtimes as _rt
-from .devices import DEVICES
 from .predict import (
     PRIOR_TARGET,
     PRIOR_WINOGRAD,
@@ -65,7 +64,7 @@ class _Compiled:
     """One row as arrays, for fast evaluation inside the fit."""
 
     def __init__(self, row):
-        dev = DEVICES[row.computer]
+        dev = row.device
         dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
         unit = dev.unit(dep.target)
         nodes = dispatched(row.cost.nodes, dep.runtime)
@@ -185,7 +184,7 @@ def fallback_cv(rows) -> dict:
     for g in groups:
         table = tune([r for r in tuning if r.group != g])
         for r in (r for r in tuning if r.group == g):
-            dev = DEVICES[r.computer]
+            dev = r.device
             dep = _rt.resolve(dev, r.runtime, r.precision, r.target or None)
             for i, rule in enumerate(FALLBACK_RULES):
                 t = {**table, "fallback": {"rule": rule}}

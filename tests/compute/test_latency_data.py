@@ -23,7 +23,7 @@ DETECTORS = {"yolov8n", "yolov8s", "yolov8m", "yolov8l", "yolo11n", "yolo11s", "
              "yolo26m", "yolo26l"}
 NETWORKS = CLASSIFIERS | DETECTORS
 LATENCY_COLUMNS = ["row_id", "source_id", "computer", "runtime", "target", "precision", "network", "input",
-                   "latency_ms", "table", "row", "notes"]
+                   "latency_ms", "table", "row", "notes", "cpu_clock_ghz"]
 SOURCE_COLUMNS = ["source_id", "document", "publisher", "year", "where", "half", "added"]
 ENERGY_COLUMNS = ["energy_id", "source_id", "computer", "runtime", "target", "precision", "network", "input",
                   "latency_ms", "power_w", "idle_w", "energy_j", "measured_at", "table", "row", "notes"]
@@ -33,7 +33,12 @@ def _read(name, columns):
     with open(DATA / name, newline="") as fh:
         reader = csv.DictReader(fh)
         assert reader.fieldnames == columns, f"{name}: columns {reader.fieldnames}"
-        return list(reader)
+        out = list(reader)
+    # a field with an unquoted comma shifts the columns after it (DictReader keeps the rest
+    # under None): every row must have exactly the header's fields
+    bad = [r.get(columns[0]) for r in out if None in r or None in r.values()]
+    assert not bad, f"{name}: rows with more or fewer fields than the header: {bad}"
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -65,6 +70,8 @@ def test_every_row_has_allowed_values_and_a_known_source(rows, sources):
         assert int(r["input"]) >= 32, where
         assert 0.1 < float(r["latency_ms"]) < 60_000, where
         assert r["table"].strip() and r["row"].strip(), where
+        if r["cpu_clock_ghz"]:                  # the source states another clock: say it
+            assert 0.1 < float(r["cpu_clock_ghz"]) < 10 and "GHz" in r["notes"] + r["table"], where
         if r["runtime"] == "edgetpu":
             assert (r["target"], r["precision"]) == ("npu", "int8"), where
         if r["runtime"] == "tensorrt":
