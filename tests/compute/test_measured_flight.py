@@ -33,6 +33,9 @@ def _fly(profile_path, net, seed=0, duration=30.0):
                       tasks=[task], seed=seed).run()
 
 
+N_DRAWS = 20_000
+
+
 @pytest.mark.slow
 def test_a_measured_profile_in_flight_reproduces_its_p50_and_p95(profiled):
     out, net, _ = profiled
@@ -51,12 +54,15 @@ def test_a_measured_profile_in_flight_reproduces_its_p50_and_p95(profiled):
     task = fa.Task(fa.ml.OnnxModel(net), period_s=dt, alert="result", device=dev)
     r = fa.ml.TaskRunner(task).bind(np.random.default_rng(0))
     frame = np.zeros((48, 48, 3), np.uint8)
-    for i in range(4000):
+    # 20,000 draws: the p95 of 4,000 uniform draws from 1,000 timings missed the timings' own
+    # p95 by just over 5 % once in CI (the draws' p95 has a standard error of about 0.35
+    # percentile points at 4,000, 0.15 at 20,000)
+    for i in range(N_DRAWS):
         r.on_frame(dt * i, frame)
         r.advance(dt * i)
     r.advance(1e9)
     got = r.kpis()
-    assert got["inference_count"] == 4000 and got["frames_dropped"] == 0
+    assert got["inference_count"] == N_DRAWS and got["frames_dropped"] == 0
     assert got["inference_latency_p50_s"] == pytest.approx(p50, rel=0.05)
     assert got["inference_latency_p95_s"] == pytest.approx(p95, rel=0.05)
     assert got["inference_latency_p95_s"] > got["inference_latency_p50_s"]
