@@ -164,8 +164,9 @@ class LatencyFallbackWarning(UserWarning):
 @dataclass(frozen=True)
 class LatencyPrediction:
     """One inference: ``seconds``, ``band`` (low, high seconds: the held-out half's range of
-    published/predicted for this computer and runtime, or for its target when that pair has
-    fewer than ``MIN_BAND_ROWS`` held-out rows), ``energy_j`` above idle, and
+    published/predicted for this computer and runtime; when that pair has fewer than
+    ``MIN_BAND_ROWS`` held-out rows, for every runtime of this computer on the same unit;
+    with fewer still, for every computer's rows on that unit), ``energy_j`` above idle, and
     ``per_node``: ((node, kind, seconds, bound), ...)."""
 
     seconds: float
@@ -270,8 +271,12 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
 
 def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tuple[float, float]:
     bands = table.get("bands", {})
-    b = bands.get(f"{dev.name}/{dep.runtime}")
-    if not b or b.get("n", 0) < MIN_BAND_ROWS:      # too few rows: the target's held-out range
+    b = None
+    for key in (f"{dev.name}/{dep.runtime}", f"{dev.name}/*/{dep.target}"):
+        b = bands.get(key)
+        if b and b.get("n", 0) >= MIN_BAND_ROWS:
+            break
+    else:           # too few rows on this computer: the target's held-out range
         b = bands.get(f"*/{dep.target}")
     if not b:
         return (seconds / 2.0, seconds * 2.0)       # untuned: the issue's 2x bound

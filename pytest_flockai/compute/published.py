@@ -168,14 +168,16 @@ def summary(rows: list[Row], table: dict) -> dict:
 
 
 def bands(rows: list[Row], table: dict) -> dict:
-    """Held-out published/predicted ranges per ``computer/runtime`` and per ``*/target``
-    (what ``LatencyPrediction.band`` scales the prediction by)."""
+    """Held-out published/predicted ranges per ``computer/runtime``, per ``computer/*/target``
+    (every runtime of that computer on that unit) and per ``*/target`` (what
+    ``LatencyPrediction.band`` scales the prediction by)."""
     held = [x for x in rows if x.half == "heldout"]
     if not held:
         return {}
     inv = 1.0 / ratios(held, table)
     out: dict = {}
     for _label, key in (("cr", lambda x: f"{x.computer}/{x.runtime}"),
+                       ("ct", lambda x: f"{x.computer}/*/{x.target}"),
                        ("t", lambda x: f"*/{x.target}")):
         groups: dict[str, list[float]] = {}
         for x, v in zip(held, inv):

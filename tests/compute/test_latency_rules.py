@@ -128,3 +128,22 @@ def test_eager_pytorch_fp16_runs_at_the_fp32_rate_without_tensor_cores():
     assert runtimes.compute_precision(trt, gpu) == ("fp16", 2.0)
     pt_orin = runtimes.resolve(orin, "pytorch", "fp16", "gpu")
     assert runtimes.compute_precision(pt_orin, orin.unit("gpu")) == ("fp16", 2.0)
+
+
+def test_the_band_falls_back_to_the_computer_before_every_computer():
+    """A computer/runtime pair with too few held-out rows takes the range of that computer's
+    rows on the same unit, and only without those the range of every computer's."""
+    from pytest_flockai.compute import predict
+    pi4 = DEVICES["raspberry-pi-4"]
+    dep = runtimes.resolve(pi4, "onnxruntime", "fp32", "cpu")
+    n = predict.MIN_BAND_ROWS
+    bands = {"raspberry-pi-4/onnxruntime": {"min": 0.9, "max": 1.1, "n": n - 1},
+             "raspberry-pi-4/*/cpu": {"min": 0.7, "max": 1.8, "n": n},
+             "*/cpu": {"min": 0.1, "max": 8.0, "n": 10 * n}}
+    assert predict._band({"bands": bands}, pi4, dep, 1.0) == (0.7, 1.8)
+    bands["raspberry-pi-4/onnxruntime"]["n"] = n            # enough rows of its own
+    assert predict._band({"bands": bands}, pi4, dep, 1.0) == (0.9, 1.1)
+    del bands["raspberry-pi-4/onnxruntime"]
+    bands["raspberry-pi-4/*/cpu"]["n"] = n - 1              # too few on this computer too
+    assert predict._band({"bands": bands}, pi4, dep, 2.0) == (0.2, 16.0)
+    assert predict._band({}, pi4, dep, 1.0) == (0.5, 2.0)    # untuned: the issue's 2x
