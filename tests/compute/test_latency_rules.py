@@ -4,6 +4,7 @@ takes the rule the tuning file records, the datasheets carry every figure a Devi
 and the validation script's verdict follows the two criteria of the held-out target."""
 
 import copy
+import dataclasses
 import sys
 import tomllib
 from pathlib import Path
@@ -147,3 +148,21 @@ def test_the_band_falls_back_to_the_computer_before_every_computer():
     bands["raspberry-pi-4/*/cpu"]["n"] = n - 1              # too few on this computer too
     assert predict._band({"bands": bands}, pi4, dep, 2.0) == (0.2, 16.0)
     assert predict._band({}, pi4, dep, 1.0) == (0.5, 2.0)    # untuned: the issue's 2x
+
+
+def test_a_row_measured_at_another_cpu_clock_is_predicted_at_that_clock():
+    """The 2022 ncnn Raspberry Pi 4 section ran at 1.5 GHz (its heading): its rows carry
+    cpu_clock_ghz and are predicted on a CPU whose clock and peaks are scaled to it."""
+    from pytest_flockai.compute import published
+    pi4 = DEVICES["raspberry-pi-4"]
+    slow = published.at_cpu_clock(pi4, 1.5)
+    assert slow.unit("cpu").clock_ghz == 1.5 and published.at_cpu_clock(pi4, None) is pi4
+    assert slow.unit("cpu").peak_macs("fp32") == pytest.approx(
+        pi4.unit("cpu").peak_macs("fp32") * 1.5 / pi4.unit("cpu").clock_ghz)
+    rows, _ = published.load_rows()
+    clocked = [r for r in rows if r.cpu_clock_ghz]
+    assert clocked and all(r.source_id == "ncnn-benchncnn-rpi4-1500mhz-2022" for r in clocked)
+    r = clocked[0]
+    table = {}          # the untuned priors: the clock alone makes the difference
+    at_sheet = published.predict_row(dataclasses.replace(r, cpu_clock_ghz=None), table)
+    assert published.predict_row(r, table) > at_sheet
