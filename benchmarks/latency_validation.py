@@ -70,7 +70,8 @@ def fresh_lines(rows, table, added: dict[str, str]) -> list[str]:
     if not new:
         return []
     s = published.summary(new, table)
-    out = [f"Rows of the sources added on {last} ({len(new)} rows):",
+    out = [f"Rows of the sources added on {last} ({len(new)} rows; their held-out rows were "
+           f"seen by no revision of the model made before they were added):", "",
            "| half | computer | rows | median abs ln | worst ratio | within 2x |",
            "|---|---|---|---|---|---|"]
     for half, v in s.items():
@@ -154,7 +155,7 @@ def main(argv=None) -> int:
     for why in skipped:
         print("  skipped", why)
     if a.markdown:
-        text = "\n".join(lines + [""] + vlines) + "\n"
+        text = "\n".join(lines + [""] + vlines + ([""] + fresh if fresh else [])) + "\n"
         atomic_write(Path(a.markdown), lambda fh: fh.write(text))
     return 0
 
