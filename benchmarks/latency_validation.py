@@ -12,7 +12,6 @@ target on the held-out half: for each computer with at least 8 rows, median
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import sys
 from pathlib import Path
@@ -54,19 +53,14 @@ def verdict_lines(s: dict) -> list[str]:
     return out
 
 
-def added_by_source(path=None) -> dict[str, str]:
-    """``source_id -> added`` (the date a source joined the table, ``latency_sources.csv``)."""
-    with open(path or published.SOURCES, encoding="utf-8", newline="") as fh:
-        return {r["source_id"]: r.get("added", "") for r in csv.DictReader(fh)}
-
-
-def fresh_lines(rows, table, added: dict[str, str]) -> list[str]:
-    """The rows of the sources added last, per half and computer: the held-out ones among
-    them were never seen by a revision of the model made before they were added."""
-    if not added:
+def fresh_lines(rows, table) -> list[str]:
+    """The rows of the sources added last (``Row.added``), per half and computer: the
+    held-out ones among them were never seen by a revision of the model made before they
+    were added."""
+    if not rows:
         return []
-    last = max(added.values())
-    new = [r for r in rows if added.get(r.source_id) == last]
+    last = max(r.added for r in rows)
+    new = [r for r in rows if r.added == last]
     if not new:
         return []
     s = published.summary(new, table)
@@ -126,7 +120,7 @@ def main(argv=None) -> int:
           "row beyond 2x:")
     vlines = verdict_lines(s)
     print("\n".join(vlines))
-    fresh = fresh_lines(rows, table, added_by_source())
+    fresh = fresh_lines(rows, table)
     if fresh:
         print()
         print("\n".join(fresh))

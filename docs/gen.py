@@ -154,7 +154,7 @@ def computers() -> str:
 def latency_validation() -> str:
     """Predicted / published latency per half and computer (benchmarks/latency_validation.py)."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
-    from latency_validation import added_by_source, fresh_lines, table_lines, verdict_lines
+    from latency_validation import fresh_lines, table_lines, verdict_lines
 
     from pytest_flockai.compute import predict, published
 
@@ -164,7 +164,7 @@ def latency_validation() -> str:
     table = predict.efficiencies()
     s = published.summary(rows, table)
     keep = [ln for ln in table_lines(s) if "| computer/runtime |" not in ln]
-    fresh = fresh_lines(rows, table, added_by_source())
+    fresh = fresh_lines(rows, table)
     return ("\n".join(keep) + f"\n\n{len(rows)} rows used, {len(skipped)} skipped.\n\n"
             + "\n".join(verdict_lines(s)) + "\n"
             + ("\n" + "\n".join(fresh) + "\n" if fresh else ""))

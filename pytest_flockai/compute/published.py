@@ -47,6 +47,8 @@ class Row:
     cost: object = None          # a NetworkCost (None: no per-node summary for it)
     #: the CPU clock the source states the board ran at, where it differs from the datasheet
     cpu_clock_ghz: float | None = None
+    #: when the row's source joined the table (``added`` in latency_sources.csv)
+    added: str = ""
 
     @property
     def group(self) -> str:
@@ -91,7 +93,9 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
     """(usable rows, why each skipped row was skipped)."""
     if not table.is_file() or not sources.is_file():
         return [], [f"no published table ({table.name} / {sources.name} absent)"]
-    halves = {s["source_id"]: s["half"].strip() for s in _read_csv(sources)}
+    srcs = _read_csv(sources)
+    halves = {s["source_id"]: s["half"].strip() for s in srcs}
+    added = {s["source_id"]: (s.get("added") or "").strip() for s in srcs}
     rows, skipped, costs = [], [], {}
     for r in _read_csv(table):
         rid = r.get("row_id", "?")
@@ -123,7 +127,7 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
                               f"allowed; expected a clock in GHz between 0.1 and 10, or empty")
         rows.append(Row(rid, r["source_id"], half, r["computer"], r["runtime"],
                         r["target"], r["precision"], r["network"], r["input"],
-                        float(r["latency_ms"]) / 1e3, costs[key], ghz))
+                        float(r["latency_ms"]) / 1e3, costs[key], ghz, added[r["source_id"]]))
     return rows, skipped
 
 
