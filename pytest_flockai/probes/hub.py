@@ -145,9 +145,10 @@ class ProbeHub:
                 values = self._collect(p, t, view)
                 if values is None:
                     continue
+                row = tuple(values.get(m, math.nan) for m in p._metric_names)
                 ts, rows = self.samples[p.name]
+                rows.append(row)
                 ts.append(t)
-                rows.append(tuple(values.get(m, math.nan) for m in p._metric_names))
                 if force:
                     self.final[p.name] = values
                 if self.subscribers:
@@ -208,10 +209,14 @@ class ProbeHub:
         return out
 
     def frames(self) -> dict[str, pd.DataFrame]:
-        """One DataFrame of samples per probe, indexed by simulated time."""
+        """One DataFrame of samples per probe, indexed by simulated time. A flight stopped by
+        the wall-clock watchdog (``max_wall_s``) can be interrupted between a sample's two
+        appends: the frame keeps the samples that have both a time and a row."""
         out = {}
         for p in self.probes:
             ts, rows = self.samples[p.name]
+            n = min(len(ts), len(rows))
             cols = [p.column(m) for m in p._metric_names]
-            out[p.name] = pd.DataFrame(rows, columns=cols, index=pd.Index(ts, name="t"), dtype=float)
+            out[p.name] = pd.DataFrame(rows[:n], columns=cols, index=pd.Index(ts[:n], name="t"),
+                                       dtype=float)
         return out

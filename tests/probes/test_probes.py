@@ -141,3 +141,19 @@ def test_phase_changes_are_events(flown):
     assert phases[0] == "takeoff" and phases[-1] == "landed"
     assert {"move", "accelerating", "landing"} <= set(phases)
     assert all(a != b for a, b in zip(phases, phases[1:]))
+
+
+def test_a_sample_torn_by_the_watchdog_leaves_consistent_frames():
+    """The wall-clock watchdog interrupts the flight between any two statements: a sample
+    whose time was appended but not its row (or the reverse) is left out of the frames,
+    instead of failing the partial result (pandas: "Length of values ... does not match")."""
+    from pytest_flockai.probes.hub import ProbeHub
+    hub = ProbeHub([Speedo(period_s=0.5)])
+    ts, rows = hub.samples["app"]
+    ts.extend([0.5, 1.0])
+    rows.extend([(1.0, 1.0), (2.0, 2.0)])
+    ts.append(1.5)                                  # torn: the time, not the row
+    df = hub.frames()["app"]
+    assert list(df.index) == [0.5, 1.0] and list(df["app.samples"]) == [1.0, 2.0]
+    rows.extend([(3.0, 3.0), (4.0, 4.0)])          # torn the other way
+    assert list(hub.frames()["app"].index) == [0.5, 1.0, 1.5]
