@@ -49,6 +49,9 @@ class Row:
     cpu_clock_ghz: float | None = None
     #: when the row's source joined the table (``added`` in latency_sources.csv)
     added: str = ""
+    #: the CPU threads the benchmark ran with, where it is not the runtime's default of
+    #: every core (Ultralytics' TFLite rows: 1, see ``load_rows``); None: the default
+    threads: int | None = None
 
     @property
     def group(self) -> str:
@@ -59,6 +62,12 @@ class Row:
         """The computer as measured: its datasheet, with the CPU at ``cpu_clock_ghz`` when
         the source states another clock (peaks scale with the clock)."""
         return at_cpu_clock(DEVICES[self.computer], self.cpu_clock_ghz)
+
+    @property
+    def deployment(self) -> _rt.Deployment:
+        """The row's (runtime, target, precision, threads) resolved on ``device``."""
+        return _rt.resolve(self.device, self.runtime, self.precision, self.target or None,
+                           self.threads if self.target == "cpu" else None)
 
 
 def at_cpu_clock(dev, clock_ghz: float | None):
@@ -125,16 +134,24 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
         if ghz is not None and not (0.1 <= ghz <= 10.0):
             raise ConfigError(f"{table.name}: row {rid}: cpu_clock_ghz = {clock!r} is not "
                               f"allowed; expected a clock in GHz between 0.1 and 10, or empty")
+        raw = (r.get("threads") or "").strip()
+        threads = int(raw) if raw.isdigit() else (None if not raw else -1)
+        cores = DEVICES[r["computer"]].unit("cpu").cores if r["target"] == "cpu" else 0
+        if threads is not None and not 1 <= threads <= cores:
+            raise ConfigError(f"{table.name}: row {rid}: threads = {raw!r} is not allowed; "
+                              f"expected empty (the runtime's default: every core) or, for a "
+                              f"cpu row, an int in 1..{cores}")
         rows.append(Row(rid, r["source_id"], half, r["computer"], r["runtime"],
                         r["target"], r["precision"], r["network"], r["input"],
-                        float(r["latency_ms"]) / 1e3, costs[key], ghz, added[r["source_id"]]))
+                        float(r["latency_ms"]) / 1e3, costs[key], ghz, added[r["source_id"]],
+                        threads))
     return rows, skipped
 
 
 def predict_row(row: Row, table: dict) -> float:
     """Predicted seconds of one row with the efficiency table ``table``."""
     dev = row.device
-    dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
+    dep = row.deployment
     return roofline(row.cost, dev, dep, params_for(table, dep))[0]
 
 

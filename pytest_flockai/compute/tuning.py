@@ -65,7 +65,7 @@ class _Compiled:
 
     def __init__(self, row):
         dev = row.device
-        dep = _rt.resolve(dev, row.runtime, row.precision, row.target or None)
+        dep = row.deployment
         unit = dev.unit(dep.target)
         nodes = dispatched(row.cost.nodes, dep.runtime)
         self.target, self.group = dep.target, dep.key
@@ -185,7 +185,7 @@ def fallback_cv(rows) -> dict:
         table = tune([r for r in tuning if r.group != g])
         for r in (r for r in tuning if r.group == g):
             dev = r.device
-            dep = _rt.resolve(dev, r.runtime, r.precision, r.target or None)
+            dep = r.deployment
             for i, rule in enumerate(FALLBACK_RULES):
                 t = {**table, "fallback": {"rule": rule}}
                 secs = roofline(r.cost, dev, dep, params_for(t, dep))[0]

@@ -23,7 +23,7 @@ DETECTORS = {"yolov8n", "yolov8s", "yolov8m", "yolov8l", "yolo11n", "yolo11s", "
              "yolo26m", "yolo26l"}
 NETWORKS = CLASSIFIERS | DETECTORS
 LATENCY_COLUMNS = ["row_id", "source_id", "computer", "runtime", "target", "precision", "network", "input",
-                   "latency_ms", "table", "row", "notes", "cpu_clock_ghz"]
+                   "latency_ms", "table", "row", "notes", "cpu_clock_ghz", "threads"]
 SOURCE_COLUMNS = ["source_id", "document", "publisher", "year", "where", "half", "added"]
 ENERGY_COLUMNS = ["energy_id", "source_id", "computer", "runtime", "target", "precision", "network", "input",
                   "latency_ms", "power_w", "idle_w", "energy_j", "measured_at", "table", "row", "notes"]
@@ -72,6 +72,8 @@ def test_every_row_has_allowed_values_and_a_known_source(rows, sources):
         assert r["table"].strip() and r["row"].strip(), where
         if r["cpu_clock_ghz"]:                  # the source states another clock: say it
             assert 0.1 < float(r["cpu_clock_ghz"]) < 10 and "GHz" in r["notes"] + r["table"], where
+        if r["threads"]:                        # not the runtime's default: say why
+            assert r["target"] == "cpu" and int(r["threads"]) >= 1 and "thread" in r["notes"], where
         if r["runtime"] == "edgetpu":
             assert (r["target"], r["precision"]) == ("npu", "int8"), where
         if r["runtime"] == "tensorrt":

@@ -166,3 +166,28 @@ def test_a_row_measured_at_another_cpu_clock_is_predicted_at_that_clock():
     table = {}          # the untuned priors: the clock alone makes the difference
     at_sheet = published.predict_row(dataclasses.replace(r, cpu_clock_ghz=None), table)
     assert published.predict_row(r, table) > at_sheet
+
+
+def test_a_row_run_on_fewer_threads_is_predicted_on_that_many_cores(tmp_path):
+    """Ultralytics' TFLite rows ran on one thread (its AutoBackend builds the TFLite
+    Interpreter without num_threads; TFLite's XNNPACK delegate then has no thread pool): they
+    carry threads = 1 and are predicted on one core; a thread count the computer does not
+    have is refused naming the row, the field and what is allowed."""
+    from pytest_flockai.compute import published
+    rows, _ = published.load_rows()
+    one = [r for r in rows if r.threads == 1]
+    assert one and all(r.runtime == "tflite" and r.source_id.startswith("ultralytics-")
+                       for r in one)
+    assert {r.computer for r in one} >= {"raspberry-pi-5", "jetson-orin-nx-16gb"}
+    r = one[0]
+    table = {}
+    every_core = published.predict_row(dataclasses.replace(r, threads=None), table)
+    assert published.predict_row(r, table) > 1.5 * every_core
+    assert r.deployment.threads == 1
+    src = published.TABLE.read_text(encoding="utf-8").splitlines()
+    head, first = src[0], next(line for line in src[1:] if ",raspberry-pi-4," in line)
+    for bad in ("5", "x", "0"):
+        fields = first.rsplit(",", 1)[0]
+        (tmp_path / "t.csv").write_text(f"{head}\n{fields},{bad}\n", encoding="utf-8")
+        with pytest.raises(ConfigError, match=r"threads = '.*' is not allowed.*1\.\.4"):
+            published.load_rows(tmp_path / "t.csv")
