@@ -12,6 +12,8 @@ ranges per computer/runtime that ``predict_latency(...).band`` reports. The held
 are evaluated after the fit and never fed back into it.
 
     python benchmarks/latency_tune.py [--out FILE]
+    python benchmarks/latency_tune.py --loso     # judge a model change: leave each tuning
+                                                 # source out in turn (about 1 min), no write
 """
 
 from __future__ import annotations
@@ -30,11 +32,21 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(predict.EFFICIENCIES))
     ap.add_argument("--networks", default=str(published.NETWORKS),
                     help="folder of the per-node network summaries")
+    ap.add_argument("--loso", action="store_true",
+                    help="print the leave-one-source-out figures of the tuning half and stop")
     a = ap.parse_args(argv)
     rows, skipped = published.load_rows(networks=Path(a.networks))
     if not any(r.half == "tuning" for r in rows):
         print("no usable tuning rows:", *skipped[:10], sep="\n  ")
         return 1
+    if a.loso:
+        cv = tuning.loso(rows)
+        print("leave-one-source-out on the tuning half (median |ln(predicted/published)|):")
+        for src, v in cv["per_source"].items():
+            print(f"  {src:44s} rows {v['n']:3d}  {v['median_abs_ln']:.3f}")
+        print(f"median over sources {cv['median_of_sources']:.3f}; pooled rows: median "
+              f"{cv['pooled_median']:.3f}, mean {cv['pooled_mean']:.3f}")
+        return 0
     table = tuning.tune(rows)
     # the rule for deployments without tuning rows, chosen on the tuning half (about 2 min)
     table["fallback"] = tuning.fallback_cv(rows)

@@ -32,6 +32,9 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
    tuning half too (``fallback_cv``): each tuned runtime/target/precision is left out of the
    fit in turn and its rows predicted as an untuned group would be, under each candidate
    rule; the rule with the smallest median |ln(predicted/published)| over those rows wins.
+6. A change to the model's structure is judged on the tuning half too, by leaving each
+   tuning source out in turn (``loso``, ``benchmarks/latency_tune.py --loso``): the median
+   over sources of their median |ln(predicted/published)|.
 """
 
 from __future__ import annotations
@@ -197,4 +200,32 @@ def fallback_cv(rows) -> dict:
     return {"rule": FALLBACK_RULES[best], "candidates": cands, "groups_left_out": len(groups)}
 
 
-__all__ = ["BOUNDS", "FALLBACK_RULES", "PRIOR_WEIGHT", "TARGET_PARAMS", "fallback_cv", "tune"]
+def loso(rows, fallback: dict | None = None) -> dict:
+    """Leave-one-source-out on the tuning half: for each tuning source, fit on the other
+    tuning sources and predict its rows. How a change to the model is judged without the
+    held-out half: a new source is what a user's own deployment looks like, so the figure
+    that counts is the median over sources of each source's median |ln(predicted /
+    published)| (every source weighs the same), with the pooled median and mean beside it.
+
+    Returns {"per_source": {source: {"n", "median_abs_ln"}}, "median_of_sources",
+    "pooled_median", "pooled_mean"}. ``fallback``: the rule for untuned deployments (the
+    stored one when None)."""
+    from .predict import efficiencies
+    from .published import predict_row
+
+    tuning = [r for r in rows if r.half == "tuning"]
+    rule = efficiencies().get("fallback", {}) if fallback is None else fallback
+    per, pooled = {}, []
+    for src in sorted({r.source_id for r in tuning}):
+        table = {**tune([r for r in tuning if r.source_id != src]), "fallback": rule}
+        e = [abs(math.log(predict_row(r, table) / r.latency_s))
+             for r in tuning if r.source_id == src]
+        per[src] = {"n": len(e), "median_abs_ln": float(np.median(e))}
+        pooled += e
+    return {"per_source": per,
+            "median_of_sources": float(np.median([v["median_abs_ln"] for v in per.values()])),
+            "pooled_median": float(np.median(pooled)), "pooled_mean": float(np.mean(pooled))}
+
+
+__all__ = ["BOUNDS", "FALLBACK_RULES", "PRIOR_WEIGHT", "TARGET_PARAMS", "fallback_cv", "loso",
+           "tune"]
