@@ -50,11 +50,13 @@ from .predict import (
     PRIOR_WINOGRAD,
     WINOGRAD,
     dispatched,
+    efficiencies,
     params_for,
     roofline,
     stream_gbs,
     winograd_3x3,
 )
+from .published import predict_row
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s")
@@ -210,9 +212,6 @@ def loso(rows, fallback: dict | None = None) -> dict:
     Returns {"per_source": {source: {"n", "median_abs_ln"}}, "median_of_sources",
     "pooled_median", "pooled_mean"}. ``fallback``: the rule for untuned deployments (the
     stored one when None)."""
-    from .predict import efficiencies
-    from .published import predict_row
-
     tuning = [r for r in rows if r.half == "tuning"]
     rule = efficiencies().get("fallback", {}) if fallback is None else fallback
     per, pooled = {}, []
