@@ -16,6 +16,10 @@ flies a policy flight not measured (imports, caches), then the three. The summar
 the overhead of the app flight over the unpaced and over the paced policy flight
 (medians) and PASS or FAIL against the target (``TARGET_PCT``).
 
+The app flight's front-end is also timed on its own (thread CPU in ``Autopilot.decide``,
+which holds the commands, the mission, the telemetry, the pacing and the pre-flight wait,
+and in the link's thread), printed per round and as a median.
+
 ``--against DIR`` runs every round twice, in fresh interpreters, alternating this
 checkout and the package in ``DIR`` (e.g. ``git archive`` of an older commit): a
 before/after comparison under the same load.
@@ -42,8 +46,40 @@ KINDS = ("policy", "paced", "app")
 TARGET_PCT = 25.0
 
 
+#: the front-end's thread CPU of the flight being flown (``_instrument``)
+_ACC = {"decide": 0.0, "telemetry": 0.0, "link": 0.0}
+
+
+def _instrument(acc: dict) -> None:
+    """Count the thread CPU time spent in the front-end's own code into ``acc``:
+    ``decide`` (Autopilot.decide on the simulation thread: commands, the mission, pacing,
+    telemetry, and the pre-flight wait), ``telemetry`` (its part in Autopilot._telemetry)
+    and ``link`` (the link's wall-clock thread). Wrappers on this interpreter's classes,
+    for this benchmark only."""
+    from pytest_flockai.app import autopilot, mavlink_udp
+
+    def timed(cls, name, key):
+        inner = getattr(cls, name)
+        if getattr(inner, "_timed", False):
+            return
+
+        def wrapper(*a, **k):
+            c = time.thread_time()
+            try:
+                return inner(*a, **k)
+            finally:
+                acc[key] += time.thread_time() - c
+        wrapper._timed = True           # type: ignore[attr-defined]
+        setattr(cls, name, wrapper)
+
+    timed(autopilot.Autopilot, "decide", "decide")
+    timed(autopilot.Autopilot, "_telemetry", "telemetry")
+    timed(mavlink_udp.Link, "_serve", "link")
+
+
 def _flights(speed: float) -> dict:
-    """One round in this interpreter: {kind: (CPU s, simulated s, wall s, app CPU s)}."""
+    """One round in this interpreter: {kind: (CPU s, simulated s, wall s, app CPU s)}, and
+    ``frontend``: {decide, telemetry, link} CPU s of the app flight's front-end."""
     import pytest_flockai as fa
     from pytest_flockai.app import autopilot
     from pytest_flockai.control.pilots import Waypoints
@@ -70,13 +106,17 @@ def _flights(speed: float) -> dict:
 
     drone = fa.drone("dji-mavic-2-pro")
     pts = [(0.0, 20.0, 10.0), (15.0, 20.0, 10.0), (15.0, 0.0, 8.0)]
-    out = {}
+    out: dict = {}
+    acc = _ACC
+    _instrument(acc)
     fa.Mission(drone, Waypoints(pts, 5.0), fly_on="estimate", policies=[Idle(0.0)]).run()
     for kind in KINDS:          # after a flight not measured: each on warm imports and caches
         ch0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         c0, w0 = time.process_time(), time.perf_counter()
         if kind == "app":
+            acc.update(dict.fromkeys(acc, 0.0))
             r = fa.app.run([sys.executable, APP], drone, speed=speed, timeout_s=300)
+            out["frontend"] = dict(acc)
             assert r.exit_code == 0, r.output
             sim = r.result.scenario["sim_time_s"]
         else:
@@ -88,6 +128,12 @@ def _flights(speed: float) -> dict:
         app_cpu = (ch1.ru_utime + ch1.ru_stime) - (ch0.ru_utime + ch0.ru_stime)
         out[kind] = (cpu, sim, wall, app_cpu)
     return out
+
+
+def _fe(r: dict) -> float:
+    """ms of the front-end's own CPU per simulated second of the app flight."""
+    f = r["frontend"]
+    return 1000 * (f["decide"] + f["link"]) / r["app"][1]
 
 
 def _round_in(path: str, speed: float) -> dict:
@@ -124,7 +170,8 @@ def main() -> None:
             print(f"round {i + 1} {side:7s}: policy {ms['policy']:.2f}, paced {ms['paced']:.2f}, "
                   f"app {ms['app']:.2f} ms CPU per simulated s (app flight {r['app'][1]:.1f} "
                   f"simulated s in {r['app'][2]:.1f} wall s; the app's own process "
-                  f"{r['app'][3]:.2f} CPU s); {_load()}", flush=True)
+                  f"{r['app'][3]:.2f} CPU s); front-end's own code {_fe(r):.2f} ms per "
+                  f"simulated s; {_load()}", flush=True)
     for side, rs in rows.items():
         per = {k: [1000 * r[k][0] / r[k][1] for r in rs] for k in KINDS}
         best = {k: min(v) for k, v in per.items()}
@@ -138,6 +185,14 @@ def main() -> None:
             print(f"  overhead over {what}: median {over:+.0f} % (best {100 * (best['app'] / best[base] - 1):+.0f} %): "
                   f"{'PASS' if over <= TARGET_PCT else 'FAIL'} against the {TARGET_PCT:g} % target")
         print(f"  pacing alone (paced over policy): median {100 * (med['paced'] / med['policy'] - 1):+.0f} %")
+        fe = {k: statistics.median(1000 * r["frontend"][k] / r["app"][1] for r in rs)
+              for k in ("decide", "telemetry", "link")}
+        own = statistics.median(_fe(r) for r in rs)
+        print(f"  the front-end's own code (thread CPU in Autopilot.decide and the link thread): "
+              f"median {own:.2f} ms per simulated s ({100 * own / med['paced']:.0f} % of the "
+              f"paced policy flight): decide {fe['decide']:.2f} (telemetry {fe['telemetry']:.2f}), "
+              f"link thread {fe['link']:.2f} (its pacing's wake-ups included, which the paced "
+              f"policy flight pays in its own step)")
 
 
 if __name__ == "__main__":
