@@ -49,8 +49,9 @@ class Row:
     cpu_clock_ghz: float | None = None
     #: when the row's source joined the table (``added`` in latency_sources.csv)
     added: str = ""
-    #: the CPU threads the benchmark ran with, where it is not the runtime's default of
-    #: every core (Ultralytics' TFLite rows: 1, see ``load_rows``); None: the default
+    #: the CPU threads the benchmark ran with, where the source or its code says so
+    #: (Ultralytics' TF Lite rows: 1, see ``load_rows``); None: the runtime's default
+    #: (``runtimes.DEFAULT_THREADS``: every core but for TF Lite)
     threads: int | None = None
 
     @property
@@ -139,7 +140,7 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
         cores = DEVICES[r["computer"]].unit("cpu").cores if r["target"] == "cpu" else 0
         if threads is not None and not 1 <= threads <= cores:
             raise ConfigError(f"{table.name}: row {rid}: threads = {raw!r} is not allowed; "
-                              f"expected empty (the runtime's default: every core) or, for a "
+                              f"expected empty (the runtime's default) or, for a "
                               f"cpu row, an int in 1..{cores}")
         rows.append(Row(rid, r["source_id"], half, r["computer"], r["runtime"],
                         r["target"], r["precision"], r["network"], r["input"],

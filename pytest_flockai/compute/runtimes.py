@@ -36,6 +36,13 @@ RUNTIME_TARGETS: dict[str, tuple[str, ...]] = {
     "openvino": ("cpu", "gpu", "npu"), "opencv-dnn": ("cpu", "gpu"), "pytorch": ("cpu", "gpu"),
     "tensorrt": ("gpu",), "edgetpu": ("npu",),
 }
+#: CPU threads a runtime uses when none are asked for, where that is not every core: TF
+#: Lite's Python ``Interpreter`` without ``num_threads`` leaves the thread count to the
+#: runtime (-1), and its default XNNPACK delegate then gets no thread pool (TensorFlow
+#: Lite's delegate options: ``num_threads > 1 ? num_threads : 0``; XNNPACK delegate README,
+#: "XNNPACK engine being single-threaded by default", TensorFlow PR 45061); ONNX Runtime,
+#: ncnn, OpenVINO, OpenCV DNN and PyTorch use every core by default.
+DEFAULT_THREADS = {"tflite": 1}
 #: precisions each runtime can execute (Edge TPU: int8 only)
 RUNTIME_PRECISIONS: dict[str, tuple[str, ...]] = {r: PRECISIONS for r in RUNTIMES}
 RUNTIME_PRECISIONS["edgetpu"] = ("int8",)
@@ -141,7 +148,8 @@ def check_names(runtime=None, precision=None, target=None, threads=None, *,
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, Integral)
                                 or threads < 1):
         raise ConfigError(f"{w}threads = {threads!r} is not allowed; expected an int >= 1 "
-                          f"(or None: every core of the computer's CPU)")
+                          f"(or None: the runtime's default, every core of the computer's CPU "
+                          f"but for TF Lite, one)")
 
 
 def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
@@ -189,9 +197,11 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
     if threads is not None and target == "cpu" and threads > unit.cores:
         raise ConfigError(f"{w}threads = {threads!r} is not allowed on computer {device.name!r}: "
                           f"its CPU has {unit.cores} cores; expected 1..{unit.cores}")
+    if threads is None and target == "cpu":
+        threads = DEFAULT_THREADS.get(runtime)
     return Deployment(runtime, target, precision, None if threads is None else int(threads))
 
 
-__all__ = ["BYTES", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
+__all__ = ["BYTES", "DEFAULT_THREADS", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
            "TF32_BY_DEFAULT", "Deployment", "check_names", "compute_precision", "peak_macs",
            "resolve"]

@@ -76,8 +76,9 @@ class Task:
 
     ``runtime``, ``precision``, ``target``, ``threads``: the deployment on the computer the
     task runs on (``compute.runtimes``; defaults: the computer's first listed runtime and its
-    usual precision; threads: every core). They set the latency of an ONNX model
-    (``compute.predict_latency``); a computer that cannot run them is a ConfigError.
+    usual precision; threads: the runtime's default, every core but for TF Lite's one). They
+    set the latency of an ONNX model (``compute.predict_latency``); a computer that cannot
+    run them is a ConfigError.
     """
 
     model: Any

@@ -179,11 +179,19 @@ def test_a_row_run_on_fewer_threads_is_predicted_on_that_many_cores(tmp_path):
     assert one and all(r.runtime == "tflite" and r.source_id.startswith("ultralytics-")
                        for r in one)
     assert {r.computer for r in one} >= {"raspberry-pi-5", "jetson-orin-nx-16gb"}
-    r = one[0]
+    r = next(x for x in one if x.computer == "raspberry-pi-5")
     table = {}
-    every_core = published.predict_row(dataclasses.replace(r, threads=None), table)
-    assert published.predict_row(r, table) > 1.5 * every_core
+    four = published.predict_row(dataclasses.replace(r, threads=4), table)
+    assert published.predict_row(r, table) > 1.5 * four
     assert r.deployment.threads == 1
+    # TF Lite's own default is one thread; the other runtimes' is every core (None)
+    assert published.predict_row(dataclasses.replace(r, threads=None), table) == \
+        published.predict_row(r, table)
+    pi5 = DEVICES["raspberry-pi-5"]
+    assert runtimes.resolve(pi5, "tflite", "fp32").threads == 1
+    assert runtimes.resolve(pi5, "tflite", "fp32", threads=4).threads == 4
+    assert runtimes.resolve(pi5, "onnxruntime", "fp32").threads is None
+    assert {x.threads for x in rows if x.source_id == "nobuotsukamoto-tflite-raspi"} == {4}
     src = published.TABLE.read_text(encoding="utf-8").splitlines()
     head, first = src[0], next(line for line in src[1:] if ",raspberry-pi-4," in line)
     for bad in ("5", "x", "0"):
