@@ -44,7 +44,8 @@ OPSET = 17
 NETWORKS = {
     **{n: (640, f"ultralytics YOLO('{n}.yaml') DetectionModel") for n in (
         "yolov8n", "yolov8s", "yolov8m", "yolov8l", "yolo11n", "yolo11s", "yolo11m", "yolo11l",
-        "yolov5nu", "yolov5su", "yolo26n", "yolo26s", "yolo26m", "yolo26l")},
+        "yolov5nu", "yolov5su", "yolo26n", "yolo26s", "yolo26m", "yolo26l",
+        "yolov9t", "yolov9s", "yolov9m", "yolov10n", "yolov10s", "yolov10m")},
     **{n: (224, f"torchvision.models.{n}(weights=None)") for n in (
         "resnet18", "resnet50", "resnet101", "mobilenet_v2", "mobilenet_v3_small",
         "mobilenet_v3_large", "efficientnet_b0", "squeezenet1_1", "vgg16", "densenet121",
