@@ -63,11 +63,14 @@ KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
 #: 0.3 / 0.73); a few microseconds per kernel dispatch at 1 GHz.
 PRIOR_TARGET = {
     "cpu": {"conv": 0.5, "dwconv": 0.15, "matmul": 0.5, "elementwise": 0.25, "pool": 0.25,
-            "data": 0.25, "mem": 0.55, "mem_weights": 0.55, "dispatch_s": 20e-6, "overhead_s": 1e-3},
+            "data": 0.25, "mem": 0.55, "mem_weights": 0.55, "dispatch_s": 20e-6, "overhead_s": 1e-3,
+            "parallel": 1.0},
     "gpu": {"conv": 0.4, "dwconv": 0.05, "matmul": 0.4, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.68, "mem_weights": 0.68, "dispatch_s": 10e-6, "overhead_s": 1e-3},
+            "data": 0.1, "mem": 0.68, "mem_weights": 0.68, "dispatch_s": 10e-6, "overhead_s": 1e-3,
+            "parallel": 1.0},
     "npu": {"conv": 0.5, "dwconv": 0.2, "matmul": 0.3, "elementwise": 0.1, "pool": 0.1,
-            "data": 0.1, "mem": 0.41, "mem_weights": 0.41, "dispatch_s": 5e-6, "overhead_s": 2e-3},
+            "data": 0.1, "mem": 0.41, "mem_weights": 0.41, "dispatch_s": 5e-6, "overhead_s": 2e-3,
+            "parallel": 1.0},
 }
 
 
@@ -245,10 +248,19 @@ def params_for(table: dict, dep: _rt.Deployment) -> dict:
     return {**tgt, "scale": scale, "winograd": wino, "tuned": g is not None}
 
 
+def thread_share(dep: _rt.Deployment, unit, parallel: float) -> float:
+    """The share of the threads' summed peak a CPU deployment reaches: n threads run as
+    ``1 + (n - 1) * parallel`` of one (1 on other units, or at ``parallel`` = 1)."""
+    if dep.target != "cpu" or unit.cores <= 1:
+        return 1.0
+    n = min(dep.threads or unit.cores, unit.cores)
+    return (1.0 + (n - 1) * parallel) / n
+
+
 def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
     """(seconds, per-node timings) of a network cost on a deployment with efficiencies."""
     unit = dev.unit(dep.target)
-    peak = _rt.peak_macs(dep, unit)
+    peak = _rt.peak_macs(dep, unit) * thread_share(dep, unit, prm.get("parallel", 1.0))
     bw = stream_gbs(dev) * 1e9 * prm["mem"]
     bw_w = stream_gbs(dev) * 1e9 * prm["mem_weights"]
     nbytes = _rt.compute_precision(dep, unit)[1]

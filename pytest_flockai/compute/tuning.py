@@ -11,7 +11,9 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
      convolution, two memory efficiencies (fractions of the sustained bandwidth: one for
      activations, read and written through the caches, one for weights, streamed once from
      DRAM), the dispatch cost per
-     node and the per-inference overhead (both at 1 GHz, scaled by the unit's clock);
+     node and the per-inference overhead (both at 1 GHz, scaled by the unit's clock), and,
+     for the CPU, the parallel efficiency of its threads (n threads compute as
+     ``1 + (n - 1) * parallel`` of one: ``predict.thread_share``; prior 1, bounds 0.2-1);
    - per runtime/target/precision with tuning rows: one scale of the compute efficiency;
    - per runtime/target with tuning rows: one factor on the dispatch cost (how much a
      runtime fuses and how cheaply it launches: TensorRT against eager PyTorch).
@@ -54,14 +56,16 @@ from .predict import (
     params_for,
     roofline,
     stream_gbs,
+    thread_share,
     winograd_3x3,
 )
 from .published import predict_row
 
 PRIOR_WEIGHT = 0.1
-TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s")
+TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s",
+                 "parallel")
 BOUNDS = {"dwconv": (0.01, 4.0), "matmul": (0.01, 4.0), "mem": (0.02, 1.0), "mem_weights": (0.02, 1.0),
-          "dispatch_s": (1e-7, 2e-3), "overhead_s": (1e-6, 0.2)}
+          "dispatch_s": (1e-7, 2e-3), "overhead_s": (1e-6, 0.2), "parallel": (0.2, 1.0)}
 _KIND = {"conv": 0, "dwconv": 1, "matmul": 2, "elementwise": 3, "pool": 4, "data": 5}
 
 
@@ -76,6 +80,7 @@ class _Compiled:
         self.target, self.group = dep.target, dep.key
         self.rt = f"{dep.runtime}/{dep.target}"
         self.peak = _rt.peak_macs(dep, unit)
+        self.dep, self.unit = dep, unit
         self.bw = stream_gbs(dev) * 1e9
         self.clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
         self.kind = np.array([_KIND[n.kind] for n in nodes], dtype=int)
@@ -93,7 +98,8 @@ class _Compiled:
         eff = np.array([tgt["conv"] * scale, tgt["dwconv"] * scale, tgt["matmul"] * scale,
                         tgt["elementwise"], tgt["pool"], tgt["data"]])
         eff = np.minimum(eff, 1.0)
-        tc = self.macs / (self.peak * eff[self.kind])
+        tc = self.macs / (self.peak * thread_share(self.dep, self.unit, tgt.get("parallel", 1.0))
+                          * eff[self.kind])
         if self.uses_wino:
             tc = np.where(self.wino, tc / wino, tc)
         tm = (self.abytes / (self.bw * tgt["mem"]) + self.wbytes / (self.bw * tgt["mem_weights"])

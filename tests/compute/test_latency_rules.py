@@ -14,7 +14,7 @@ import pytest
 from pytest_flockai.compute import datasheets, runtimes
 from pytest_flockai.compute.devices import DEVICES
 from pytest_flockai.compute.graph import NetworkCost, NodeCost
-from pytest_flockai.compute.predict import dispatched, params_for, predict_latency
+from pytest_flockai.compute.predict import dispatched, params_for, predict_latency, roofline
 from pytest_flockai.errors import ConfigError
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -203,3 +203,27 @@ def test_a_row_run_on_fewer_threads_is_predicted_on_that_many_cores(tmp_path):
         (tmp_path / "t.csv").write_text(f"{head}\n{fields},{bad}\n", encoding="utf-8")
         with pytest.raises(ConfigError, match=r"threads = '.*' is not allowed.*1\.\.4"):
             published.load_rows(tmp_path / "t.csv")
+
+
+def test_cpu_threads_add_at_the_tuned_parallel_efficiency():
+    """n CPU threads run as 1 + (n - 1) * parallel threads' worth of one core's peak: one
+    thread is one core whatever the efficiency, every thread at parallel = 1, and a GPU or
+    NPU is not touched. The stored table's figure lies between the bounds, below 1."""
+    from pytest_flockai.compute.predict import efficiencies, thread_share
+    pi5 = DEVICES["raspberry-pi-5"]
+    cpu = pi5.unit("cpu")
+    one = runtimes.resolve(pi5, "onnxruntime", "fp32", threads=1)
+    four = runtimes.resolve(pi5, "onnxruntime", "fp32")
+    assert thread_share(one, cpu, 0.5) == 1.0
+    assert thread_share(four, cpu, 1.0) == 1.0
+    assert thread_share(four, cpu, 0.5) == pytest.approx((1 + 3 * 0.5) / 4)
+    nano = DEVICES["jetson-nano-10w"]
+    gpu_dep = runtimes.resolve(nano, "tensorrt", "fp16")
+    assert thread_share(gpu_dep, nano.unit("gpu"), 0.5) == 1.0
+    par = efficiencies()["targets"]["cpu"]["parallel"]
+    assert 0.2 <= par < 1.0
+    cost = conv_relu(n=2)
+    t = {"targets": {"cpu": {"parallel": 0.5}}}
+    a = roofline(cost, pi5, one, params_for(t, one))[0]
+    b = roofline(cost, pi5, four, params_for(t, four))[0]
+    assert 2.0 < a / b < 2.5            # 2.5 threads' worth, the memory side unchanged
