@@ -157,3 +157,33 @@ def test_a_sample_torn_by_the_watchdog_leaves_consistent_frames():
     assert list(df.index) == [0.5, 1.0] and list(df["app.samples"]) == [1.0, 2.0]
     rows.extend([(3.0, 3.0), (4.0, 4.0)])          # torn the other way
     assert list(hub.frames()["app"].index) == [0.5, 1.0, 1.5]
+
+
+def test_telemetry_torn_by_the_watchdog_keeps_the_rows_it_counted():
+    """The watchdog can stop ``TelemetryRecorder.record`` between any two statements: after
+    the row's index moved but not its count, and after a full chunk was kept but before the
+    next was allocated. The frame holds the rows counted, once each, with the sensor
+    columns (sliced to the same count) beside them, instead of failing the partial result."""
+    from pytest_flockai.mission import loop
+    from pytest_flockai.mission.assemble import Flight
+    from pytest_flockai.mission.plan import resolve
+
+    m = fa.Mission(fa.drone("dji-mavic-2-pro"), fa.pilots.Hover(altitude=5.0, duration=3.0),
+                   sensors=[fa.sensors.Barometer()], seed=0)
+    flight = Flight([resolve(m)], [m])
+    loop.fly(flight)
+    rec = flight.runs[0].telemetry
+    whole = rec.frame()
+    n = rec.n
+    assert n > 20 and len(whole) == n and any(c.startswith("sensor.") for c in whole.columns)
+    rec._i += 1                                      # torn: index moved, count did not
+    for hist in (rec._sensor_hist or {}).values():
+        hist.append(hist[-1])
+    torn = rec.frame()
+    assert len(torn) == n and torn.index.equals(whole.index)
+    rec._i -= 1                                      # torn at a chunk's end: kept, not renewed
+    rec._buf, rec._t = rec._buf[: rec._i].copy(), rec._t[: rec._i].copy()
+    rec._phase, rec._stage = rec._phase[: rec._i].copy(), rec._stage[: rec._i].copy()
+    rec._full.append((rec._buf, rec._t, rec._phase, rec._stage))
+    again = rec.frame()
+    assert len(again) == n and again.index.equals(whole.index)
