@@ -68,7 +68,7 @@ class Row:
     def deployment(self) -> _rt.Deployment:
         """The row's (runtime, target, precision, threads) resolved on ``device``."""
         return _rt.resolve(self.device, self.runtime, self.precision, self.target or None,
-                           self.threads if self.target == "cpu" else None)
+                           self.threads)
 
 
 def at_cpu_clock(dev, clock_ghz: float | None):

@@ -87,11 +87,10 @@ class TelemetryRecorder:
         """The DataFrame (index: simulated time ``t``), built once. Its rows are the first
         ``n`` recorded: a flight stopped by the wall-clock watchdog in the middle of
         ``record`` (``Overrun`` lands at any bytecode) leaves the chunks and the counters
-        one step apart, and ``n`` is the last thing ``record`` counts."""
+        one step apart (a chunk kept but not yet renewed comes twice, after the rows
+        counted), and ``n`` is the last thing ``record`` counts."""
         n, i = self.n, self._i
         parts = self._full + [(self._buf[:i], self._t[:i], self._phase[:i], self._stage[:i])]
-        if self._full and self._full[-1][0] is self._buf:     # torn between keep and renew
-            parts = self._full
         buf, ts, phase, stage = (np.concatenate([p[j] for p in parts])[:n] for j in range(4))
         tel = pd.DataFrame(buf, columns=self.columns, index=pd.Index(ts, name="t"), copy=False)
         tel["phase"] = pd.Categorical.from_codes(phase, categories=list(PHASES))
