@@ -28,6 +28,25 @@ NonZero Range ScatterND ScatterElements Scatter OneHot Trilu Compress NonMaxSupp
 EyeLike ReverseSequence""".split())
 ACTIVATIONS = frozenset("""Relu Clip LeakyRelu Sigmoid HardSigmoid HardSwish Tanh Elu Selu
 Softplus""".split())
+#: recurrent layers (ONNX LSTM, GRU, RNN): every time step multiplies the input by W and the
+#: hidden state by R, so seq * batch * (elements of W + elements of R) MACs (W: [directions,
+#: gates * hidden, input], R: [directions, gates * hidden, hidden]; the gates' element-wise
+#: work is left out, as a bias is for Gemm)
+RECURRENT = frozenset(("LSTM", "GRU", "RNN"))
+#: ONNX Runtime's contrib operators (domain ``com.microsoft``) that its quantizer
+#: (QOperator format) and graph optimizers write, by the kind they are counted as: their
+#: inputs and outputs are laid out as the standard operator they stand for (ONNX Runtime
+#: "Contrib operators" reference, ``docs/ContribOperators.md``)
+MS_OPS = {
+    "QLinearAdd": "elementwise", "QLinearMul": "elementwise", "QLinearSigmoid": "elementwise",
+    "QLinearLeakyRelu": "elementwise", "QLinearSoftmax": "elementwise",
+    "QLinearConcat": "data", "QLinearWhere": "elementwise", "QLinearGlobalAveragePool": "pool",
+    "QLinearAveragePool": "pool", "QGemm": "matmul", "FusedConv": "conv",
+    "FusedMatMul": "matmul", "MatMulIntegerToFloat": "matmul", "DynamicQuantizeMatMul": "matmul",
+    "Gelu": "elementwise", "FastGelu": "elementwise", "BiasGelu": "elementwise",
+    "QuickGelu": "elementwise", "BiasAdd": "elementwise", "SkipLayerNormalization": "elementwise",
+    "QuantizeLinear": "data", "DequantizeLinear": "data", "NhwcMaxPool": "pool",
+}
 _WEIGHT_TYPES = frozenset((onnx.TensorProto.FLOAT, onnx.TensorProto.FLOAT16,
                            onnx.TensorProto.DOUBLE, onnx.TensorProto.BFLOAT16,
                            onnx.TensorProto.INT8, onnx.TensorProto.UINT8))
@@ -56,6 +75,8 @@ def is_folded(node, consts: set[str], shapes: dict) -> bool:
 def node_cost(node, shapes) -> tuple[str, int, str | None]:
     """(kind, MACs, None) or (kind, 0, why it cannot be counted)."""
     op = node.op_type
+    if node.domain == "com.microsoft" and op in MS_OPS:
+        return _contrib_cost(node, shapes, MS_OPS[op])
     if node.domain not in ("", "ai.onnx"):
         return "data", 0, f"custom domain {node.domain!r}"
 
@@ -86,6 +107,9 @@ def node_cost(node, shapes) -> tuple[str, int, str | None]:
         else:
             need = out if x is not None and out is not None else None
             macs = max(1, math.prod(out)) * x[-1] if need else 0
+    elif op in RECURRENT or op in ("Einsum", "Attention"):
+        kind = "matmul"
+        need, macs = _matmul_like(op, node, shapes, attrs)
     elif op in POOL:
         kind = "pool"
         ks = attrs.get("kernel_shape")
@@ -104,5 +128,80 @@ def node_cost(node, shapes) -> tuple[str, int, str | None]:
     return kind, int(macs), None
 
 
-__all__ = ["ACTIVATIONS", "CONV", "ELEMENTWISE", "GLOBAL_POOL", "MATMUL", "POOL", "REDUCE", "RESAMPLE", "ZERO",
+def _shape(shapes, names, i):
+    return shapes.get(names[i]) if len(names) > i and names[i] else None
+
+
+def _matmul_like(op, node, shapes, attrs) -> tuple[object, int]:
+    """(a known shape or None, MACs) of a recurrent layer, an Einsum or an Attention."""
+    x = _shape(shapes, node.input, 0)
+    if op in RECURRENT:
+        w, r = _shape(shapes, node.input, 1), _shape(shapes, node.input, 2)
+        if x is None or w is None or r is None or len(x) != 3:
+            return None, 0
+        seq, batch = (x[1], x[0]) if attrs.get("layout", 0) else (x[0], x[1])
+        return x, seq * batch * (math.prod(w) + math.prod(r))
+    if op == "Einsum":
+        return _einsum(attrs.get("equation", b""), node, shapes)
+    # Attention (opset 23): softmax(Q K^T) V, so kv_seq * (Q elements + output elements)
+    k, out = _shape(shapes, node.input, 1), _shape(shapes, node.output, 0)
+    if x is None or k is None or out is None or len(k) not in (3, 4):
+        return None, 0
+    kv_seq = k[-2] if len(k) == 4 else k[1]
+    return out, kv_seq * (math.prod(x) + math.prod(out))
+
+
+def _einsum(equation, node, shapes) -> tuple[object, int]:
+    """MACs of an Einsum: output elements * the product of the summed labels' sizes."""
+    eq = (equation.decode() if isinstance(equation, bytes) else str(equation)).replace(" ", "")
+    lhs, arrow, rhs = eq.partition("->")
+    terms = lhs.split(",")
+    ins = [_shape(shapes, node.input, i) for i in range(len(terms))]
+    if any(s is None for s in ins) or len(terms) != len(node.input):
+        return None, 0
+    size: dict[str, int] = {}
+    for term, shp in zip(terms, ins):
+        head, ell, tail = term.partition("...")
+        if len(head) + len(tail) > len(shp) or (not ell and len(term) != len(shp)):
+            return None, 0
+        named = tuple(shp[:len(head)]) + (tuple(shp[len(shp) - len(tail):]) if tail else ())
+        for c, d in zip(head + tail, named):
+            size[c] = max(size.get(c, 1), int(d))
+    kept = set(rhs) if arrow else {c for c in size if lhs.count(c) == 1}  # implicit output
+    out = _shape(shapes, node.output, 0)
+    if out is None:
+        return None, 0
+    summed = math.prod(d for c, d in size.items() if c not in kept)
+    return out, max(1, math.prod(out)) * summed
+
+
+def _contrib_cost(node, shapes, kind) -> tuple[str, int, str | None]:
+    """ONNX Runtime contrib operators (``MS_OPS``), counted as the operator they stand for."""
+    out = _shape(shapes, node.output, 0)
+    if kind == "data":
+        return kind, 0, None
+    if out is None:
+        return kind, 0, "shapes unknown after shape inference and an onnxruntime run"
+    op = node.op_type
+    if kind == "conv":
+        w = _shape(shapes, node.input, 1)
+        return (kind, 0, "shapes unknown") if w is None else (kind, math.prod(out) * math.prod(w[1:]), None)
+    if kind == "matmul":
+        # QGemm/MatMulIntegerToFloat/DynamicQuantizeMatMul/FusedMatMul: A is input 0
+        a = _shape(shapes, node.input, 0)
+        if a is None:
+            return kind, 0, "shapes unknown after shape inference and an onnxruntime run"
+        attrs = {x.name: onnx.helper.get_attribute_value(x) for x in node.attribute}
+        k = a[0] if op == "QGemm" and attrs.get("transA", 0) else a[-1]
+        return kind, max(1, math.prod(out)) * int(k), None
+    if kind == "pool":
+        x = _shape(shapes, node.input, 0)
+        if op == "QLinearGlobalAveragePool":
+            return kind, math.prod(x) if x is not None else math.prod(out), None
+        attrs = {x.name: onnx.helper.get_attribute_value(x) for x in node.attribute}
+        return kind, math.prod(out) * math.prod(attrs.get("kernel_shape", [1])), None
+    return kind, math.prod(out), None
+
+
+__all__ = ["ACTIVATIONS", "CONV", "MS_OPS", "RECURRENT", "ELEMENTWISE", "GLOBAL_POOL", "MATMUL", "POOL", "REDUCE", "RESAMPLE", "ZERO",
            "is_folded", "node_cost", "weight_names"]

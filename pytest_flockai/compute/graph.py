@@ -15,6 +15,9 @@ Conv (group 1),        conv       out_elements * (C_in / group) * prod(kernel);
 ConvTranspose                     ConvTranspose: in_elements * (C_out / group) * k
 Conv (group > 1)       dwconv     the same formula (depthwise and grouped)
 Gemm, MatMul           matmul     M * N * K (batched per numpy rules); bias not counted
+LSTM, GRU, RNN         matmul     seq * batch * (elements of W + elements of R)
+Einsum                 matmul     out_elements * prod(sizes of the summed labels)
+Attention (opset 23)   matmul     kv_seq * (Q elements + output elements)
 Max/Average/LpPool     pool       out_elements * prod(kernel_shape)
 Global*Pool            pool       in_elements
 element-wise, norms,   elementwise out_elements (Resize, activations, BatchNorm...);
@@ -22,7 +25,10 @@ Reduce*, TopK                     Reduce*, ArgMax, TopK: in_elements
 data movement          data       0: Reshape Transpose Concat Split Slice Gather Cast ...
 =====================  ========== =====================================================
 
-Fusion (``fused_into``, the name of the node that absorbs it): a Conv or
+ONNX Runtime's contrib operators (``com.microsoft``: FusedConv, QGemm, QLinearAdd, ...)
+count as the standard operator they stand for (``_ops.MS_OPS``).
+
+Fusion (``fused_into``, the name of the node that absorbs it; ``_fusion``): a Conv or
 ConvTranspose absorbs a following BatchNormalization, then one activation (Relu,
 Clip, LeakyRelu, Sigmoid, HardSigmoid, HardSwish, Tanh, Elu, Selu, Softplus, or
 SiLU / hard-swish written as ``x * Sigmoid(x)`` / ``x * HardSigmoid(x)``); a MatMul
@@ -30,7 +36,9 @@ absorbs a bias ``Add`` and then an activation; each link only when the tensor ha
 that one consumer and is not a graph output. Nodes computed from constants only
 (shape arithmetic, ``Constant``, ``Shape`` of a static tensor) carry
 ``fused_into = FOLDED``, kind ``data`` and 0 MACs: runtimes fold them when they load
-the model.
+the model. In a quantized graph's QDQ format, the activations' Quantize/DequantizeLinear
+nodes are absorbed into the layer they wrap, and ``meta["int8"]`` says how the graph is
+quantized (``_fusion.quantization``).
 """
 
 from __future__ import annotations
@@ -40,13 +48,14 @@ import io
 import math
 import os
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import onnx
 
 from .._io import atomic_write
 from ..errors import ConfigError
-from ._ops import ACTIVATIONS, is_folded, node_cost, weight_names
+from ._fusion import FOLDED, fuse, fuse_qdq, quantization
+from ._ops import is_folded, node_cost, weight_names
 from ._shapes import (
     constant_shapes,
     fix_input_shapes,
@@ -57,8 +66,6 @@ from ._shapes import (
 )
 
 KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
-#: ``fused_into`` of a node that runtimes fold into a constant before running
-FOLDED = "<constant>"
 CSV_FIELDS = ("name", "op_type", "kind", "macs", "weight_elems", "in_elems", "out_elems",
               "fused_into")
 CSV_SCHEMA = "flockai-network-cost/1"
@@ -289,10 +296,13 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
         nodes.append(NodeCost(label, node.op_type, kind, int(macs), elems(node.input, weight=True),
                               elems(node.input), elems(node.output),
                               FOLDED if is_const else None))
-    nodes = _fuse(g, nodes)
+    nodes = fuse_qdq(g, fuse(g, nodes))
     shape = next(iter(shapes.get(i.name) for i in graph_inputs(fixed)), None)
-    cost = NetworkCost(tuple(nodes), name or default_name, shape, tuple(uncounted),
-                       {"shapes": how})
+    meta = {"shapes": how}
+    quant = quantization(g)
+    if quant:
+        meta["int8"] = quant
+    cost = NetworkCost(tuple(nodes), name or default_name, shape, tuple(uncounted), meta)
     if uncounted:
         _refuse_or_warn(cost, error, allow_uncounted)
     return cost
@@ -312,51 +322,4 @@ def _refuse_or_warn(cost: NetworkCost, error, allow: bool) -> None:
     warnings.warn(f"pytest-flockai: {text}; counted as 0 (allow_uncounted=True)", stacklevel=3)
 
 
-def _fuse(g, nodes: list[NodeCost]) -> list[NodeCost]:
-    """Mark BatchNorm / bias / activation nodes fused into the Conv or MatMul before them."""
-    consumers: dict[str, list[int]] = {}
-    for i, node in enumerate(g.node):
-        for t in node.input:
-            consumers.setdefault(t, []).append(i)
-    outputs = {o.name for o in g.output}
-    fused: dict[int, str] = {}
-    inits = frozenset(_constant_names(g))
-
-    def only(t):
-        c = consumers.get(t, [])
-        return c[0] if len(c) == 1 and t not in outputs and c[0] not in fused else None
-
-    for i, node in enumerate(g.node):
-        op = node.op_type
-        if nodes[i].fused_into is not None or i in fused or not node.output:
-            continue
-        if op not in ("Conv", "ConvTranspose", "MatMul", "Gemm"):
-            continue
-        head, t = nodes[i].name, node.output[0]
-        j = only(t)
-        first = "BatchNormalization" if op.startswith("Conv") else "Add"
-        if j is not None and g.node[j].op_type == first and (
-                first != "Add" or all(x == t or x in inits for x in g.node[j].input)):
-            fused[j], t = head, g.node[j].output[0]
-            j = only(t)
-        if j is not None and g.node[j].op_type in ACTIVATIONS:
-            fused[j] = head
-            continue
-        c = consumers.get(t, [])          # x * Sigmoid(x), x * HardSigmoid(x)
-        if len(c) == 2 and t not in outputs and not (set(c) & set(fused)):
-            a, b = sorted(c, key=lambda k: g.node[k].op_type != "Mul")
-            gate = g.node[b]
-            if (g.node[a].op_type == "Mul" and gate.op_type in ("Sigmoid", "HardSigmoid")
-                    and gate.output[0] in g.node[a].input
-                    and consumers.get(gate.output[0]) == [a]):
-                fused[a] = fused[b] = head
-    return [replace(n, fused_into=fused[i]) if i in fused else n for i, n in enumerate(nodes)]
-
-
-def _constant_names(g) -> list[str]:
-    """Names of the graph's initializers and ``Constant`` outputs."""
-    return [t.name for t in g.initializer] + [n.output[0] for n in g.node
-                                              if n.op_type == "Constant" and n.output]
-
-
-__all__ = ["FOLDED", "KINDS", "NetworkCost", "NodeCost", "analyze"]
+__all__ = ["FOLDED", "KINDS", "NetworkCost", "NodeCost", "analyze", "quantization"]

@@ -325,8 +325,9 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
     ``model``: an ONNX path, bytes or ModelProto, an ``OnnxModel``, a ``NetworkCost`` or a
     MAC count (the fallback rule, with a warning). ``device``: a profile name, a ``Device``
     or a ``MeasuredDevice``. ``runtime``/``precision``/``target``/``threads``: the
-    deployment (defaults: the computer's first listed runtime and the unit's first
-    precision). ``input_shape``: the full input shape for a graph with dynamic dims."""
+    deployment (defaults: the computer's first listed runtime and its default precision;
+    int8 for a quantized graph, QDQ or QOperator, where the runtime runs int8).
+    ``input_shape``: the full input shape for a graph with dynamic dims."""
     dev = _resolve_dev(device)
     if is_measured(dev) or getattr(dev, "measured", None) is not None:   # a measured profile
         return _measured(model, dev)
@@ -335,8 +336,10 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
                           f"(fa.devices()), a Device or a MeasuredDevice (fa.compute.profile)")
     if isinstance(model, (int, float)) and not isinstance(model, bool):
         return _from_macs(float(model), dev, runtime, precision, target, threads)
-    dep = _rt.resolve(dev, runtime, precision, target, threads, where="predict_latency")
+    _rt.check_names(runtime, precision, target, threads, where="predict_latency")
     cost = _cost(model, tuple(input_shape) if input_shape is not None else None)
+    dep = _rt.resolve(dev, runtime, precision, target, threads, where="predict_latency",
+                      quantized=getattr(cost, "meta", {}).get("int8"))
     table = efficiencies(efficiencies_path)
     secs, per = roofline(cost, dev, dep, params_for(table, dep))
     macs = float(sum(n.macs for n in cost.nodes))

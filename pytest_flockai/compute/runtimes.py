@@ -19,6 +19,7 @@ allowed, and both the computer and the runtime when the combination is impossibl
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from numbers import Integral
 
@@ -46,6 +47,11 @@ DEFAULT_THREADS = {"tflite": 1}
 #: precisions each runtime can execute (Edge TPU: int8 only)
 RUNTIME_PRECISIONS: dict[str, tuple[str, ...]] = {r: PRECISIONS for r in RUNTIMES}
 RUNTIME_PRECISIONS["edgetpu"] = ("int8",)
+
+
+class QuantizedModelWarning(UserWarning):
+    """An int8 (quantized) model is predicted at another precision: the deployment cannot
+    run int8."""
 
 
 @dataclass(frozen=True)
@@ -153,9 +159,12 @@ def check_names(runtime=None, precision=None, target=None, threads=None, *,
 
 
 def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
-            where: str = "") -> Deployment:
+            where: str = "", quantized: str | bool | None = None) -> Deployment:
     """The deployment on ``device`` (a ``Device``) with the defaults filled in.
 
+    ``quantized``: the model is an int8 graph (``NetworkCost.meta["int8"]``): with no
+    precision stated (by the call or the drone's defaults) it runs at int8 where the
+    runtime can, else at the runtime's default precision with a ``QuantizedModelWarning``.
     ConfigError for an unknown name, or for what this computer cannot run (naming the
     computer, the runtime and what it can run)."""
     check_names(runtime, precision, target, threads, where=where)
@@ -187,6 +196,15 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
                           f"computer {device.name!r}; allowed: {', '.join(targets)}")
     unit = device.unit(target)
     precs = [p for p in unit.precisions if p in RUNTIME_PRECISIONS[runtime]]
+    if precision is None and quantized:   # an int8 graph runs its int8 kernels
+        if "int8" in precs:
+            precision = "int8"
+        else:
+            warnings.warn(f"{w}the model is quantized (int8, {quantized}) but runtime "
+                          f"{runtime!r} on the {target} of computer {device.name!r} cannot run "
+                          f"int8 (allowed there: {', '.join(precs) or 'none'}); predicted at "
+                          f"the runtime's default precision", QuantizedModelWarning,
+                          stacklevel=3)
     if precision is None:       # what the runtime runs by default: fp32 but on TensorRT/Edge TPU
         precision = ("fp32" if "fp32" in precs and runtime not in ("tensorrt", "edgetpu")
                      else precs[0] if precs else unit.precisions[0])
@@ -203,5 +221,5 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
 
 
 __all__ = ["BYTES", "DEFAULT_THREADS", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
-           "TF32_BY_DEFAULT", "Deployment", "check_names", "compute_precision", "peak_macs",
+           "TF32_BY_DEFAULT", "Deployment", "QuantizedModelWarning", "check_names", "compute_precision", "peak_macs",
            "resolve"]

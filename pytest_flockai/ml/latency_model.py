@@ -7,7 +7,8 @@ Which rule applies (``InferenceTimer.method``):
   samples of that model, so p95 differs from p50 as it does on the drone;
 - ``"roofline"``: an ``OnnxModel`` whose graph is known (no ``macs=`` given), on a computer
   with a datasheet: ``compute.predict_latency`` at the frame's input shape, for the task's
-  runtime, target, precision and threads (deterministic; memoised per input shape);
+  runtime, target, precision and threads (deterministic; memoised per input shape); a
+  quantized (int8) graph runs at int8 unless the task or the drone states a precision;
 - ``"macs"``: any other model (a MAC count stated by the user: ``PythonModel``,
   ``OpenCVModel``, templates): the computer's MAC-count rule ``overhead_s + macs /
   macs_per_s``.
@@ -20,6 +21,7 @@ import warnings
 import numpy as np
 
 from ..compute import runtimes as _rt
+from ..compute.graph import quantization
 from ..compute.predict import mac_rule_seconds, predict_latency
 from .models import OnnxModel
 
@@ -62,9 +64,11 @@ class InferenceTimer:
         else:
             self.method = "macs"
         if device.deployments and not is_measured(device):
+            quant = quantization(gm._proto.graph) if gm is not None else None
             self.deployment = _rt.resolve(device, task.runtime, task.precision, task.target,
                                           task.threads, where=f"task {task.name!r} on "
-                                                              f"{device.name!r}")
+                                                              f"{device.name!r}",
+                                          quantized=quant)
 
     def seconds(self, model, frame, macs) -> float:
         """Device seconds of one inference on ``frame`` (``macs``: its MAC count)."""

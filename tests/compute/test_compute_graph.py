@@ -214,3 +214,62 @@ def test_reference_network_summaries_load_and_agree_with_their_index():
     assert abs(macs["yolov8n-640.csv"] / 4.41e9 - 1) < 0.02      # plain torch.onnx.export
     assert abs(macs["resnet50-224.csv"] / 4.1e9 - 1) < 0.02      # He et al. 2016: 4.1 GMAC
     assert abs(macs["mobilenet_v2-224.csv"] / 300e6 - 1) < 0.03  # Sandler et al. 2018: 300 M
+
+
+def _ones(name, shape):
+    return numpy_helper.from_array(np.full(shape, 0.01, np.float32), name)
+
+
+def test_recurrent_einsum_and_attention_layers_are_counted():
+    seq, batch, inp, hid = 7, 2, 12, 20
+    x = helper.make_tensor_value_info("x", TensorProto.FLOAT, [seq, batch, inp])
+    for op, gates in (("LSTM", 4), ("GRU", 3), ("RNN", 1)):
+        for dirs in (1, 2):
+            node = helper.make_node(op, ["x", "W", "R"], ["y", "h"], name=op, hidden_size=hid,
+                                    direction="bidirectional" if dirs == 2 else "forward")
+            m = _model([node], [x], [_y()], [_ones("W", (dirs, gates * hid, inp)),
+                                             _ones("R", (dirs, gates * hid, hid))])
+            cost = analyze(m)
+            assert cost.uncounted == () and cost.nodes[0].kind == "matmul"
+            # every step: W x_t and R h_{t-1} per direction and gate
+            assert cost.macs == seq * batch * dirs * gates * hid * (inp + hid), (op, dirs)
+    # batch-first layout (opset 14): X is [batch, seq, input]
+    node = helper.make_node("LSTM", ["x", "W", "R"], ["y"], name="lstm", hidden_size=hid, layout=1)
+    bf = helper.make_tensor_value_info("x", TensorProto.FLOAT, [batch, seq, inp])
+    m = _model([node], [bf], [_y()], [_ones("W", (1, 4 * hid, inp)), _ones("R", (1, 4 * hid, hid))])
+    assert analyze(m).macs == seq * batch * 4 * hid * (inp + hid)
+    # Einsum: output elements times the summed labels (a batched matmul, then a trace-like sum)
+    a = helper.make_tensor_value_info("x", TensorProto.FLOAT, [3, 5, 6])
+    node = helper.make_node("Einsum", ["x", "b"], ["y"], name="bmm", equation="bij,bjk->bik")
+    m = _model([node], [a], [_y()], [_ones("b", (3, 6, 4))], opset=17)
+    assert analyze(m).macs == 3 * 5 * 4 * 6
+    node = helper.make_node("Einsum", ["x", "b"], ["y"], name="ell", equation="...ij,...jk")
+    m = _model([node], [a], [_y()], [_ones("b", (3, 6, 4))], opset=17)
+    assert analyze(m).macs == 3 * 5 * 4 * 6                      # implicit output ...ik
+    node = helper.make_node("Einsum", ["x"], ["y"], name="sum", equation="bij->b")
+    assert analyze(_model([node], [a], [_y()], [])).macs == 3 * 5 * 6
+
+
+def test_attention_of_opset_23_is_counted():
+    if onnx.defs.onnx_opset_version() < 23:
+        pytest.skip(f"onnx {onnx.__version__} has no opset 23 (Attention)")
+    b, h, sq, skv, d = 1, 4, 10, 16, 8
+    q = helper.make_tensor_value_info("x", TensorProto.FLOAT, [b, h, sq, d])
+    node = helper.make_node("Attention", ["x", "k", "v"], ["y"], name="attn")
+    m = _model([node], [q], [_y()], [_ones("k", (b, h, skv, d)), _ones("v", (b, h, skv, d))],
+               opset=23)
+    m.ir_version = 10
+    cost = analyze(m)
+    # softmax(Q K^T) V: sq*skv*d for the scores and sq*skv*d for the weighted sum, per head
+    assert cost.uncounted == () and cost.macs == 2 * b * h * sq * skv * d
+
+
+def test_onnxruntime_contrib_operators_are_counted_as_what_they_stand_for():
+    # ONNX Runtime's graph optimizer writes FusedConv (com.microsoft) for Conv + activation
+    node = helper.make_node("FusedConv", ["x", "w"], ["y"], name="fc", domain="com.microsoft",
+                            activation="Relu", pads=[1, 1, 1, 1], kernel_shape=[3, 3])
+    m = _model([node], [_x([1, 3, 8, 8])], [_y()], [_w("w", (4, 3, 3, 3))])
+    m.opset_import.append(helper.make_opsetid("com.microsoft", 1))
+    cost = analyze(m)
+    assert cost.uncounted == () and cost.nodes[0].kind == "conv"
+    assert cost.macs == 4 * 8 * 8 * 3 * 9

@@ -1,0 +1,130 @@
+"""How runtimes fuse an ONNX graph's nodes (``fused_into`` of ``graph.NodeCost``).
+
+- ``fuse``: a Conv or ConvTranspose absorbs a following BatchNormalization, then one
+  activation (or a gated SiLU / hard-swish); a MatMul or Gemm absorbs a bias ``Add``, then an
+  activation (the table in ``graph``'s docstring).
+- ``fuse_qdq``: in a quantized graph in the QDQ format (``QuantizeLinear`` /
+  ``DequantizeLinear`` pairs around each layer, as ``onnxruntime.quantization``, TensorRT's
+  and OpenVINO's quantizers and ``torch.ao`` exports write it), the activations' Q/DQ nodes
+  are absorbed into the layer they wrap: ONNX Runtime ("Quantize ONNX models", QDQ format:
+  "the QDQ nodes are fused into quantized operators" by its graph transformers), TensorRT
+  ("Explicit quantization": Q/DQ layers fused into the quantized convolution), OpenVINO's
+  low-precision transformations and TF Lite (a quantized model's ops run int8 kernels end to
+  end) each run one int8 kernel per layer, with no separate pass over the tensor. A Q/DQ
+  pair between two layers is absorbed into the layer that writes the tensor; a DQ that
+  reads a graph input's quantized copy into the layer that reads it. A QuantizeLinear on a
+  graph input stays: it is a real pass that turns the float input into int8.
+- ``quantization``: how a graph is quantized: ``"qdq"``, ``"qoperator"`` (QLinearConv,
+  QLinearMatMul, ConvInteger, MatMulInteger, ONNX Runtime's QLinear* operators),
+  ``"dynamic"`` (DynamicQuantizeLinear + MatMulInteger / ConvInteger), or None.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ._ops import ACTIVATIONS
+
+#: ``fused_into`` of a node that runtimes fold into a constant before running
+FOLDED = "<constant>"
+QDQ = frozenset(("QuantizeLinear", "DequantizeLinear"))
+QOPERATOR = frozenset(("QLinearConv", "QLinearMatMul", "ConvInteger", "MatMulInteger", "QGemm",
+                       "QLinearAdd", "QLinearMul", "MatMulIntegerToFloat",
+                       "DynamicQuantizeMatMul"))
+
+
+def quantization(g) -> str | None:
+    """``"dynamic"``, ``"qoperator"``, ``"qdq"`` or None: how ``g``'s layers are quantized."""
+    ops = {n.op_type for n in g.node}
+    if "DynamicQuantizeLinear" in ops or "DynamicQuantizeMatMul" in ops \
+            or "MatMulIntegerToFloat" in ops:
+        return "dynamic"
+    if ops & QOPERATOR:
+        return "qoperator"
+    if "DequantizeLinear" in ops and ops - QDQ - {"Constant"}:
+        return "qdq"
+    return None
+
+
+def fuse_qdq(g, nodes: list) -> list:
+    """Absorb the activations' QuantizeLinear / DequantizeLinear nodes into the layer they
+    wrap (the module docstring); folded (weight) DQ nodes stay folded."""
+    producer: dict[str, int] = {}
+    for i, node in enumerate(g.node):
+        for o in node.output:
+            producer[o] = i
+    consumers: dict[str, list[int]] = {}
+    for i, node in enumerate(g.node):
+        for t in node.input:
+            consumers.setdefault(t, []).append(i)
+    head: dict[int, str] = {}
+
+    def owner(i: int) -> str | None:
+        """The layer node ``i`` runs as part of (itself, unless fused)."""
+        if i in head:
+            return head[i]
+        f = nodes[i].fused_into
+        return nodes[i].name if f is None else (None if f == FOLDED else f)
+
+    for i, node in enumerate(g.node):
+        if node.op_type not in QDQ or nodes[i].fused_into is not None or not node.input:
+            continue
+        src = producer.get(node.input[0])
+        layer = owner(src) if src is not None else None
+        if layer is not None:
+            head[i] = layer                    # written by a layer (or its Q): absorbed
+        elif node.op_type == "DequantizeLinear" and node.output:
+            reads = [c for c in consumers.get(node.output[0], []) if g.node[c].op_type not in QDQ]
+            if len(reads) == 1 and nodes[reads[0]].fused_into is None:
+                head[i] = nodes[reads[0]].name  # a graph input's int8 copy, read by one layer
+    return [replace(n, fused_into=head[i]) if i in head else n for i, n in enumerate(nodes)]
+
+
+def fuse(g, nodes: list) -> list:
+    """Mark BatchNorm / bias / activation nodes fused into the Conv or MatMul before them."""
+    consumers: dict[str, list[int]] = {}
+    for i, node in enumerate(g.node):
+        for t in node.input:
+            consumers.setdefault(t, []).append(i)
+    outputs = {o.name for o in g.output}
+    fused: dict[int, str] = {}
+    inits = frozenset(_constant_names(g))
+
+    def only(t):
+        c = consumers.get(t, [])
+        return c[0] if len(c) == 1 and t not in outputs and c[0] not in fused else None
+
+    for i, node in enumerate(g.node):
+        op = node.op_type
+        if nodes[i].fused_into is not None or i in fused or not node.output:
+            continue
+        if op not in ("Conv", "ConvTranspose", "MatMul", "Gemm"):
+            continue
+        head, t = nodes[i].name, node.output[0]
+        j = only(t)
+        first = "BatchNormalization" if op.startswith("Conv") else "Add"
+        if j is not None and g.node[j].op_type == first and (
+                first != "Add" or all(x == t or x in inits for x in g.node[j].input)):
+            fused[j], t = head, g.node[j].output[0]
+            j = only(t)
+        if j is not None and g.node[j].op_type in ACTIVATIONS:
+            fused[j] = head
+            continue
+        c = consumers.get(t, [])          # x * Sigmoid(x), x * HardSigmoid(x)
+        if len(c) == 2 and t not in outputs and not (set(c) & set(fused)):
+            a, b = sorted(c, key=lambda k: g.node[k].op_type != "Mul")
+            gate = g.node[b]
+            if (g.node[a].op_type == "Mul" and gate.op_type in ("Sigmoid", "HardSigmoid")
+                    and gate.output[0] in g.node[a].input
+                    and consumers.get(gate.output[0]) == [a]):
+                fused[a] = fused[b] = head
+    return [replace(n, fused_into=fused[i]) if i in fused else n for i, n in enumerate(nodes)]
+
+
+def _constant_names(g) -> list[str]:
+    """Names of the graph's initializers and ``Constant`` outputs."""
+    return [t.name for t in g.initializer] + [n.output[0] for n in g.node
+                                              if n.op_type == "Constant" and n.output]
+
+
+__all__ = ["FOLDED", "QDQ", "QOPERATOR", "fuse", "fuse_qdq", "quantization"]

@@ -1,0 +1,136 @@
+"""Quantized (int8) ONNX graphs, as ``onnxruntime.quantization`` writes them, run as int8
+layers: the activations' QuantizeLinear / DequantizeLinear nodes are absorbed into the layer
+they wrap (one int8 kernel, as ONNX Runtime, TensorRT, OpenVINO and TF Lite run it), and the
+graph runs at int8 unless the call, the task or the drone states a precision."""
+
+import warnings
+
+import numpy as np
+import onnx
+import pytest
+from onnx import TensorProto, helper, numpy_helper
+from onnxruntime.quantization import CalibrationDataReader, QuantFormat, quantize_static
+
+import pytest_flockai as fa
+from pytest_flockai.compute.graph import FOLDED, analyze
+from pytest_flockai.compute.predict import predict_latency
+from pytest_flockai.compute.runtimes import QuantizedModelWarning
+
+SIDE = 64
+
+
+def _float_net(path):
+    """Four 3x3 Conv + ReLU blocks, a global pool and a classifier (opset 17)."""
+    rng = np.random.default_rng(5)
+    nodes, inits, src, c = [], [], "x", 3
+    for i, co in enumerate((16, 32, 32, 64)):
+        nodes += [helper.make_node("Conv", [src, f"w{i}", f"b{i}"], [f"c{i}"], name=f"conv{i}",
+                                   pads=[1, 1, 1, 1], kernel_shape=[3, 3],
+                                   strides=[2, 2] if i % 2 else [1, 1]),
+                  helper.make_node("Relu", [f"c{i}"], [f"r{i}"], name=f"relu{i}")]
+        inits += [numpy_helper.from_array(0.1 * rng.standard_normal((co, c, 3, 3)).astype(
+            np.float32), f"w{i}"), numpy_helper.from_array(np.zeros(co, np.float32), f"b{i}")]
+        src, c = f"r{i}", co
+    nodes += [helper.make_node("GlobalAveragePool", [src], ["gp"], name="gap"),
+              helper.make_node("Flatten", ["gp"], ["fl"], name="flat"),
+              helper.make_node("Gemm", ["fl", "wf"], ["y"], name="fc", transB=1)]
+    inits.append(numpy_helper.from_array(rng.standard_normal((10, 64)).astype(np.float32), "wf"))
+    g = helper.make_graph(nodes, "net", [helper.make_tensor_value_info(
+        "x", TensorProto.FLOAT, [1, 3, SIDE, SIDE])], [helper.make_tensor_value_info(
+            "y", TensorProto.FLOAT, [1, 10])], inits)
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    onnx.save(m, str(path))
+    return path
+
+
+class _Frames(CalibrationDataReader):
+    def __init__(self):
+        self.rng, self.n = np.random.default_rng(0), 0
+
+    def get_next(self):
+        self.n += 1
+        return ({"x": self.rng.standard_normal((1, 3, SIDE, SIDE)).astype(np.float32)}
+                if self.n <= 3 else None)
+
+
+@pytest.fixture(scope="module")
+def nets(tmp_path_factory):
+    d = tmp_path_factory.mktemp("quant")
+    f = _float_net(d / "float.onnx")
+    out = {"float": f}
+    for name, fmt in (("qdq", QuantFormat.QDQ), ("qop", QuantFormat.QOperator)):
+        out[name] = d / f"{name}.onnx"
+        quantize_static(str(f), str(out[name]), _Frames(), quant_format=fmt)
+    return out
+
+
+def test_a_qdq_graph_runs_as_its_int8_layers(nets):
+    f, q = analyze(nets["float"]), analyze(nets["qdq"])
+    assert "int8" not in f.meta and q.meta["int8"] == "qdq"
+    # the quantizer writes a Q/DQ pair around every activation; each is absorbed into the
+    # layer that writes (or, for the graph input's copy, reads) it
+    qdq = [n for n in q.nodes if n.op_type in ("QuantizeLinear", "DequantizeLinear")]
+    assert len(qdq) >= 10
+    names = {n.name for n in q.nodes}
+    assert sum(n.fused_into == FOLDED for n in qdq) == 9              # the weights' DQ
+    assert all(n.fused_into in names or n.fused_into == FOLDED for n in qdq if n.fused_into)
+    assert [n.name for n in q.run_nodes if n in qdq] == ["x_QuantizeLinear"]   # float -> int8
+    by = {n.name: n for n in q.nodes}
+    assert by["r0_QuantizeLinear"].fused_into == by["r0_DequantizeLinear"].fused_into == "conv0"
+    run = [n.op_type for n in q.run_nodes]
+    assert run.count("Conv") == 4 and run.count("Gemm") == 1
+    # the same layers, the same MACs but the ReLUs the quantizer folded into the ranges
+    relu = sum(n.macs for n in f.nodes if n.op_type == "Relu")
+    assert q.macs == f.macs - relu
+    # so it predicts as the float graph at int8, not slower than the float graph at fp32
+    for dev, rt in (("raspberry-pi-4", "onnxruntime"), ("jetson-orin-nano", "tensorrt")):
+        pq = predict_latency(nets["qdq"], dev, runtime=rt)
+        pf8 = predict_latency(nets["float"], dev, runtime=rt, precision="int8")
+        pf = predict_latency(nets["float"], dev, runtime=rt)
+        assert pq.precision == "int8" and pf.precision != "int8"
+        assert pq.seconds == pytest.approx(pf8.seconds, rel=0.1), dev
+        assert pq.seconds < pf.seconds, dev
+    # the QOperator format (QLinearConv, ONNX Runtime's QGemm and QLinearGlobalAveragePool)
+    o = analyze(nets["qop"])
+    assert o.meta["int8"] == "qoperator" and o.uncounted == () and o.macs >= q.macs - 64 * 10
+    assert predict_latency(nets["qop"], "raspberry-pi-4").precision == "int8"
+
+
+def test_a_stated_precision_wins_and_int8_where_it_cannot_run_warns(nets):
+    p = predict_latency(nets["qdq"], "raspberry-pi-4", precision="fp32")
+    assert p.precision == "fp32"
+    # the Jetson Nano's Maxwell GPU has no int8 path in TensorRT: its default, with a warning
+    with pytest.warns(QuantizedModelWarning, match=r"quantized \(int8, qdq\).*'tensorrt'.*"
+                                                   r"jetson-nano-10w"):
+        p = predict_latency(nets["qdq"], "jetson-nano-10w", runtime="tensorrt")
+    assert p.precision == "fp16"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        predict_latency(nets["float"], "jetson-nano-10w", runtime="tensorrt")
+
+
+def test_a_task_on_a_quantized_model_runs_at_int8_unless_told(nets):
+    model = fa.ml.OnnxModel(nets["qdq"])
+
+    def p50(drone_kw=None, **task_kw):
+        task = fa.Task(model, period_s=1.0, device="raspberry-pi-4", alert="result", **task_kw)
+        if drone_kw is not None:
+            drone = fa.drone("dji-mavic-2-pro", device="raspberry-pi-4", **drone_kw)
+            r = fa.Mission(drone, fa.pilots.Hover(altitude=3.0, duration=3.0), seed=0,
+                           tasks=[fa.Task(model, period_s=1.0, alert="result")]).run()
+            lat = {e["compute_s"] for e in r.events if e.get("kind") == "inference"}
+            assert len(lat) == 1                   # one frame size: one latency
+            return lat.pop()
+        r = fa.ml.TaskRunner(task).bind(0)
+        r.on_frame(0.0, np.zeros((SIDE, SIDE, 3), np.uint8))
+        r.advance(5.0)
+        return r.kpis()["inference_latency_p50_s"]
+
+    int8 = predict_latency(nets["qdq"], "raspberry-pi-4", precision="int8").seconds
+    fp32 = predict_latency(nets["qdq"], "raspberry-pi-4", precision="fp32").seconds
+    assert p50() == pytest.approx(int8)
+    assert p50(precision="fp32") == pytest.approx(fp32)
+    assert p50(drone_kw={}) == pytest.approx(int8)
+    assert p50(drone_kw={"precision": "fp32"}) == pytest.approx(fp32)
+    assert fp32 > 1.2 * int8
