@@ -158,6 +158,9 @@ def dispatched(nodes, runtime: str) -> list:
 
 #: held-out rows a (computer, runtime) needs for its own band (else its target's band)
 MIN_BAND_ROWS = 4
+#: publishers those rows must come from: rows of one publisher (two revisions of one maker's
+#: guide) measure that publisher's agreement with itself, not the spread a user will see
+MIN_BAND_SOURCES = 2
 
 
 class LatencyFallbackWarning(UserWarning):
@@ -168,8 +171,9 @@ class LatencyFallbackWarning(UserWarning):
 class LatencyPrediction:
     """One inference: ``seconds``, ``band`` (low, high seconds: the held-out half's range of
     published/predicted for this computer and runtime; when that pair has fewer than
-    ``MIN_BAND_ROWS`` held-out rows, for every runtime of this computer on the same unit;
-    with fewer still, for every computer's rows on that unit), ``energy_j`` above idle, and
+    ``MIN_BAND_ROWS`` held-out rows or they come from fewer than ``MIN_BAND_SOURCES``
+    publishers, for every runtime of this computer on the same unit (by the same rule);
+    failing that, for every computer's rows on that unit), ``energy_j`` above idle, and
     ``per_node``: ((node, kind, seconds, bound), ...)."""
 
     seconds: float
@@ -286,7 +290,8 @@ def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tupl
     b = None
     for key in (f"{dev.name}/{dep.runtime}", f"{dev.name}/*/{dep.target}"):
         b = bands.get(key)
-        if b and b.get("n", 0) >= MIN_BAND_ROWS:
+        if (b and b.get("n", 0) >= MIN_BAND_ROWS
+                and b.get("sources", MIN_BAND_SOURCES) >= MIN_BAND_SOURCES):
             break
     else:           # too few rows on this computer: the target's held-out range
         b = bands.get(f"*/{dep.target}")
@@ -380,6 +385,6 @@ def _measured(model, dev) -> LatencyPrediction:
                              math.nan)
 
 
-__all__ = ["ACT_UNFUSED", "EFFICIENCIES", "FALLBACK", "KINDS", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
+__all__ = ["ACT_UNFUSED", "EFFICIENCIES", "FALLBACK", "KINDS", "MIN_BAND_ROWS", "MIN_BAND_SOURCES", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
            "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
            "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]

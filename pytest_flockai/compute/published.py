@@ -53,6 +53,9 @@ class Row:
     #: (Ultralytics' TF Lite rows: 1, see ``load_rows``); None: the runtime's default
     #: (``runtimes.DEFAULT_THREADS``: every core but for TF Lite)
     threads: int | None = None
+    #: who published the row's source (``publisher`` in latency_sources.csv, the text before
+    #: " ("): two revisions of one maker's guide are one publisher
+    publisher: str = ""
 
     @property
     def group(self) -> str:
@@ -106,6 +109,7 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
     srcs = _read_csv(sources)
     halves = {s["source_id"]: s["half"].strip() for s in srcs}
     added = {s["source_id"]: (s.get("added") or "").strip() for s in srcs}
+    pubs = {s["source_id"]: (s.get("publisher") or "").split(" (")[0].strip() for s in srcs}
     rows, skipped, costs = [], [], {}
     for r in _read_csv(table):
         rid = r.get("row_id", "?")
@@ -145,7 +149,7 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
         rows.append(Row(rid, r["source_id"], half, r["computer"], r["runtime"],
                         r["target"], r["precision"], r["network"], r["input"],
                         float(r["latency_ms"]) / 1e3, costs[key], ghz, added[r["source_id"]],
-                        threads))
+                        threads, pubs[r["source_id"]]))
     return rows, skipped
 
 
@@ -192,7 +196,8 @@ def summary(rows: list[Row], table: dict) -> dict:
 def bands(rows: list[Row], table: dict) -> dict:
     """Held-out published/predicted ranges per ``computer/runtime``, per ``computer/*/target``
     (every runtime of that computer on that unit) and per ``*/target`` (what
-    ``LatencyPrediction.band`` scales the prediction by)."""
+    ``LatencyPrediction.band`` scales the prediction by), each with its row count ``n`` and
+    the number of publishers its rows come from (``sources``)."""
     held = [x for x in rows if x.half == "heldout"]
     if not held:
         return {}
@@ -202,10 +207,12 @@ def bands(rows: list[Row], table: dict) -> dict:
                        ("ct", lambda x: f"{x.computer}/*/{x.target}"),
                        ("t", lambda x: f"*/{x.target}")):
         groups: dict[str, list[float]] = {}
+        who: dict[str, set[str]] = {}
         for x, v in zip(held, inv):
             groups.setdefault(key(x), []).append(float(v))
+            who.setdefault(key(x), set()).add(x.publisher or x.source_id)
         for k, v in groups.items():
-            out[k] = {"min": min(v), "max": max(v), "n": len(v)}
+            out[k] = {"min": min(v), "max": max(v), "n": len(v), "sources": len(who[k])}
     return out
 
 

@@ -150,6 +150,32 @@ def test_the_band_falls_back_to_the_computer_before_every_computer():
     assert predict._band({}, pi4, dep, 1.0) == (0.5, 2.0)    # untuned: the issue's 2x
 
 
+def test_a_band_needs_rows_of_two_publishers():
+    """Rows of one publisher (two revisions of one maker's guide) say how that publisher
+    agrees with itself: such a pair takes its computer's band; the tuned table records the
+    publishers of each band, read from latency_sources.csv."""
+    from pytest_flockai.compute import predict, published
+    pi5 = DEVICES["raspberry-pi-5"]
+    dep = runtimes.resolve(pi5, "onnxruntime", "fp32", "cpu")
+    n, k = predict.MIN_BAND_ROWS, predict.MIN_BAND_SOURCES
+    bands = {"raspberry-pi-5/onnxruntime": {"min": 0.92, "max": 0.99, "n": n, "sources": k - 1},
+             "raspberry-pi-5/*/cpu": {"min": 0.3, "max": 8.0, "n": 4 * n, "sources": k}}
+    assert predict._band({"bands": bands}, pi5, dep, 1.0) == (0.3, 8.0)
+    bands["raspberry-pi-5/onnxruntime"]["sources"] = k
+    assert predict._band({"bands": bands}, pi5, dep, 1.0) == (0.92, 0.99)
+    rows, _ = published.load_rows()
+    assert {r.publisher for r in rows if r.source_id.startswith("ultralytics-")} == {"Ultralytics"}
+    assert {r.publisher for r in rows if r.source_id.startswith("krai-")} == {"Krai"}
+    table = predict.efficiencies()
+    held = [r for r in rows if r.half == "heldout"]
+    for key, b in table["bands"].items():
+        comp, _, rest = key.partition("/")
+        mine = [r for r in held if comp in ("*", r.computer) and (
+            rest == f"*/{r.target}" if rest.startswith("*/") else
+            rest == r.target if comp == "*" else rest == r.runtime)]
+        assert b["n"] == len(mine) and b["sources"] == len({r.publisher for r in mine}), key
+
+
 def test_a_row_measured_at_another_cpu_clock_is_predicted_at_that_clock():
     """The 2022 ncnn Raspberry Pi 4 section ran at 1.5 GHz (its heading): its rows carry
     cpu_clock_ghz and are predicted on a CPU whose clock and peaks are scaled to it."""
