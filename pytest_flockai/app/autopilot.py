@@ -29,8 +29,9 @@ from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames
 from .commands import Commands
-from .mavlink_udp import RATES, Link, M
+from .mavlink_udp import Link, M
 from .pilots import Setpoint
+from .streams import RATES
 
 #: s of simulated time between the autopilot's steps (25 Hz: commands, setpoints, telemetry)
 PERIOD_S = 0.04
@@ -41,6 +42,11 @@ SLEEP_MIN_S = 0.010
 #: s of wall time without a setpoint after which OFFBOARD falls back to HOLD (PX4's
 #: COM_OF_LOSS_T default is 1 s)
 OFFBOARD_LOSS_S = 1.0
+
+
+def _floats(a) -> list:
+    """``a`` (an array or a sequence) as a list of Python floats."""
+    return a.tolist() if hasattr(a, "tolist") else [float(x) for x in a]
 
 
 class Autopilot(Policy, Commands):
@@ -108,11 +114,11 @@ class Autopilot(Policy, Commands):
     def snapshot(self, t: float) -> dict:
         """The telemetry fields of this instant, from the drone's navigation state."""
         st, g = self.st, self.geo
-        q, v = st.qc, st.vc
+        q, v = _floats(st.qc), _floats(st.vc)     # NumPy scalars make the arithmetic slower
         lat, lon, amsl, rel = g.to_global(q[0], q[1], q[2])
         rpy = frames.euler_ned(q[3:7])
         vn, ve, vd = v[1], v[0], -v[2]
-        volts = st.battery_v if st.battery_v > 0 else 16.8
+        volts = float(st.battery_v) if st.battery_v > 0 else 16.8
         return {"ms": int(t * 1000), "lat": int(round(lat * 1e7)), "lon": int(round(lon * 1e7)),
                 "amsl_mm": int(round(amsl * 1000)), "rel_mm": int(round(rel * 1000)),
                 "vn_cm": int(vn * 100), "ve_cm": int(ve * 100), "vd_cm": int(vd * 100),
@@ -123,7 +129,7 @@ class Autopilot(Policy, Commands):
                 "landed": self.landed_state(), "gs_cm": int(math.hypot(vn, ve) * 100),
                 "cog_cdeg": int(math.degrees(math.atan2(ve, vn)) % 360 * 100),
                 "home": self._home_int,
-                "mission_seq": self.mi}
+                "mission_seq": self.mi, "mission_n": len(self.link.mission)}
 
     # -- the simulation's step -------------------------------------------------------------
     def decide(self, t: float, drone) -> None:
@@ -211,7 +217,7 @@ class Autopilot(Policy, Commands):
                 r = self.rates[n]
                 nxt = self._due[n] + 1.0 / r if r > 0 else math.inf
                 self._due[n] = nxt if nxt > clock else clock + 1.0 / r    # fell behind: resync
-            self.link.queue([self.link.message(n, snap) for n in due])
+            self.link.queue_telemetry(due, snap)
         self._next_tel = min(self._due.values())
 
     def _preflight(self, t: float) -> None:

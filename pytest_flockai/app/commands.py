@@ -15,8 +15,9 @@ from ..control.pilots import Waypoints
 from ..control.stages import DONE, TAKEOFF
 from ..control.stages import LANDING as LAND
 from . import frames
-from .mavlink_udp import RATES, M, name_of
+from .mavlink_udp import M, name_of
 from .pilots import ORBIT_YAW, AppOrbit, Leg, Setpoint
+from .streams import RATES
 
 A, DENIED, UNSUP = M.MAV_RESULT_ACCEPTED, M.MAV_RESULT_DENIED, M.MAV_RESULT_UNSUPPORTED
 GLOBAL_FRAMES = (M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_INT)

@@ -9,7 +9,8 @@ simulation (``inbox``), which acts on them at its next step and acknowledges the
 Before the flight starts and after it ended the thread answers commands itself and
 keeps streaming the last state, so an app that waits for "landed" or "disarmed"
 still sees them. It records what the app last sent and asked for: a hung app's failure
-names it (``diagnosis``). Each message carries the next sequence number (``_pack``).
+names it (``diagnosis``). Each message carries the next sequence number (``_pack``);
+telemetry is built and packed when its burst is sent (``queue_telemetry``).
 """
 
 from __future__ import annotations
@@ -21,9 +22,8 @@ import time
 
 from pymavlink.dialects.v20 import common as M
 
-SENSORS = (M.MAV_SYS_STATUS_SENSOR_3D_GYRO | M.MAV_SYS_STATUS_SENSOR_3D_ACCEL
-           | M.MAV_SYS_STATUS_SENSOR_3D_MAG | M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE
-           | M.MAV_SYS_STATUS_SENSOR_GPS | M.MAV_SYS_STATUS_PREARM_CHECK)
+from . import streams
+
 #: mission items the drone flies (the rest are refused at upload)
 MISSION_FLOWN = {M.MAV_CMD_NAV_WAYPOINT, M.MAV_CMD_NAV_TAKEOFF, M.MAV_CMD_NAV_LAND,
                  M.MAV_CMD_NAV_RETURN_TO_LAUNCH, M.MAV_CMD_NAV_LOITER_TIME,
@@ -44,12 +44,6 @@ PARAMS = {"MIS_TAKEOFF_ALT": 2.5, "MPC_XY_CRUISE": 5.0, "MPC_LAND_SPEED": 0.7,
 #: MAVSDK's UDP connection reads datagrams of up to 2048 bytes)
 MAX_DATAGRAM = 1400
 
-#: telemetry rates (Hz of simulated time) before the app asks for others
-RATES = {"ATTITUDE": 10.0, "GLOBAL_POSITION_INT": 10.0, "LOCAL_POSITION_NED": 10.0,
-         "SYS_STATUS": 2.0, "EXTENDED_SYS_STATE": 2.0, "BATTERY_STATUS": 1.0,
-         "GPS_RAW_INT": 2.0, "HOME_POSITION": 1.0, "MISSION_CURRENT": 1.0}
-
-
 def name_of(cmd: int) -> str:
     e = M.enums["MAV_CMD"].get(int(cmd))
     return e.name.replace("MAV_CMD_", "") if e is not None else str(cmd)
@@ -67,8 +61,9 @@ class Link:
         self.mav = M.MAVLink(None, srcSystem=1, srcComponent=1)
         self.mav.robust_parsing = True
         self._lock = threading.Lock()
-        self._out: list = []                # packed messages not sent yet (``queue``)
-        self._out_n = 0                     # their bytes
+        #: what is not sent yet, in order (``queue``, ``queue_telemetry``): messages, and
+        #: (telemetry names, state) pairs built into messages when they are sent
+        self._out: list = []
         self.queued_at = 0.0                # time.monotonic() of the oldest of them
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.params = dict(PARAMS)
@@ -87,21 +82,22 @@ class Link:
     def send(self, msg) -> None:
         """Send ``msg`` now, after the telemetry queued before it (one datagram)."""
         with self._lock:
-            self._out.append(self._pack(msg))
+            self._out.append(msg)
             self._flush()
 
     def queue(self, msgs) -> None:
-        """Pack ``msgs`` for the next datagram (``flush``): telemetry of one burst of
+        """Queue ``msgs`` for the next datagram (``flush``): telemetry of one burst of
         simulated steps reaches the app at one instant however it is sent."""
         with self._lock:
             if not self._out:
                 self.queued_at = time.monotonic()
-            for m in msgs:
-                buf = self._pack(m)
-                if self._out_n + len(buf) > MAX_DATAGRAM:
-                    self._flush()
-                self._out.append(buf)
-                self._out_n += len(buf)
+            self._out.extend(msgs)
+
+    def queue_telemetry(self, names, state: dict) -> None:
+        """Queue the telemetry messages ``names`` of ``state`` (``Autopilot.snapshot``):
+        they are built and packed when the burst is sent (``flush``), one after the other
+        with the next sequence numbers, not at each simulated step that queued them."""
+        self.queue(((tuple(names), state),))
 
     def _pack(self, msg) -> bytes:
         """``msg`` packed with the next sequence number (``pack`` does not advance it)."""
@@ -120,11 +116,28 @@ class Link:
             self._flush()
 
     def _flush(self) -> None:
-        buf = b"".join(self._out)
-        self._out.clear()
-        self._out_n = 0
-        if not buf:
-            return
+        """Send what is queued, in order, in datagrams of at most ``MAX_DATAGRAM`` bytes
+        (MAVLink parsers read a datagram as a byte stream: one kernel call for many)."""
+        items, self._out = self._out, []
+        bufs: list = []
+        n = 0
+        for item in items:
+            if isinstance(item, tuple):         # (names, state): build the messages now
+                names, state = item
+                msgs = [m for m in (self.message(k, state) for k in names) if m is not None]
+            else:
+                msgs = [item]
+            for m in msgs:
+                buf = self._pack(m)
+                if n + len(buf) > MAX_DATAGRAM and bufs:
+                    self._sendto(b"".join(bufs))
+                    bufs, n = [], 0
+                bufs.append(buf)
+                n += len(buf)
+        if bufs:
+            self._sendto(b"".join(bufs))
+
+    def _sendto(self, buf: bytes) -> None:
         try:
             self.sock.sendto(buf, ("127.0.0.1", self.port))
         except OSError:
@@ -141,12 +154,6 @@ class Link:
         self.send(M.MAVLink_heartbeat_message(M.MAV_TYPE_QUADROTOR, M.MAV_AUTOPILOT_PX4, base,
                                               ap.custom_mode, status, 3))
 
-    def send_all(self, msgs) -> None:
-        """Send ``msgs`` now, in one datagram (MAVLink parsers read a datagram as a byte
-        stream: one kernel call instead of one per message)."""
-        self.queue(msgs)
-        self.flush()
-
     def stream(self, name: str, s: dict) -> None:
         """Send telemetry message ``name`` from the state ``s`` (``Autopilot.snapshot``)."""
         m = self.message(name, s)
@@ -155,37 +162,7 @@ class Link:
 
     def message(self, name: str, s: dict):
         """Telemetry message ``name`` from the state ``s`` (None: not one streamed)."""
-        ms = s["ms"]
-        if name == "GLOBAL_POSITION_INT":
-            m = M.MAVLink_global_position_int_message(
-                ms, s["lat"], s["lon"], s["amsl_mm"], s["rel_mm"], s["vn_cm"], s["ve_cm"],
-                s["vd_cm"], s["hdg_cdeg"])
-        elif name == "LOCAL_POSITION_NED":
-            m = M.MAVLink_local_position_ned_message(ms, *s["ned"], *s["vned"])
-        elif name == "ATTITUDE":
-            m = M.MAVLink_attitude_message(ms, *s["rpy"], *s["rates"])
-        elif name == "SYS_STATUS":
-            m = M.MAVLink_sys_status_message(SENSORS, SENSORS, SENSORS, 200, s["mv"],
-                                             s["ca"], s["pct"], 0, 0, 0, 0, 0, 0)
-        elif name == "EXTENDED_SYS_STATE":
-            m = M.MAVLink_extended_sys_state_message(M.MAV_VTOL_STATE_UNDEFINED, s["landed"])
-        elif name == "BATTERY_STATUS":
-            m = M.MAVLink_battery_status_message(
-                0, M.MAV_BATTERY_FUNCTION_ALL, M.MAV_BATTERY_TYPE_LIPO, 2500,
-                [s["mv"]] + [65535] * 9, s["ca"], -1, -1, s["pct"])
-        elif name == "GPS_RAW_INT":
-            m = M.MAVLink_gps_raw_int_message(ms * 1000, M.GPS_FIX_TYPE_3D_FIX, s["lat"],
-                                              s["lon"], s["amsl_mm"], 100, 150, s["gs_cm"],
-                                              s["cog_cdeg"], 12)
-        elif name == "HOME_POSITION":
-            h = s["home"]
-            m = M.MAVLink_home_position_message(h[0], h[1], h[2], 0.0, 0.0, 0.0,
-                                                [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0)
-        elif name == "MISSION_CURRENT":
-            m = M.MAVLink_mission_current_message(s["mission_seq"], len(self.mission))
-        else:
-            return None
-        return m
+        return streams.message(name, s, len(self.mission))
 
     def autopilot_version(self) -> None:
         caps = (M.MAV_PROTOCOL_CAPABILITY_MISSION_INT | M.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
@@ -222,9 +199,11 @@ class Link:
                 self.heartbeat()
                 next_hb = now + 1.0
             if not self.sim_running and self.snap is not None and now >= next_tel:
-                self.send_all([self.message(n, self.snap) for n in (
+                self.queue_telemetry((
                     "GLOBAL_POSITION_INT", "LOCAL_POSITION_NED", "ATTITUDE", "SYS_STATUS",
-                    "EXTENDED_SYS_STATE", "BATTERY_STATUS", "GPS_RAW_INT", "HOME_POSITION")])
+                    "EXTENDED_SYS_STATE", "BATTERY_STATUS", "GPS_RAW_INT", "HOME_POSITION"),
+                    self.snap)
+                self.flush()
                 next_tel = now + 0.25
             wake = next_hb
             if self._up is not None:
