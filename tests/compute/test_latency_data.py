@@ -156,7 +156,8 @@ def test_sources_added_later_take_their_half_from_the_digest_of_their_id(sources
     """Sources added after the first split are halved by rule, not by choice: tuning when the
     SHA-256 of the source id is even, held out when odd (decided before any prediction)."""
     import hashlib
-    assert {s["added"] for s in sources.values()} <= {"2026-11", "2026-11-27", "2026-11-28"}
+    assert {s["added"] for s in sources.values()} <= {"2026-11", "2026-11-27", "2026-11-28",
+                                                     "2026-12-06"}
     later = [s for s in sources.values() if s["added"] != "2026-11"]
     assert later
     for s in later:

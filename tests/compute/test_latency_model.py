@@ -253,7 +253,7 @@ def test_fleet_offload_times_the_ground_inference_with_the_layer_model(tmp_path)
 
 
 #: ``added`` months (latency_sources.csv) of the sources latency_efficiencies.json was tuned on
-TUNED_ON = {"2026-11", "2026-11-27", "2026-11-28"}
+TUNED_ON = {"2026-11", "2026-11-27", "2026-11-28", "2026-12-06"}
 
 
 @pytest.mark.slow
