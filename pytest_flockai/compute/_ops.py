@@ -12,22 +12,35 @@ Add Sub Mul Div Pow Sqrt Exp Log Abs Neg Reciprocal Floor Ceil Round Sign Max Mi
 Relu LeakyRelu PRelu Elu Selu Celu ThresholdedRelu Sigmoid HardSigmoid HardSwish Tanh Softplus
 Softsign Clip Erf Gelu Mish Sin Cos Softmax LogSoftmax BatchNormalization InstanceNormalization
 LayerNormalization GroupNormalization LRN Where Equal Greater GreaterOrEqual Less LessOrEqual
-Not And Or Xor Mod IsNaN IsInf Hardmax Shrink BitShift Swish
+Not And Or Xor Mod IsNaN IsInf Hardmax Shrink BitShift Swish CumSum MeanVarianceNormalization
+LpNormalization RMSNormalization RotaryEmbedding SkipSimplifiedLayerNormalization Det Bernoulli
+RandomNormalLike RandomUniformLike BitwiseAnd BitwiseOr BitwiseXor BitwiseNot Acos Asin Atan
+Acosh Asinh Atanh Cosh Sinh Tan AffineGrid CumProd SwiGLU RandomNormal RandomUniform Multinomial
+HannWindow HammingWindow BlackmanWindow NegativeLogLikelihoodLoss SoftmaxCrossEntropyLoss MaxRoiPool
 """.split())
 REDUCE = frozenset("""ReduceMean ReduceSum ReduceMax ReduceMin ReduceProd ReduceL1 ReduceL2
 ReduceLogSum ReduceLogSumExp ReduceSumSquare ArgMax ArgMin TopK""".split())
 POOL = frozenset(("MaxPool", "AveragePool", "LpPool"))
 GLOBAL_POOL = frozenset(("GlobalAveragePool", "GlobalMaxPool", "GlobalLpPool"))
 RESAMPLE = frozenset(("Resize", "Upsample", "GridSample", "RoiAlign"))
-CONV = frozenset(("Conv", "ConvInteger", "QLinearConv", "ConvTranspose"))
+CONV = frozenset(("Conv", "ConvInteger", "QLinearConv", "ConvTranspose", "DeformConv"))
 MATMUL = frozenset(("Gemm", "MatMul", "MatMulInteger", "QLinearMatMul"))
 ZERO = frozenset("""Reshape Flatten Transpose Squeeze Unsqueeze Concat Split Slice Gather
 GatherElements GatherND Identity Cast CastLike Shape Size Constant ConstantOfShape Dropout Pad
 Expand Tile DepthToSpace SpaceToDepth QuantizeLinear DequantizeLinear DynamicQuantizeLinear
 NonZero Range ScatterND ScatterElements Scatter OneHot Trilu Compress NonMaxSuppression
-EyeLike ReverseSequence""".split())
+EyeLike ReverseSequence MaxUnpool CenterCropPad Col2Im Unique SequenceConstruct SequenceAt
+SequenceInsert SequenceErase SequenceEmpty SequenceLength SplitToSequence ConcatFromSequence
+Optional OptionalGetElement OptionalHasElement BitCast TensorScatter MelWeightMatrix""".split())
 ACTIVATIONS = frozenset("""Relu Clip LeakyRelu Sigmoid HardSigmoid HardSwish Tanh Elu Selu
 Softplus""".split())
+#: standard operators left uncounted on purpose (a graph holding one is refused by name, or
+#: counted as 0 with ``allow_uncounted``): control flow whose cost depends on the data (If,
+#: Loop, Scan, SequenceMap), transforms whose cost is not out-elements (DFT, STFT), text and
+#: image decoding, and the newest stateful layers (LinearAttention, CausalConvWithState)
+NOT_COUNTED = frozenset("""If Loop Scan SequenceMap DFT STFT ImageDecoder RegexFullMatch
+StringConcat StringNormalizer StringSplit TfIdfVectorizer LinearAttention
+CausalConvWithState""".split())
 #: recurrent layers (ONNX LSTM, GRU, RNN): every time step multiplies the input by W and the
 #: hidden state by R, so seq * batch * (elements of W + elements of R) MACs (W: [directions,
 #: gates * hidden, input], R: [directions, gates * hidden, hidden]; the gates' element-wise
@@ -203,5 +216,5 @@ def _contrib_cost(node, shapes, kind) -> tuple[str, int, str | None]:
     return kind, math.prod(out), None
 
 
-__all__ = ["ACTIVATIONS", "CONV", "MS_OPS", "RECURRENT", "ELEMENTWISE", "GLOBAL_POOL", "MATMUL", "POOL", "REDUCE", "RESAMPLE", "ZERO",
+__all__ = ["ACTIVATIONS", "CONV", "MS_OPS", "NOT_COUNTED", "RECURRENT", "ELEMENTWISE", "GLOBAL_POOL", "MATMUL", "POOL", "REDUCE", "RESAMPLE", "ZERO",
            "is_folded", "node_cost", "weight_names"]
