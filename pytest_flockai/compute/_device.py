@@ -10,7 +10,10 @@ from ..errors import ConfigError
 @dataclass(frozen=True)
 class Unit:
     """A compute unit of a computer: ``kind`` (cpu/gpu/npu), ``cores`` (CPU cores, or 1),
-    ``clock_ghz`` and ``peak``: ((precision, peak MAC/s of the whole unit), ...)."""
+    ``clock_ghz`` and ``peak``: ((precision, peak MAC/s of the whole unit), ...); for an
+    accelerator that keeps the network's parameters in its own memory (the Edge TPU),
+    ``cache_mb`` of it and ``link_gbs``, the host link the parameters that do not fit stream
+    over at every inference (0: neither)."""
 
     kind: str
     cores: int
@@ -18,6 +21,8 @@ class Unit:
     peak: tuple[tuple[str, float], ...]
     name: str = ""
     tensor_cores: int = 0
+    cache_mb: float = 0.0
+    link_gbs: float = 0.0
 
     @property
     def precisions(self) -> tuple[str, ...]:

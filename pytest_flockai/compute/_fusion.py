@@ -14,6 +14,9 @@
   pair between two layers is absorbed into the layer that writes the tensor; a DQ that
   reads a graph input's quantized copy into the layer that reads it. A QuantizeLinear on a
   graph input stays: it is a real pass that turns the float input into int8.
+- ``dispatched``: the nodes a runtime runs, with the gated activations (SiLU, hard-swish)
+  and, for eager PyTorch, every activation a pass of its own where that runtime does not fuse
+  them (``GATE_FUSED``, ``ACT_UNFUSED``).
 - ``quantization``: how a graph is quantized: ``"qdq"``, ``"qoperator"`` (QLinearConv,
   QLinearMatMul, ConvInteger, MatMulInteger, ONNX Runtime's QLinear* operators),
   ``"dynamic"`` (DynamicQuantizeLinear + MatMulInteger / ConvInteger), or None.
@@ -127,4 +130,49 @@ def _constant_names(g) -> list[str]:
                                               if n.op_type == "Constant" and n.output]
 
 
-__all__ = ["FOLDED", "QDQ", "QOPERATOR", "fuse", "fuse_qdq", "quantization"]
+#: runtimes that fuse a gated activation ``x * gate(x)`` into the convolution before it, by
+#: gate. TensorRT fuses point-wise chains into the convolution's epilogue (TensorRT developer
+#: guide, "Layer fusion": PointWise fusion) and OpenVINO's CPU plugin fuses Swish and
+#: HSwish as post-ops; ncnn's Convolution fuses hard-swish (``activation_type`` 6) but has no
+#: Swish activation, so SiLU runs as its own Swish layer (ncnn ``src/layer/convolution``,
+#: ``fuse_convolution_activation`` in ``tools/ncnnoptimize``); ONNX Runtime's FusedConv takes
+#: Relu / Sigmoid / Tanh / LeakyRelu / Clip / HardSigmoid, never the Mul after them; TFLite
+#: runs LOGISTIC / HARD_SWISH and MUL as their own ops; eager PyTorch runs SiLU as one op.
+#: Any other runtime/gate pair: one separate element-wise pass (read x, write x * gate(x)).
+GATE_FUSED = {"tensorrt": ("Sigmoid", "HardSigmoid"), "openvino": ("Sigmoid", "HardSigmoid"),
+              "edgetpu": ("Sigmoid", "HardSigmoid"), "ncnn": ("HardSigmoid",)}
+
+
+#: runtimes that fuse no activation into the convolution before it: eager PyTorch calls
+#: each module in turn (``nn.ReLU`` after ``nn.Conv2d`` is a second kernel launch and a
+#: second pass over the tensor). Fusion in PyTorch is an explicit transformation of the
+#: model: ``torch.ao.quantization.quantize_fx.fuse_fx`` ("Fuse modules like conv+bn,
+#: conv+bn+relu etc", PyTorch API reference), ``torch.nn.utils.fusion.fuse_conv_bn_eval``,
+#: TorchScript freezing or ``torch.compile``. Its gated activations (SiLU, hard-swish) are
+#: one kernel each, as ``GATE_FUSED``'s rule already counts.
+ACT_UNFUSED = frozenset(("pytorch",))
+
+
+def dispatched(nodes, runtime: str) -> list:
+    """The nodes a runtime runs: the unfused ones, plus, where the runtime does not fuse a
+    gated activation (``GATE_FUSED``), that activation's Mul as one element-wise pass over
+    its output (one read, one write, one op per element), and, for the runtimes of
+    ``ACT_UNFUSED``, every other activation fused into a convolution as its own pass."""
+    gates = {n.fused_into: n.op_type for n in nodes
+             if n.fused_into and n.op_type in ("Sigmoid", "HardSigmoid")}
+    fused = GATE_FUSED.get(runtime, ())
+    out = []
+    for n in nodes:
+        if not n.fused_into:
+            out.append(n)
+        elif (runtime in ACT_UNFUSED and n.kind == "elementwise"
+              and n.op_type not in ("Sigmoid", "HardSigmoid", "Mul")):
+            out.append(replace(n, fused_into=None))
+        elif (n.op_type == "Mul" and n.fused_into in gates
+              and gates[n.fused_into] not in fused):
+            out.append(replace(n, in_elems=n.out_elems, macs=n.out_elems, fused_into=None))
+    return out
+
+
+__all__ = ["ACT_UNFUSED", "FOLDED", "GATE_FUSED", "QDQ", "QOPERATOR", "dispatched", "fuse",
+           "fuse_qdq", "quantization"]

@@ -24,6 +24,7 @@ for a model known only by its MAC count, an estimate). ``from_datasheet`` reads 
 from __future__ import annotations
 
 import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 from ..errors import ConfigError
@@ -86,7 +87,11 @@ def from_datasheet(name: str, t: dict) -> Device:
         if isinstance(u, dict):
             peaks = _peaks(kind, u)
             if peaks:
-                units.append(_unit(kind, u, peaks))
+                unit = _unit(kind, u, peaks)
+                if kind == "npu" and u.get("on_chip_memory_mb") and t.get("edgetpu_link_gbs"):
+                    unit = replace(unit, cache_mb=float(u["on_chip_memory_mb"]),
+                                   link_gbs=float(t["edgetpu_link_gbs"]))
+                units.append(unit)
     have = {u.kind for u in units}
     deps = tuple(f"{r}/{k}" for r in t.get("runtimes", ()) for k in TARGET_ORDER.get(r, ())
                  if k in have)

@@ -40,7 +40,7 @@ import json
 import math
 import os
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
@@ -48,6 +48,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from . import runtimes as _rt
+from ._fusion import ACT_UNFUSED, GATE_FUSED, dispatched
 from .devices import Device
 from .devices import device as _device
 from .graph import analyze
@@ -110,50 +111,6 @@ def winograd_3x3(n) -> bool:
     spatial = n.macs / n.weight_elems
     cin = n.in_elems / spatial
     return cin >= 8 and 7.0 <= (n.macs / n.out_elems) / cin <= 11.0
-
-
-#: runtimes that fuse a gated activation ``x * gate(x)`` into the convolution before it, by
-#: gate. TensorRT fuses point-wise chains into the convolution's epilogue (TensorRT developer
-#: guide, "Layer fusion": PointWise fusion) and OpenVINO's CPU plugin fuses Swish and
-#: HSwish as post-ops; ncnn's Convolution fuses hard-swish (``activation_type`` 6) but has no
-#: Swish activation, so SiLU runs as its own Swish layer (ncnn ``src/layer/convolution``,
-#: ``fuse_convolution_activation`` in ``tools/ncnnoptimize``); ONNX Runtime's FusedConv takes
-#: Relu / Sigmoid / Tanh / LeakyRelu / Clip / HardSigmoid, never the Mul after them; TFLite
-#: runs LOGISTIC / HARD_SWISH and MUL as their own ops; eager PyTorch runs SiLU as one op.
-#: Any other runtime/gate pair: one separate element-wise pass (read x, write x * gate(x)).
-GATE_FUSED = {"tensorrt": ("Sigmoid", "HardSigmoid"), "openvino": ("Sigmoid", "HardSigmoid"),
-              "edgetpu": ("Sigmoid", "HardSigmoid"), "ncnn": ("HardSigmoid",)}
-
-
-#: runtimes that fuse no activation into the convolution before it: eager PyTorch calls
-#: each module in turn (``nn.ReLU`` after ``nn.Conv2d`` is a second kernel launch and a
-#: second pass over the tensor). Fusion in PyTorch is an explicit transformation of the
-#: model: ``torch.ao.quantization.quantize_fx.fuse_fx`` ("Fuse modules like conv+bn,
-#: conv+bn+relu etc", PyTorch API reference), ``torch.nn.utils.fusion.fuse_conv_bn_eval``,
-#: TorchScript freezing or ``torch.compile``. Its gated activations (SiLU, hard-swish) are
-#: one kernel each, as ``GATE_FUSED``'s rule already counts.
-ACT_UNFUSED = frozenset(("pytorch",))
-
-
-def dispatched(nodes, runtime: str) -> list:
-    """The nodes a runtime runs: the unfused ones, plus, where the runtime does not fuse a
-    gated activation (``GATE_FUSED``), that activation's Mul as one element-wise pass over
-    its output (one read, one write, one op per element), and, for the runtimes of
-    ``ACT_UNFUSED``, every other activation fused into a convolution as its own pass."""
-    gates = {n.fused_into: n.op_type for n in nodes
-             if n.fused_into and n.op_type in ("Sigmoid", "HardSigmoid")}
-    fused = GATE_FUSED.get(runtime, ())
-    out = []
-    for n in nodes:
-        if not n.fused_into:
-            out.append(n)
-        elif (runtime in ACT_UNFUSED and n.kind == "elementwise"
-              and n.op_type not in ("Sigmoid", "HardSigmoid", "Mul")):
-            out.append(replace(n, fused_into=None))
-        elif (n.op_type == "Mul" and n.fused_into in gates
-              and gates[n.fused_into] not in fused):
-            out.append(replace(n, in_elems=n.out_elems, macs=n.out_elems, fused_into=None))
-    return out
 
 
 #: held-out rows a (computer, runtime) needs for its own band (else its target's band)
@@ -261,6 +218,18 @@ def thread_share(dep: _rt.Deployment, unit, parallel: float) -> float:
     return (1.0 + (n - 1) * parallel) / n
 
 
+def param_stream(nbytes: float, held: float, cache: float) -> tuple[float, float]:
+    """(bytes streamed at every inference, bytes held after) of a layer's ``nbytes`` of
+    parameters on an accelerator whose ``cache`` bytes of on-chip memory already hold
+    ``held``: the compiler caches the parameters in the network's order until the memory is
+    full, and the rest stream from the host's memory at every inference (Coral, "Edge TPU
+    Compiler": models "share the Edge TPU's RAM for parameter data caching"; arXiv 2503.01025,
+    abstract: "given the limited amount of on-chip memory on the Edge TPU, accesses to
+    external (host) memory rapidly become an important performance bottleneck")."""
+    fits = max(0.0, min(nbytes, cache - held))
+    return nbytes - fits, held + fits
+
+
 def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
     """(seconds, per-node timings) of a network cost on a deployment with efficiencies."""
     unit = dev.unit(dep.target)
@@ -271,6 +240,11 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
     clock = unit.clock_ghz if unit.clock_ghz > 0 else 1.0
     dispatch = prm["dispatch_s"] / clock
     total, per = prm["overhead_s"] / clock, []
+    # an accelerator with its own parameter memory (the Edge TPU): the parameters that do not
+    # fit stream over the host link at every inference (``param_stream``)
+    cache = getattr(unit, "cache_mb", 0.0) * 2 ** 20
+    link = getattr(unit, "link_gbs", 0.0) * 1e9 * prm["mem_weights"]
+    held = 0.0
     for n in dispatched(cost.nodes, dep.runtime):
         eff = min(1.0, prm[n.kind] * (prm["scale"] if n.kind in ("conv", "dwconv", "matmul")
                                       else 1.0))
@@ -279,6 +253,9 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
             tc /= prm["winograd"]
         tm = ((n.in_elems + n.out_elems) * nbytes / bw + n.weight_elems * nbytes / bw_w
               if bw > 0 else 0.0)
+        if cache > 0 and link > 0 and n.weight_elems:
+            streamed, held = param_stream(n.weight_elems * nbytes, held, cache)
+            tm += streamed / link
         t = max(tc, tm) + dispatch
         total += t
         per.append((n.name, n.kind, t, "compute" if tc >= tm else "memory"))
@@ -385,6 +362,6 @@ def _measured(model, dev) -> LatencyPrediction:
                              math.nan)
 
 
-__all__ = ["ACT_UNFUSED", "EFFICIENCIES", "FALLBACK", "KINDS", "MIN_BAND_ROWS", "MIN_BAND_SOURCES", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
+__all__ = ["ACT_UNFUSED", "EFFICIENCIES", "FALLBACK", "KINDS", "MIN_BAND_ROWS", "MIN_BAND_SOURCES", "param_stream", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
            "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
            "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]

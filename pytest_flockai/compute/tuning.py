@@ -53,6 +53,7 @@ from .predict import (
     WINOGRAD,
     dispatched,
     efficiencies,
+    param_stream,
     params_for,
     roofline,
     stream_gbs,
@@ -88,6 +89,14 @@ class _Compiled:
         size = _rt.compute_precision(dep, unit)[1]
         self.wbytes = np.array([float(n.weight_elems) for n in nodes]) * size
         self.abytes = np.array([float(n.in_elems + n.out_elems) for n in nodes]) * size
+        # parameters streamed from the host at every inference (an accelerator whose own
+        # memory cannot hold them all: ``predict.param_stream``)
+        self.link = getattr(unit, "link_gbs", 0.0) * 1e9
+        cache, held, streamed = getattr(unit, "cache_mb", 0.0) * 2 ** 20, 0.0, []
+        for w in self.wbytes:
+            s, held = param_stream(float(w), held, cache) if cache > 0 else (0.0, held)
+            streamed.append(s)
+        self.sbytes = np.array(streamed)
         self.wino = np.array([winograd_3x3(n) for n in nodes], dtype=bool)
         self.uses_wino = self.rt in WINOGRAD and bool(self.wino.any())
         self.n = len(nodes)
@@ -104,6 +113,8 @@ class _Compiled:
             tc = np.where(self.wino, tc / wino, tc)
         tm = (self.abytes / (self.bw * tgt["mem"]) + self.wbytes / (self.bw * tgt["mem_weights"])
               if self.bw > 0 else 0.0 * self.abytes)
+        if self.link > 0:
+            tm = tm + self.sbytes / (self.link * tgt["mem_weights"])
         return float(np.sum(np.maximum(tc, tm)) + (self.n * tgt["dispatch_s"] * dispatch
                                                    + tgt["overhead_s"]) / self.clock)
 

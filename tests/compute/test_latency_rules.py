@@ -14,7 +14,13 @@ import pytest
 from pytest_flockai.compute import datasheets, runtimes
 from pytest_flockai.compute.devices import DEVICES
 from pytest_flockai.compute.graph import NetworkCost, NodeCost
-from pytest_flockai.compute.predict import dispatched, params_for, predict_latency, roofline
+from pytest_flockai.compute.predict import (
+    dispatched,
+    efficiencies,
+    params_for,
+    predict_latency,
+    roofline,
+)
 from pytest_flockai.errors import ConfigError
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -255,3 +261,37 @@ def test_cpu_threads_add_at_the_tuned_parallel_efficiency():
     a = roofline(cost, pi5, one, params_for(t, one))[0]
     b = roofline(cost, pi5, four, params_for(t, four))[0]
     assert 2.0 < a / b < 2.5            # 2.5 threads' worth, the memory side unchanged
+
+
+def test_parameters_beyond_the_edge_tpus_memory_stream_over_its_link():
+    """The Edge TPU caches a network's parameters in its 8 MB of on-chip memory in the
+    network's order; the rest stream from the host over its PCIe link at every inference, so
+    a large network pays its parameter bytes over the link, and a small one does not."""
+    from pytest_flockai.compute import published, tuning
+    from pytest_flockai.compute.predict import param_stream
+    mb = 2 ** 20
+    assert param_stream(3 * mb, 0.0, 8 * mb) == (0.0, 3 * mb)           # fits
+    assert param_stream(3 * mb, 7 * mb, 8 * mb) == (2 * mb, 8 * mb)     # 1 MB fits
+    assert param_stream(3 * mb, 8 * mb, 8 * mb) == (3 * mb, 8 * mb)     # full: all streams
+    coral = DEVICES["coral-dev-board"]
+    tpu = coral.unit("npu")
+    assert tpu.cache_mb == 8.0 and tpu.link_gbs == 0.5
+    vgg = published.network_cost("vgg16", "224")
+    mobilenet = published.network_cost("mobilenet_v2", "224")
+    for cost, streams in ((vgg, True), (mobilenet, False)):
+        p = predict_latency(cost, coral, runtime="edgetpu")
+        no_link = dataclasses.replace(coral, units=(dataclasses.replace(tpu, link_gbs=0.0),))
+        q = predict_latency(cost, no_link, runtime="edgetpu")
+        weights = cost.weight_elems            # int8: one byte each
+        if streams:                            # 138 M parameters: 130 MB over 0.5 GB/s
+            assert p.seconds - q.seconds >= 0.9 * (weights - 8 * mb) / 0.5e9
+        else:                                  # 3.5 M parameters: all on chip
+            assert p.seconds == pytest.approx(q.seconds)
+    # the tuner's fast path computes the same seconds as the roofline (one model, two codes)
+    table = efficiencies()
+    rows, _ = published.load_rows()
+    row = next(r for r in rows if r.computer == "coral-dev-board" and r.network == "vgg16")
+    prm = params_for(table, row.deployment)
+    fast = tuning._Compiled(row).seconds(prm, prm["scale"], 1.0)
+    slow, _ = roofline(row.cost, row.device, row.deployment, prm)
+    assert fast == pytest.approx(slow, rel=1e-9)
