@@ -44,7 +44,12 @@ def quantization(g) -> str | None:
         return "dynamic"
     if ops & QOPERATOR:
         return "qoperator"
-    if "DequantizeLinear" in ops and ops - QDQ - {"Constant"}:
+    # QDQ: activations are quantized (a QuantizeLinear of a computed tensor); a graph whose
+    # only DequantizeLinear nodes read stored weights is weight-only quantized and computes
+    # in float
+    consts = set(_constant_names(g))
+    if any(n.op_type == "QuantizeLinear" and n.input and n.input[0] not in consts
+           for n in g.node):
         return "qdq"
     return None
 

@@ -134,3 +134,20 @@ def test_a_task_on_a_quantized_model_runs_at_int8_unless_told(nets):
     assert p50(drone_kw={}) == pytest.approx(int8)
     assert p50(drone_kw={"precision": "fp32"}) == pytest.approx(fp32)
     assert fp32 > 1.2 * int8
+
+
+def test_weight_only_quantization_computes_in_float():
+    """int8 weights dequantized for a float convolution (no activation is quantized) are a
+    smaller file, not an int8 network: no int8 default."""
+    w = numpy_helper.from_array(np.ones((8, 3, 3, 3), np.int8), "w_q")
+    scale = numpy_helper.from_array(np.asarray(0.01, np.float32), "w_s")
+    nodes = [helper.make_node("DequantizeLinear", ["w_q", "w_s"], ["w"], name="w/DQ"),
+             helper.make_node("Conv", ["x", "w"], ["y"], name="conv", pads=[1, 1, 1, 1])]
+    g = helper.make_graph(nodes, "wo", [helper.make_tensor_value_info(
+        "x", TensorProto.FLOAT, [1, 3, SIDE, SIDE])], [helper.make_tensor_value_info(
+            "y", TensorProto.FLOAT, None)], [w, scale])
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    cost = analyze(m)
+    assert "int8" not in cost.meta and cost.nodes[0].fused_into == FOLDED
+    assert predict_latency(cost, "raspberry-pi-4").precision == "fp32"
