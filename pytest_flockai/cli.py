@@ -8,7 +8,8 @@ with the same schema; a test present in several inputs keeps its last entry.
 ``flockai history`` compare runs across commits (``reports/subcommands.py``);
 ``flockai cache info|clear|prune`` shows, empties and trims the flight cache (only
 files carrying the cache's own header are ever removed). ``flockai profile-device``
-times ONNX models on this computer (``compute/profiler.py``).
+times ONNX models on this computer (``compute/profiler.py``); ``flockai predict-latency``
+predicts a model's latency on the computer profiles (``compute/latency_cli.py``).
 
 Exit statuses, the same for every subcommand (docs/how-to/ci-cache.md):
 0 done, 1 a regression (``compare`` only), 2 a usage or input error (a bad
@@ -26,6 +27,7 @@ from pathlib import Path
 from . import cache as _cache
 from . import limits
 from .airframe import blueprints
+from .compute import latency_cli as _latency_cli
 from .compute import profiler as _profiler
 from .errors import ConfigError, FlockAIError
 from .reports import files as _report
@@ -75,6 +77,7 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("blueprints", help="list the built-in drone blueprints")
     _commands.add_parsers(sub)
     _profiler.add_parser(sub)
+    _latency_cli.add_parser(sub)
     c = sub.add_parser("cache", help="the flight cache: info, clear or prune it")
     csub = c.add_subparsers(dest="cache_cmd", required=True)
     for name, help_ in (("info", "entries, size, limit and key source of the flight cache"),
@@ -169,6 +172,8 @@ def _run(a) -> int:
         return _cache_cmd(a)
     if a.cmd == "profile-device":
         return _profiler.run_cli(a)
+    if a.cmd == "predict-latency":
+        return _latency_cli.run_cli(a)
     _report.check_writable(a.out, "flockai merge: OUT")
     merged = merge_reports(a.inputs)
     _report.write_json_atomic(a.out, merged)

@@ -1,0 +1,108 @@
+"""``flockai predict-latency MODEL.onnx``: a network's predicted inference latency on the
+computer profiles, from the shell (``predict.predict_latency`` for each computer and each
+runtime it lists, or for the ones asked for).
+
+    flockai predict-latency yolov8n.onnx --input-shape 1x3x640x640
+    flockai predict-latency model.onnx --computer raspberry-pi-5 --runtime ncnn --precision int8
+
+One row per (computer, runtime): the deployment (runtime/target/precision and threads), the
+predicted milliseconds, the held-out range around it (``LatencyPrediction.band``) and the
+energy above idle; a quantized (int8) model on a deployment that cannot run int8 is marked
+``*`` (its default precision is shown). A deployment a computer cannot run is left out when the computers or the
+runtime were not both named, and listed under the table; when both were named it is the usage
+error it is for ``predict_latency``. ``--json`` also writes the rows (atomically).
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+from .._io import atomic_write
+from ..errors import ConfigError
+from . import runtimes as _rt
+from .devices import device, devices
+from .graph import analyze
+from .predict import predict_latency
+from .profiler import _parse_shape
+
+__all__ = ["add_parser", "rows", "run_cli"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("predict-latency", help="predict an ONNX model's inference latency on "
+                                               "the computer profiles")
+    p.add_argument("model", type=Path, metavar="MODEL.onnx")
+    p.add_argument("--computer", action="append", default=None, metavar="NAME",
+                   help="a computer profile (repeat for several; default: every profile with "
+                        "a datasheet)")
+    p.add_argument("--runtime", default=None, help="one runtime (default: each the computer "
+                                                   "lists)")
+    p.add_argument("--precision", default=None, help="fp32, fp16 or int8 (default: the "
+                                                     "runtime's; int8 for a quantized graph)")
+    p.add_argument("--target", default=None, help="cpu, gpu or npu")
+    p.add_argument("--threads", type=int, default=None, help="CPU threads (default: the "
+                                                             "runtime's)")
+    p.add_argument("--input-shape", default=None, help="the input's shape, e.g. 1x3x640x640, "
+                                                       "where it is dynamic")
+    p.add_argument("--json", type=Path, default=None, help="also write the rows to this JSON "
+                                                           "file")
+
+
+def rows(model, computers=None, *, runtime=None, precision=None, target=None, threads=None,
+         input_shape=None) -> tuple[list[dict], list[str]]:
+    """(one dict per predicted deployment, why each left-out deployment was left out);
+    ``model`` an ONNX path (or a ``NetworkCost``)."""
+    _rt.check_names(runtime, precision, target, threads)
+    cost = model if hasattr(model, "nodes") else analyze(model, input_shape)
+    names = list(computers) if computers else devices()
+    strict = bool(computers) and runtime is not None
+    out, left = [], []
+    for name in names:
+        dev = device(name)
+        if not dev.deployments:
+            left.append(f"{name}: no datasheet")
+            continue
+        for rt in [runtime] if runtime is not None else list(dev.runtimes):
+            try:
+                with warnings.catch_warnings(record=True) as said:
+                    warnings.simplefilter("always", _rt.QuantizedModelWarning)
+                    p = predict_latency(cost, dev, runtime=rt, precision=precision,
+                                        target=target, threads=threads)
+            except ConfigError as e:            # what this computer cannot run
+                if strict:
+                    raise
+                left.append(f"{name}/{rt}: {e}")
+                continue
+            fell_back = any(issubclass(w.category, _rt.QuantizedModelWarning) for w in said)
+            out.append({"computer": name, **p.to_dict(), "milliseconds": p.milliseconds,
+                        "int8_fallback": fell_back})
+    return out, left
+
+
+def run_cli(a) -> int:
+    _rt.check_names(a.runtime, a.precision, a.target, a.threads)
+    cost = analyze(a.model, _parse_shape(a.input_shape))
+    found, left = rows(cost, a.computer, runtime=a.runtime, precision=a.precision,
+                       target=a.target, threads=a.threads)
+    print(f"flockai predict-latency: {cost.name}: {cost.macs / 1e9:.3g} GMAC, "
+          f"{len(cost.run_nodes)} kernels, input {'x'.join(map(str, cost.input_shape or ()))}"
+          + (f", quantized ({cost.meta['int8']})" if cost.meta.get("int8") else ""))
+    print(f"{'computer':24s} {'runtime/target/precision':26s} {'threads':>7s} {'ms':>10s} "
+          f"{'held-out range (ms)':>21s} {'mJ above idle':>13s}")
+    for r in found:
+        dep = f"{r['runtime']}/{r['target']}/{r['precision']}" + ("*" if r["int8_fallback"] else "")
+        lo, hi = (1e3 * b for b in r["band"])
+        print(f"{r['computer']:24s} {dep:26s} {r['threads'] or 'all':>7} "
+              f"{r['milliseconds']:10.2f} {f'{lo:.2f}-{hi:.2f}':>21s} "
+              f"{1e3 * r['energy_j']:13.2f}")
+    if any(r["int8_fallback"] for r in found):
+        print("  * the model is quantized (int8) and this deployment cannot run int8: its "
+              "default precision is shown")
+    for why in left:
+        print(f"  left out: {why}")
+    if a.json is not None:
+        doc = {"model": str(a.model), "macs": cost.macs, "rows": found, "left_out": left}
+        atomic_write(a.json, lambda fh: fh.write(json.dumps(doc, indent=1) + "\n"))
+    return 0
