@@ -6,11 +6,12 @@
 - ``fuse_qdq``: in a quantized graph in the QDQ format (``QuantizeLinear`` /
   ``DequantizeLinear`` pairs around each layer, as ``onnxruntime.quantization``, TensorRT's
   and OpenVINO's quantizers and ``torch.ao`` exports write it), the activations' Q/DQ nodes
-  are absorbed into the layer they wrap: ONNX Runtime ("Quantize ONNX models", QDQ format:
-  "the QDQ nodes are fused into quantized operators" by its graph transformers), TensorRT
-  ("Explicit quantization": Q/DQ layers fused into the quantized convolution), OpenVINO's
-  low-precision transformations and TF Lite (a quantized model's ops run int8 kernels end to
-  end) each run one int8 kernel per layer, with no separate pass over the tensor. A Q/DQ
+  are absorbed into the layer they wrap. ONNX Runtime's graph optimizer fuses a DQ -> op -> Q
+  pattern into the quantized operator (its docs, "Quantize ONNX models", on the QDQ format),
+  TensorRT fuses Q/DQ layers into the quantized layer (developer guide, "Explicit
+  quantization"), OpenVINO's low-precision transformations do the same, and TF Lite runs a
+  quantized model's ops as int8 kernels end to end: one int8 kernel per layer, with no
+  separate pass over the tensor (paraphrased, not quoted). A Q/DQ
   pair between two layers is absorbed into the layer that writes the tensor; a DQ that
   reads a graph input's quantized copy into the layer that reads it. A QuantizeLinear on a
   graph input stays: it is a real pass that turns the float input into int8.
