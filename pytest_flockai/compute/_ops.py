@@ -47,18 +47,19 @@ CausalConvWithState""".split())
 #: work is left out, as a bias is for Gemm)
 RECURRENT = frozenset(("LSTM", "GRU", "RNN"))
 #: ONNX Runtime's contrib operators (domain ``com.microsoft``) that its quantizer
-#: (QOperator format) and graph optimizers write, by the kind they are counted as: their
-#: inputs and outputs are laid out as the standard operator they stand for (ONNX Runtime
-#: "Contrib operators" reference, ``docs/ContribOperators.md``)
+#: (QOperator format) and graph optimizers write, and the standard operator each is counted
+#: as: their data inputs sit where the standard operator's do (ONNX Runtime "Contrib
+#: operators" reference, ``docs/ContribOperators.md``)
 MS_OPS = {
-    "QLinearAdd": "elementwise", "QLinearMul": "elementwise", "QLinearSigmoid": "elementwise",
-    "QLinearLeakyRelu": "elementwise", "QLinearSoftmax": "elementwise",
-    "QLinearConcat": "data", "QLinearWhere": "elementwise", "QLinearGlobalAveragePool": "pool",
-    "QLinearAveragePool": "pool", "QGemm": "matmul", "FusedConv": "conv",
-    "FusedMatMul": "matmul", "MatMulIntegerToFloat": "matmul", "DynamicQuantizeMatMul": "matmul",
-    "Gelu": "elementwise", "FastGelu": "elementwise", "BiasGelu": "elementwise",
-    "QuickGelu": "elementwise", "BiasAdd": "elementwise", "SkipLayerNormalization": "elementwise",
-    "QuantizeLinear": "data", "DequantizeLinear": "data", "NhwcMaxPool": "pool",
+    "QLinearAdd": "Add", "QLinearMul": "Mul", "QLinearSigmoid": "Sigmoid",
+    "QLinearLeakyRelu": "LeakyRelu", "QLinearSoftmax": "Softmax", "QLinearConcat": "Concat",
+    "QLinearWhere": "Where", "QLinearGlobalAveragePool": "GlobalAveragePool",
+    "QLinearAveragePool": "AveragePool", "QGemm": "Gemm", "FusedConv": "Conv",
+    "FusedMatMul": "MatMul", "MatMulIntegerToFloat": "MatMul", "DynamicQuantizeMatMul": "MatMul",
+    "Gelu": "Gelu", "FastGelu": "Gelu", "BiasGelu": "Gelu", "QuickGelu": "Gelu",
+    "BiasAdd": "Add", "SkipLayerNormalization": "LayerNormalization",
+    "QuantizeLinear": "QuantizeLinear", "DequantizeLinear": "DequantizeLinear",
+    "NhwcMaxPool": "MaxPool",
 }
 _WEIGHT_TYPES = frozenset((onnx.TensorProto.FLOAT, onnx.TensorProto.FLOAT16,
                            onnx.TensorProto.DOUBLE, onnx.TensorProto.BFLOAT16,
@@ -89,13 +90,12 @@ def node_cost(node, shapes) -> tuple[str, int, str | None]:
     """(kind, MACs, None) or (kind, 0, why it cannot be counted)."""
     op = node.op_type
     if node.domain == "com.microsoft" and op in MS_OPS:
-        return _contrib_cost(node, shapes, MS_OPS[op])
-    if node.domain not in ("", "ai.onnx"):
+        op = MS_OPS[op]                  # counted as the standard operator it stands for
+    elif node.domain not in ("", "ai.onnx"):
         return "data", 0, f"custom domain {node.domain!r}"
 
     def s(i, outs=False):
-        names = node.output if outs else node.input
-        return shapes.get(names[i]) if len(names) > i and names[i] else None
+        return _shape(shapes, node.output if outs else node.input, i)
     out, x = s(0, True), s(0)
     if op in ZERO:
         return "data", 0, None
@@ -186,34 +186,6 @@ def _einsum(equation, node, shapes) -> tuple[object, int]:
         return None, 0
     summed = math.prod(d for c, d in size.items() if c not in kept)
     return out, max(1, math.prod(out)) * summed
-
-
-def _contrib_cost(node, shapes, kind) -> tuple[str, int, str | None]:
-    """ONNX Runtime contrib operators (``MS_OPS``), counted as the operator they stand for."""
-    out = _shape(shapes, node.output, 0)
-    if kind == "data":
-        return kind, 0, None
-    if out is None:
-        return kind, 0, "shapes unknown after shape inference and an onnxruntime run"
-    op = node.op_type
-    if kind == "conv":
-        w = _shape(shapes, node.input, 1)
-        return (kind, 0, "shapes unknown") if w is None else (kind, math.prod(out) * math.prod(w[1:]), None)
-    if kind == "matmul":
-        # QGemm/MatMulIntegerToFloat/DynamicQuantizeMatMul/FusedMatMul: A is input 0
-        a = _shape(shapes, node.input, 0)
-        if a is None:
-            return kind, 0, "shapes unknown after shape inference and an onnxruntime run"
-        attrs = {x.name: onnx.helper.get_attribute_value(x) for x in node.attribute}
-        k = a[0] if op == "QGemm" and attrs.get("transA", 0) else a[-1]
-        return kind, max(1, math.prod(out)) * int(k), None
-    if kind == "pool":
-        x = _shape(shapes, node.input, 0)
-        if op == "QLinearGlobalAveragePool":
-            return kind, math.prod(x) if x is not None else math.prod(out), None
-        attrs = {x.name: onnx.helper.get_attribute_value(x) for x in node.attribute}
-        return kind, math.prod(out) * math.prod(attrs.get("kernel_shape", [1])), None
-    return kind, math.prod(out), None
 
 
 __all__ = ["ACTIVATIONS", "CONV", "MS_OPS", "NOT_COUNTED", "RECURRENT", "ELEMENTWISE", "GLOBAL_POOL", "MATMUL", "POOL", "REDUCE", "RESAMPLE", "ZERO",

@@ -23,7 +23,7 @@ from .._io import atomic_write
 from ..errors import ConfigError
 from . import runtimes as _rt
 from .devices import device, devices
-from .graph import analyze
+from .graph import NetworkCost, analyze
 from .predict import predict_latency
 from .profiler import _parse_shape
 
@@ -51,11 +51,12 @@ def add_parser(sub) -> None:
 
 
 def rows(model, computers=None, *, runtime=None, precision=None, target=None, threads=None,
-         input_shape=None) -> tuple[list[dict], list[str]]:
-    """(one dict per predicted deployment, why each left-out deployment was left out);
-    ``model`` an ONNX path (or a ``NetworkCost``)."""
+         input_shape=None) -> tuple[NetworkCost, list[dict], list[str]]:
+    """(the model's ``NetworkCost``, one dict per predicted deployment, why each left-out
+    deployment was left out); ``model`` an ONNX path. The names are checked before the graph
+    is read."""
     _rt.check_names(runtime, precision, target, threads)
-    cost = model if hasattr(model, "nodes") else analyze(model, input_shape)
+    cost = analyze(model, input_shape)
     names = list(computers) if computers else devices()
     strict = bool(computers) and runtime is not None
     out, left = [], []
@@ -78,14 +79,13 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
             fell_back = any(issubclass(w.category, _rt.QuantizedModelWarning) for w in said)
             out.append({"computer": name, **p.to_dict(), "milliseconds": p.milliseconds,
                         "int8_fallback": fell_back})
-    return out, left
+    return cost, out, left
 
 
 def run_cli(a) -> int:
-    _rt.check_names(a.runtime, a.precision, a.target, a.threads)
-    cost = analyze(a.model, _parse_shape(a.input_shape))
-    found, left = rows(cost, a.computer, runtime=a.runtime, precision=a.precision,
-                       target=a.target, threads=a.threads)
+    cost, found, left = rows(a.model, a.computer, runtime=a.runtime, precision=a.precision,
+                             target=a.target, threads=a.threads,
+                             input_shape=_parse_shape(a.input_shape))
     print(f"flockai predict-latency: {cost.name}: {cost.macs / 1e9:.3g} GMAC, "
           f"{len(cost.run_nodes)} kernels, input {'x'.join(map(str, cost.input_shape or ()))}"
           + (f", quantized ({cost.meta['int8']})" if cost.meta.get("int8") else ""))

@@ -242,8 +242,8 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
     total, per = prm["overhead_s"] / clock, []
     # an accelerator with its own parameter memory (the Edge TPU): the parameters that do not
     # fit stream over the host link at every inference (``param_stream``)
-    cache = getattr(unit, "cache_mb", 0.0) * 2 ** 20
-    link = getattr(unit, "link_gbs", 0.0) * 1e9 * prm["mem_weights"]
+    cache = unit.cache_mb * 2 ** 20
+    link = unit.link_gbs * 1e9 * prm["mem_weights"]
     held = 0.0
     for n in dispatched(cost.nodes, dep.runtime):
         eff = min(1.0, prm[n.kind] * (prm["scale"] if n.kind in ("conv", "dwconv", "matmul")

@@ -91,8 +91,8 @@ class _Compiled:
         self.abytes = np.array([float(n.in_elems + n.out_elems) for n in nodes]) * size
         # parameters streamed from the host at every inference (an accelerator whose own
         # memory cannot hold them all: ``predict.param_stream``)
-        self.link = getattr(unit, "link_gbs", 0.0) * 1e9
-        cache, held, streamed = getattr(unit, "cache_mb", 0.0) * 2 ** 20, 0.0, []
+        self.link = unit.link_gbs * 1e9
+        cache, held, streamed = unit.cache_mb * 2 ** 20, 0.0, []
         for w in self.wbytes:
             s, held = param_stream(float(w), held, cache) if cache > 0 else (0.0, held)
             streamed.append(s)

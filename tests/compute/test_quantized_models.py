@@ -114,7 +114,6 @@ def test_a_task_on_a_quantized_model_runs_at_int8_unless_told(nets):
     model = fa.ml.OnnxModel(nets["qdq"])
 
     def p50(drone_kw=None, **task_kw):
-        task = fa.Task(model, period_s=1.0, device="raspberry-pi-4", alert="result", **task_kw)
         if drone_kw is not None:
             drone = fa.drone("dji-mavic-2-pro", device="raspberry-pi-4", **drone_kw)
             r = fa.Mission(drone, fa.pilots.Hover(altitude=3.0, duration=3.0), seed=0,
@@ -122,6 +121,7 @@ def test_a_task_on_a_quantized_model_runs_at_int8_unless_told(nets):
             lat = {e["compute_s"] for e in r.events if e.get("kind") == "inference"}
             assert len(lat) == 1                   # one frame size: one latency
             return lat.pop()
+        task = fa.Task(model, period_s=1.0, device="raspberry-pi-4", alert="result", **task_kw)
         r = fa.ml.TaskRunner(task).bind(0)
         r.on_frame(0.0, np.zeros((SIDE, SIDE, 3), np.uint8))
         r.advance(5.0)
