@@ -130,7 +130,10 @@ def main(argv=None) -> int:
                   f"{r.network}-{r.input:5s} published {1e3 * r.latency_s:9.2f} ms  "
                   f"predicted/published {q:6.2f}")
     print("\nEnergy per inference against the published watt-meter figures "
-          "(predicted latency x busy power, whole board):")
+          "(predicted latency x busy power, whole board; on a CPU the busy power above idle "
+          "x threads / cores). Beside it: the latency's ratio, and where the source gives "
+          "the idle power, the power above idle alone (predicted / measured W), so a miss "
+          "shows whether the latency or the power caused it:")
     checked = []
     for e in published.energy_check(table, networks=Path(a.networks)):
         if "skipped" in e:
@@ -138,8 +141,9 @@ def main(argv=None) -> int:
             continue
         ok = 0.5 <= e["ratio"] <= 2.0
         checked.append(ok)
-        idle = (f", above idle ratio {e['above_idle_ratio']:.2f}"
-                if "above_idle_ratio" in e else "")
+        idle = (f", above idle ratio {e['above_idle_ratio']:.2f} (latency "
+                f"{e['latency_ratio']:.2f} x power above idle {e['power_above_idle_ratio']:.2f})"
+                if "above_idle_ratio" in e else f" (latency {e['latency_ratio']:.2f})")
         print(f"  {e['id']}: {e['computer']} {e['deployment']} {e['network']}: published "
               f"{e['published_j']:.3f} J, predicted {e['predicted_j']:.3f} J, ratio "
               f"{e['ratio']:.2f}{idle}: {'within 2x' if ok else 'BEYOND 2x'}")

@@ -159,8 +159,18 @@ GATE_FUSED = {"tensorrt": ("Sigmoid", "HardSigmoid"), "openvino": ("Sigmoid", "H
 ACT_UNFUSED = frozenset(("pytorch",))
 
 
+#: operators that give a new view of their input's buffer, not a copy: ONNX Runtime
+#: registers Reshape, Flatten, Squeeze and Unsqueeze as aliasing kernels (output 0 may share
+#: input 0's buffer), PyTorch's view/reshape of a contiguous tensor copies nothing, ncnn's
+#: converter folds them (Reshape-Transpose-Reshape into one ShuffleChannel pass, the Flatten
+#: before InnerProduct away) and TensorRT fuses them into neighbouring shuffle layers. They are
+#: dispatched (a kernel launch) but move no data.
+VIEWS = frozenset(("Reshape", "Flatten", "Squeeze", "Unsqueeze"))
+
+
 def dispatched(nodes, runtime: str) -> list:
-    """The nodes a runtime runs: the unfused ones, plus, where the runtime does not fuse a
+    """The nodes a runtime runs: the unfused ones (a view, ``VIEWS``, with no bytes to
+    move), plus, where the runtime does not fuse a
     gated activation (``GATE_FUSED``), that activation's Mul as one element-wise pass over
     its output (one read, one write, one op per element), and, for the runtimes of
     ``ACT_UNFUSED``, every other activation fused into a convolution as its own pass."""
@@ -170,7 +180,7 @@ def dispatched(nodes, runtime: str) -> list:
     out = []
     for n in nodes:
         if not n.fused_into:
-            out.append(n)
+            out.append(replace(n, in_elems=0, out_elems=0) if n.op_type in VIEWS else n)
         elif (runtime in ACT_UNFUSED and n.kind == "elementwise"
               and n.op_type not in ("Sigmoid", "HardSigmoid", "Mul")):
             out.append(replace(n, fused_into=None))
@@ -180,5 +190,5 @@ def dispatched(nodes, runtime: str) -> list:
     return out
 
 
-__all__ = ["ACT_UNFUSED", "FOLDED", "GATE_FUSED", "QDQ", "QOPERATOR", "dispatched", "fuse",
+__all__ = ["ACT_UNFUSED", "FOLDED", "GATE_FUSED", "QDQ", "QOPERATOR", "VIEWS", "dispatched", "fuse",
            "fuse_qdq", "quantization"]

@@ -32,7 +32,13 @@ __all__ = ["add_parser", "rows", "run_cli"]
 
 def add_parser(sub) -> None:
     p = sub.add_parser("predict-latency", help="predict an ONNX model's inference latency on "
-                                               "the computer profiles")
+                                               "the computer profiles",
+                       description="Predict one inference of MODEL.onnx on each computer "
+                                   "profile and runtime (or the ones named), from its layers, "
+                                   "with the range the held-out published measurements give.",
+                       epilog="examples: flockai predict-latency yolov8n.onnx --input-shape "
+                              "1x3x640x640;  flockai predict-latency model.onnx --computer "
+                              "raspberry-pi-5 --runtime ncnn --precision int8")
     p.add_argument("model", type=Path, metavar="MODEL.onnx")
     p.add_argument("--computer", action="append", default=None, metavar="NAME",
                    help="a computer profile (repeat for several; default: every profile with "
@@ -56,7 +62,14 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
     deployment was left out); ``model`` an ONNX path. The names are checked before the graph
     is read."""
     _rt.check_names(runtime, precision, target, threads)
-    cost = analyze(model, input_shape)
+    try:
+        cost = analyze(model, input_shape)
+    except ConfigError as e:     # say it in the shell's terms: --input-shape, not input_shape=
+        if not str(e).startswith("input_shape = ") or "has dims" not in str(e):
+            raise
+        raise ConfigError(f"--input-shape = {'x'.join(map(str, input_shape)) if input_shape else None!r}: "
+                          f"{str(e).split(': ', 1)[1].split('; give')[0]}; give its full shape, "
+                          f"e.g. --input-shape 1x3x480x640") from None
     names = list(computers) if computers else devices()
     strict = bool(computers) and runtime is not None
     out, left = [], []
@@ -94,7 +107,8 @@ def run_cli(a) -> int:
     for r in found:
         dep = f"{r['runtime']}/{r['target']}/{r['precision']}" + ("*" if r["int8_fallback"] else "")
         lo, hi = (1e3 * b for b in r["band"])
-        print(f"{r['computer']:24s} {dep:26s} {r['threads'] or 'all':>7} "
+        thr = "-" if r["target"] != "cpu" else r["threads"] or "all"
+        print(f"{r['computer']:24s} {dep:26s} {thr:>7} "
               f"{r['milliseconds']:10.2f} {f'{lo:.2f}-{hi:.2f}':>21s} "
               f"{1e3 * r['energy_j']:13.2f}")
     if any(r["int8_fallback"] for r in found):

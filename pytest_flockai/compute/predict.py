@@ -26,8 +26,9 @@ measurements only (the procedure is in that script); the same file records, per
 (computer, runtime), the ratios predicted/published on the held-out half, which give
 ``LatencyPrediction.band``.
 
-Energy per inference: ``seconds * (active_w - idle_w)`` (the computer's busy power above
-idle at its board input, measured where published).
+Energy per inference: ``seconds * (active_w - idle_w) * share`` (the computer's busy power
+above idle at its board input, measured where published; ``share``: on a CPU the
+deployment's threads over the cores, else 1: ``runtimes.power_share``).
 
 A model known only by its MAC count (``predict_latency(5.3e8, ...)``) falls back to the
 computer's MAC-count rule ``overhead_s + macs / macs_per_s`` with a ``LatencyFallbackWarning``.
@@ -325,9 +326,10 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
     table = efficiencies(efficiencies_path)
     secs, per = roofline(cost, dev, dep, params_for(table, dep))
     macs = float(sum(n.macs for n in cost.nodes))
-    return LatencyPrediction(secs, _band(table, dev, dep, secs), secs * (dev.active_w - dev.idle_w),
-                             dev.name, dep.runtime, dep.target, dep.precision, dep.threads,
-                             "roofline", macs, per)
+    above = (dev.active_w - dev.idle_w) * _rt.power_share(dep, dev.unit(dep.target))
+    return LatencyPrediction(secs, _band(table, dev, dep, secs), secs * above, dev.name,
+                             dep.runtime, dep.target, dep.precision, dep.threads, "roofline",
+                             macs, per)
 
 
 def _from_macs(macs, dev, runtime, precision, target, threads) -> LatencyPrediction:

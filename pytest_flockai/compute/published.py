@@ -244,12 +244,17 @@ def energy_check(table: dict, path: Path = ENERGY, networks: Path = NETWORKS) ->
             continue
         lat = float(r["latency_ms"]) / 1e3
         pub = float(r["energy_j"]) if r.get("energy_j") else float(r["power_w"]) * lat
+        dep = row.deployment
+        extra_w = (dev.active_w - dev.idle_w) * _rt.power_share(dep, dev.unit(dep.target))
+        busy_w = dev.idle_w + extra_w
         rec = {"id": r["energy_id"], "computer": r["computer"], "deployment": row.group,
                "network": f"{r['network']}-{r['input']}", "published_j": pub,
-               "predicted_j": secs * dev.active_w, "ratio": secs * dev.active_w / pub}
+               "predicted_j": secs * busy_w, "ratio": secs * busy_w / pub,
+               "latency_ratio": secs / lat}
         if r.get("idle_w") and r.get("power_w"):
-            above = (float(r["power_w"]) - float(r["idle_w"])) * lat
-            rec["above_idle_ratio"] = secs * (dev.active_w - dev.idle_w) / above
+            above_w = float(r["power_w"]) - float(r["idle_w"])
+            rec["above_idle_ratio"] = secs * extra_w / (above_w * lat)
+            rec["power_above_idle_ratio"] = extra_w / above_w
         out.append(rec)
     return out
 

@@ -124,6 +124,18 @@ def compute_precision(dep: Deployment, unit) -> tuple[str, float]:
     return p, float(BYTES[p])
 
 
+def power_share(dep: Deployment | None, unit) -> float:
+    """The share of the computer's busy power above idle (``busy_w - idle_w``) that one
+    inference on this deployment draws: on a CPU, its threads over the cores (a core's
+    dynamic power is drawn while it computes, and ``busy_w`` is the board with every core
+    busy: the Raspberry Pis' figures are all-core CPU loads; on the Jetsons it is the power
+    mode's budget, an upper bound); 1 on a GPU or an NPU (``busy_w`` is the board with that
+    unit busy), and where the deployment or the unit is unknown."""
+    if dep is None or unit is None or dep.target != "cpu" or getattr(unit, "cores", 0) <= 0:
+        return 1.0
+    return min(dep.threads or unit.cores, unit.cores) / unit.cores
+
+
 def peak_macs(dep: Deployment, unit) -> float:
     """The unit's peak MAC/s for the deployment (``compute_precision``; threads on a CPU)."""
     p, _ = compute_precision(dep, unit)
@@ -221,5 +233,5 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
 
 
 __all__ = ["BYTES", "DEFAULT_THREADS", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
-           "TF32_BY_DEFAULT", "Deployment", "QuantizedModelWarning", "check_names", "compute_precision", "peak_macs",
+           "TF32_BY_DEFAULT", "Deployment", "QuantizedModelWarning", "check_names", "compute_precision", "peak_macs", "power_share",
            "resolve"]

@@ -69,6 +69,12 @@ class InferenceTimer:
                                           task.threads, where=f"task {task.name!r} on "
                                                               f"{device.name!r}",
                                           quantized=quant)
+        #: the share of the computer's busy power above idle an inference draws (on a CPU,
+        #: the deployment's threads over its cores: ``compute.runtimes.power_share``); 1 for
+        #: a measured profile (its busy power was measured at its own threads)
+        self.power_share = (1.0 if self.deployment is None else
+                            _rt.power_share(self.deployment,
+                                            device.unit(self.deployment.target)))
 
     def seconds(self, model, frame, macs) -> float:
         """Device seconds of one inference on ``frame`` (``macs``: its MAC count)."""

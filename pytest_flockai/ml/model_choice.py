@@ -63,7 +63,7 @@ def compare_models(models: dict, path, *, flight=None, device="raspberry-pi-4",
                 deployed = task.replace(runtime=runtime, precision=precision)
             timer = InferenceTimer(deployed, dev)
             lat = timer.seconds(m, frame if frame is not None else _blank(m), macs)
-            e = lat * (dev.active_w - dev.idle_w)
+            e = lat * (dev.active_w - dev.idle_w) * timer.power_share
             power = e / max(period_s, lat)
             d = timer.describe()
             row = {"model": name, "runtime": d.get("runtime"),

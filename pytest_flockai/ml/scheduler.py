@@ -180,7 +180,7 @@ class TaskScheduler(Clocked):
             tp += a2
             rb += a3
             rp += a4
-        self.cpu_time_s += busy
+        self.cpu_time_s = sum(r.cpu_time_s() for r in self.runners)   # time, not weighted
         return busy, tb, tp, rb, rp
 
     def kpis(self) -> tuple[dict, dict]:

@@ -5,7 +5,9 @@
 - compute: the SoC busy seconds the task caused on the drone (its inferences on
   board, JPEG encoding of the frames it sends, in-flight updates), as charged to
   the energy model (``proc.soc``), times the SoC's active minus idle power: the
-  energy the computer drew because the task ran (its idle draw is paid anyway).
+  energy the computer drew because the task ran (its idle draw is paid anyway). An
+  inference on the CPU is charged at its share of the cores (its threads over the
+  cores: TF Lite's one thread on a four-core Pi, a quarter).
   A remote task's inference runs on the ground station: only its encoding stays;
 - radio: the bytes and packets the task sent and received, as charged, at the
   radio's per-byte and per-packet energies (``comm.radio``, the linear model of

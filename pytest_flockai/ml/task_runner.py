@@ -185,22 +185,24 @@ class TaskRunner:
         return out
 
     def take_usage(self):
-        """(SoC busy s, tx/rx bytes and packets) since the previous call; resets the counters."""
+        """(SoC busy s, tx/rx bytes and packets) since the previous call; resets the counters.
+        Busy s weighted by the share of the SoC's busy power drawn (``InferenceTimer.power_share``)."""
         a, b = self._usage_t, self._clock
         self._usage_t = b
         if not self._busy and not self._radio:
             return _ZERO_USAGE
-        busy = 0.0
+        busy = raw = 0.0
         if self._busy:
             keep = []
-            for s, e in self._busy:
+            for s, e, w in self._busy:
                 lo, hi = max(s, a), min(e, b)
                 if hi > lo:
-                    busy += hi - lo
+                    raw += hi - lo
+                    busy += (hi - lo) * w
                 if e > b:
-                    keep.append((s, e))
+                    keep.append((s, e, w))
             self._busy = keep
-            self._busy_taken += busy
+            self._busy_taken += raw
         txb = txp = rxb = rxp = 0
         if self._radio:
             keep = []
@@ -221,9 +223,9 @@ class TaskRunner:
         bisect.insort(self._pending, (ev.t_done, self._seq, ev))
         self._next_done = self._pending[0][0]
 
-    def _busy_seg(self, a: float, dur: float):
+    def _busy_seg(self, a: float, dur: float, share: float = 1.0):
         if dur > 0.0:
-            self._busy.append((a, a + dur))
+            self._busy.append((a, a + dur, share))
 
     def _radio_rec(self, t: float, tr, direction: str):
         if direction == "up":
@@ -285,7 +287,7 @@ class TaskRunner:
     def _onboard(self, idx, t, start, frame, tc, pos):
         task, dev = self.task, self.device
         pred, err, compute = self._infer(task.model, frame, dev)
-        self._busy_seg(start, compute)
+        self._busy_seg(start, compute, self.timers[id(dev)].power_share)
         done = start + compute
         free = done + self._update(task.model, frame, done)
         count = self.scorer.count(pred, idx, frame) if err is None else None
@@ -352,7 +354,7 @@ class TaskRunner:
     def cpu_time_s(self) -> float:
         """Drone SoC busy seconds up to the last ``advance(t)``."""
         b = self._clock
-        pend = sum(max(0.0, min(e, b) - max(s, self._usage_t)) for s, e in self._busy)
+        pend = sum(max(0.0, min(e, b) - max(s, self._usage_t)) for s, e, _ in self._busy)
         return self._busy_taken + pend
 
     def kpis(self) -> dict:

@@ -59,3 +59,20 @@ def test_bad_input_is_one_line_naming_it(net, capsys, args, says):
     assert main(["predict-latency", str(net), *args]) == 2
     err = capsys.readouterr().err
     assert says in err and err.count("\n") == 1
+
+
+def test_a_dynamic_input_asks_for_the_flag_not_the_python_argument(capsys):
+    """crowd_cnn.onnx takes any image size ([1, 3, ?, ?]): the shell user is told which flag
+    to give, and the run with it predicts."""
+    from pathlib import Path
+    model = Path(__file__).resolve().parents[2] / "fixtures" / "models" / "crowd_cnn.onnx"
+    assert main(["predict-latency", str(model), "--computer", "raspberry-pi-4"]) == 2
+    err = capsys.readouterr().err
+    assert "input 'image'" in err and "e.g. --input-shape 1x3x480x640" in err
+    assert "input_shape=" not in err and err.count("\n") == 1
+    assert main(["predict-latency", str(model), "--computer", "jetson-orin-nano",
+                 "--input-shape", "1x3x240x320"]) == 0
+    rows = [ln.split() for ln in capsys.readouterr().out.splitlines()[2:] if ln.strip()]
+    # threads mean something on a CPU only
+    assert {r[2] for r in rows if "/gpu/" in r[1]} == {"-"}
+    assert {r[2] for r in rows if r[1].startswith("tflite/cpu/")} == {"1"}

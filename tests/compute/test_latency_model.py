@@ -112,6 +112,25 @@ def test_roofline_responds_to_precision_threads_and_depthwise():
     assert fp16.band[0] < fp16.seconds < fp16.band[1]
 
 
+def test_energy_on_a_cpu_draws_the_share_of_the_cores_its_threads_use():
+    """busy_w is the board with every core busy: one thread of four draws a quarter of the
+    busy power above idle; a GPU deployment draws all of it."""
+    net = convnet()
+    pi = fa.compute.device("raspberry-pi-4")
+    above = pi.active_w - pi.idle_w
+    one = predict_latency(net, "raspberry-pi-4", runtime="tflite")          # TF Lite: 1 thread
+    two = predict_latency(net, "raspberry-pi-4", runtime="onnxruntime", threads=2)
+    every = predict_latency(net, "raspberry-pi-4", runtime="onnxruntime")   # all four cores
+    assert one.threads == 1 and every.threads is None
+    assert one.energy_j == pytest.approx(one.seconds * above / 4)
+    assert two.energy_j == pytest.approx(two.seconds * above / 2)
+    assert every.energy_j == pytest.approx(every.seconds * above)
+    orin = fa.compute.device("jetson-orin-nano")
+    cpu = predict_latency(net, "jetson-orin-nano", runtime="tflite")
+    assert cpu.energy_j == pytest.approx(
+        cpu.seconds * (orin.active_w - orin.idle_w) / orin.unit("cpu").cores)
+
+
 def test_a_bare_mac_count_falls_back_to_the_old_rule_with_a_warning():
     pi = fa.compute.device("raspberry-pi-4")
     with pytest.warns(LatencyFallbackWarning, match="MAC-count rule"):

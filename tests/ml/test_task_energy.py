@@ -61,3 +61,17 @@ def test_tasks_plus_the_untasked_remainder_are_the_groups_and_the_taskless_fligh
     assert r.kpis["energy_untasked_j"] == pytest.approx(
         bare.energy_breakdown["proc"] + bare.energy_breakdown["comm"], rel=1e-6)
     assert "energy_untasked_j" not in bare.kpis
+
+
+def test_a_single_threaded_task_charges_a_quarter_of_the_pis_busy_power():
+    """TF Lite runs one thread (of the Pi 4's four cores): its inferences are charged at a
+    quarter of the busy power above idle, and cpu_time_s still counts their whole time."""
+    task = fa.Task(fa.ml.OnnxModel(MODELS / "crowd_tiny.onnx"), period_s=1.0, name="lite",
+                   alert="result", runtime="tflite")
+    r = _mission(task).run()
+    inf = [e for e in r.events if e.get("kind") == "inference" and e["task"] == "lite"]
+    busy = sum(e["compute_s"] for e in inf if e["ok"])
+    assert busy > 0
+    assert r.kpis["lite.compute_energy_j"] == pytest.approx(
+        busy * (PI4.active_w - PI4.idle_w) / 4, rel=1e-9)
+    assert r.kpis["cpu_time_s"] == pytest.approx(busy, rel=1e-6)
