@@ -64,7 +64,13 @@ def test_a_measured_profile_in_flight_reproduces_its_p50_and_p95(profiled):
     got = r.kpis()
     assert got["inference_count"] == N_DRAWS and got["frames_dropped"] == 0
     assert got["inference_latency_p50_s"] == pytest.approx(p50, rel=0.05)
-    assert got["inference_latency_p95_s"] == pytest.approx(p95, rel=0.05)
+    # within 5 % of the timings' own p95, or, where a loaded machine left the timings' tail
+    # so sparse that neighbouring samples lie more than 5 % apart, within the draws' own
+    # sampling error of it (3 standard errors: 0.45 percentile points at 20,000 draws)
+    lo, hi = np.percentile(samples, (95 - 0.45, 95 + 0.45))
+    p95_got = got["inference_latency_p95_s"]
+    assert (p95_got == pytest.approx(p95, rel=0.05) or lo <= p95_got <= hi), (
+        p95_got, p95, lo, hi)
     assert got["inference_latency_p95_s"] > got["inference_latency_p50_s"]
     # predict_latency answers from the samples too
     pred = fa.compute.predict_latency(net, dev)
