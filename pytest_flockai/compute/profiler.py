@@ -56,7 +56,8 @@ def add_parser(sub) -> None:
     p.add_argument("--runs", type=int, default=50, help="timed runs per model (default 50)")
     p.add_argument("--warmup", type=int, default=5, help="untimed runs first (default 5)")
     p.add_argument("--input-shape", default=None, help="the models' input shape, e.g. "
-                                                       "1x3x640x640, where it is dynamic")
+                                                       "1x3x640x640: it fills the dims a "
+                                                       "model leaves open (fixed ones stay)")
     p.add_argument("--power-csv", type=Path, default=None, help="a watt meter's CSV log")
     p.add_argument("--idle-w", type=float, default=None, help="idle power (W) for --power-csv "
                                                               "without times")
@@ -171,11 +172,11 @@ def _runner(path, runtime, target, threads, shape, seed):
     inp = next(i for i in proto.graph.input if i.name not in inits)
     dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else None
             for d in inp.type.tensor_type.shape.dim]
-    if shape is not None:
+    if shape is not None:       # it fills the dims the model leaves open; fixed dims stay
         if len(shape) != len(dims):
             raise ConfigError(f"--input-shape = {'x'.join(map(str, shape))!r} has rank "
                               f"{len(shape)}; {str(path)!r} input {inp.name!r} has rank {len(dims)}")
-        dims = list(shape)
+        dims = [g if d is None else d for d, g in zip(dims, shape)]
     elif dims and dims[0] is None:
         dims[0] = 1
     if any(d is None for d in dims):

@@ -156,3 +156,15 @@ def test_power_from_a_timed_meter_log_and_opencv_dnn(tmp_path):
     bad.write_bytes(net.read_bytes()[:-40])                # a truncated model file
     with pytest.raises(ConfigError, match="bad.onnx"):
         measure([bad], runs=1, warmup=0)
+
+
+def test_input_shape_fills_the_open_dims_and_keeps_the_fixed_ones(tmp_path):
+    """One --input-shape for a dynamic model and a fixed one: the dynamic model runs at it,
+    the fixed one at its own size (ONNX Runtime would refuse any other)."""
+    open_net = conv_net(tmp_path / "open.onnx", 8, side="s")          # [n, 3, s, s]
+    fixed = conv_net(tmp_path / "fixed.onnx", 8, side=32, batch=1)    # [1, 3, 32, 32]
+    doc = measure([open_net, fixed], runs=3, warmup=1, input_shape="1x3x48x48")
+    write(doc, tmp_path / "p.json")
+    dev = fa.compute.profile(tmp_path / "p.json")
+    assert dev.model(open_net).input_shape == (1, 3, 48, 48)
+    assert dev.model(fixed).input_shape == (1, 3, 32, 32)
