@@ -295,3 +295,36 @@ def test_parameters_beyond_the_edge_tpus_memory_stream_over_its_link():
     fast = tuning._Compiled(row).seconds(prm, prm["scale"], 1.0)
     slow, _ = roofline(row.cost, row.device, row.deployment, prm)
     assert fast == pytest.approx(slow, rel=1e-9)
+
+
+def test_a_view_costs_a_dispatch_and_moves_no_data():
+    """Reshape / Flatten / Squeeze / Unsqueeze alias their input's buffer: each adds its
+    dispatch to the time, not a pass over its tensor; a Transpose (a copy) still moves it."""
+    base = conv_relu(2, side=112)
+    el = 112 * 112 * 64
+
+    def with_(op):
+        extra = NodeCost("v", op, "data", 0, 0, el, el, None)
+        return NetworkCost(base.nodes + (extra,), op)
+
+    dev = DEVICES["raspberry-pi-4"]
+    dep = runtimes.resolve(dev, "onnxruntime")
+    prm = params_for(efficiencies(), dep)
+    t0 = roofline(base, dev, dep, prm)[0]
+    one_dispatch = prm["dispatch_s"] / dev.unit("cpu").clock_ghz
+    for op in ("Reshape", "Flatten", "Squeeze", "Unsqueeze"):
+        (view,) = [n for n in dispatched(with_(op).nodes, "onnxruntime") if n.name == "v"]
+        assert view.in_elems == view.out_elems == 0
+        assert roofline(with_(op), dev, dep, prm)[0] == pytest.approx(t0 + one_dispatch)
+    copy_t = roofline(with_("Transpose"), dev, dep, prm)[0] - t0
+    assert copy_t > one_dispatch + 2 * el * 4 / (25.6e9)      # a real pass over 3.2 MB x 2
+
+
+def test_the_fit_keeps_weights_at_half_the_sustained_bandwidth_or_more():
+    """Weights are one sequential read per layer: the tuner's floor holds in the stored
+    table for every target."""
+    from pytest_flockai.compute.tuning import BOUNDS
+    lo, hi = BOUNDS["mem_weights"]
+    assert lo == 0.5
+    for target, figs in efficiencies()["targets"].items():
+        assert lo - 1e-9 <= figs["mem_weights"] <= hi, target
