@@ -70,6 +70,15 @@ CSV_FIELDS = ("name", "op_type", "kind", "macs", "weight_elems", "in_elems", "ou
               "fused_into")
 CSV_SCHEMA = "flockai-network-cost/1"
 
+class DynamicInputError(ConfigError):
+    """An input with open dims and no ``input_shape`` for it (``input_name``, ``dims``: '?'
+    where open), so that a caller can say how to give the shape in its own terms."""
+
+    def __init__(self, message: str, input_name: str, dims: list):
+        super().__init__(message)
+        self.input_name, self.dims = input_name, dims
+
+
 @dataclass(frozen=True)
 class NodeCost:
     """Cost of one node of one inference (elements, not bytes: the precision decides)."""
@@ -263,9 +272,10 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
         if static_shape(inp.type) is None:
             dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else "?"
                     for d in inp.type.tensor_type.shape.dim]
-            raise ConfigError(f"input_shape = {input_shape!r}: input {inp.name!r} of "
-                              f"{default_name or 'the model'!r} has dims {dims}; give its full "
-                              f"shape (e.g. input_shape={{{inp.name!r}: (1, 3, 480, 640)}})")
+            raise DynamicInputError(
+                f"input_shape = {input_shape!r}: input {inp.name!r} of "
+                f"{default_name or 'the model'!r} has dims {dims}; give its full shape (e.g. "
+                f"input_shape={{{inp.name!r}: (1, 3, 480, 640)}})", inp.name, dims)
     shapes, how, error = infer_shapes(fixed)
     consts = set(constant_shapes(fixed))
     weights = weight_names(fixed)
@@ -322,4 +332,5 @@ def _refuse_or_warn(cost: NetworkCost, error, allow: bool) -> None:
     warnings.warn(f"pytest-flockai: {text}; counted as 0 (allow_uncounted=True)", stacklevel=3)
 
 
-__all__ = ["FOLDED", "KINDS", "NetworkCost", "NodeCost", "analyze", "quantization"]
+__all__ = ["FOLDED", "KINDS", "DynamicInputError", "NetworkCost", "NodeCost", "analyze",
+           "quantization"]

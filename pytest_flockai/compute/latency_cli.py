@@ -23,7 +23,7 @@ from .._io import atomic_write
 from ..errors import ConfigError
 from . import runtimes as _rt
 from .devices import device, devices
-from .graph import NetworkCost, analyze
+from .graph import DynamicInputError, NetworkCost, analyze
 from .predict import predict_latency
 from .profiler import _parse_shape
 
@@ -64,12 +64,11 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
     _rt.check_names(runtime, precision, target, threads)
     try:
         cost = analyze(model, input_shape)
-    except ConfigError as e:     # say it in the shell's terms: --input-shape, not input_shape=
-        if not str(e).startswith("input_shape = ") or "has dims" not in str(e):
-            raise
-        raise ConfigError(f"--input-shape = {'x'.join(map(str, input_shape)) if input_shape else None!r}: "
-                          f"{str(e).split(': ', 1)[1].split('; give')[0]}; give its full shape, "
-                          f"e.g. --input-shape 1x3x480x640") from None
+    except DynamicInputError as e:      # in the shell's terms: --input-shape, not input_shape=
+        given = "x".join(map(str, input_shape)) if input_shape else None
+        raise ConfigError(f"--input-shape = {given!r}: input {e.input_name!r} of "
+                          f"{Path(model).stem!r} has dims {e.dims}; give its full shape, e.g. "
+                          f"--input-shape 1x3x480x640") from None
     names = list(computers) if computers else devices()
     strict = bool(computers) and runtime is not None
     out, left = [], []

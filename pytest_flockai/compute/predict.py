@@ -263,6 +263,13 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
     return total, tuple(per)
 
 
+def above_idle_w(dev: Device, dep: _rt.Deployment | None) -> float:
+    """W above idle one inference on ``dep`` draws: the busy power above idle times the
+    deployment's share of it (``runtimes.power_share``: on a CPU its threads over the cores)."""
+    unit = dev.unit(dep.target) if dep is not None else None
+    return (dev.active_w - dev.idle_w) * _rt.power_share(dep, unit)
+
+
 def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tuple[float, float]:
     bands = table.get("bands", {})
     b = None
@@ -326,10 +333,9 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
     table = efficiencies(efficiencies_path)
     secs, per = roofline(cost, dev, dep, params_for(table, dep))
     macs = float(sum(n.macs for n in cost.nodes))
-    above = (dev.active_w - dev.idle_w) * _rt.power_share(dep, dev.unit(dep.target))
-    return LatencyPrediction(secs, _band(table, dev, dep, secs), secs * above, dev.name,
-                             dep.runtime, dep.target, dep.precision, dep.threads, "roofline",
-                             macs, per)
+    return LatencyPrediction(secs, _band(table, dev, dep, secs), secs * above_idle_w(dev, dep),
+                             dev.name, dep.runtime, dep.target, dep.precision, dep.threads,
+                             "roofline", macs, per)
 
 
 def _from_macs(macs, dev, runtime, precision, target, threads) -> LatencyPrediction:
@@ -366,4 +372,5 @@ def _measured(model, dev) -> LatencyPrediction:
 
 __all__ = ["ACT_UNFUSED", "EFFICIENCIES", "FALLBACK", "KINDS", "MIN_BAND_ROWS", "MIN_BAND_SOURCES", "param_stream", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
            "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
-           "efficiencies", "mac_rule_seconds", "params_for", "predict_latency", "roofline"]
+           "above_idle_w", "efficiencies", "mac_rule_seconds", "params_for", "predict_latency",
+           "roofline"]

@@ -22,7 +22,7 @@ from ..errors import ConfigError
 from . import runtimes as _rt
 from .devices import DEVICES
 from .graph import NetworkCost
-from .predict import params_for, roofline
+from .predict import above_idle_w, params_for, roofline
 
 DATA = Path(__file__).with_name("data")
 TABLE = DATA / "published_latency.csv"
@@ -244,8 +244,7 @@ def energy_check(table: dict, path: Path = ENERGY, networks: Path = NETWORKS) ->
             continue
         lat = float(r["latency_ms"]) / 1e3
         pub = float(r["energy_j"]) if r.get("energy_j") else float(r["power_w"]) * lat
-        dep = row.deployment
-        extra_w = (dev.active_w - dev.idle_w) * _rt.power_share(dep, dev.unit(dep.target))
+        extra_w = above_idle_w(dev, row.deployment)
         busy_w = dev.idle_w + extra_w
         rec = {"id": r["energy_id"], "computer": r["computer"], "deployment": row.group,
                "network": f"{r['network']}-{r['input']}", "published_j": pub,

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from ..compute.latency import resolve_device
-from ..compute.predict import LatencyFallbackWarning
+from ..compute.predict import LatencyFallbackWarning, above_idle_w
 from ..errors import ConfigError
 from .dataset_eval import evaluate_dataset
 from .latency_model import InferenceTimer
@@ -63,7 +63,7 @@ def compare_models(models: dict, path, *, flight=None, device="raspberry-pi-4",
                 deployed = task.replace(runtime=runtime, precision=precision)
             timer = InferenceTimer(deployed, dev)
             lat = timer.seconds(m, frame if frame is not None else _blank(m), macs)
-            e = lat * (dev.active_w - dev.idle_w) * timer.power_share
+            e = lat * above_idle_w(dev, timer.deployment)
             power = e / max(period_s, lat)
             d = timer.describe()
             row = {"model": name, "runtime": d.get("runtime"),

@@ -168,7 +168,7 @@ class TaskScheduler(Clocked):
         tb = tp = rb = rp = 0
         for r, ch in zip(self.runners, self.charged):
             r.advance(t)
-            b, a1, a2, a3, a4 = r.take_usage()
+            b, a1, a2, a3, a4, raw = r.take_usage()
             if b or a1 or a3:
                 ch[0] += b
                 ch[1] += a1
@@ -180,7 +180,7 @@ class TaskScheduler(Clocked):
             tp += a2
             rb += a3
             rp += a4
-        self.cpu_time_s = sum(r.cpu_time_s() for r in self.runners)   # time, not weighted
+            self.cpu_time_s += raw          # busy time, not weighted by the power share
         return busy, tb, tp, rb, rp
 
     def kpis(self) -> tuple[dict, dict]:

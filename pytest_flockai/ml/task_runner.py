@@ -45,7 +45,7 @@ from .task import Task
 from .task_scoring import Scorer
 from .templates import Template
 
-_ZERO_USAGE = (0.0, 0, 0, 0, 0)
+_ZERO_USAGE = (0.0, 0, 0, 0, 0, 0.0)
 _NO_EVENTS: tuple = ()
 #: the computer of a TaskRunner bound outside a Mission (FlockAI's drone carries a Pi 4)
 STANDALONE_DEVICE = "raspberry-pi-4"
@@ -185,8 +185,8 @@ class TaskRunner:
         return out
 
     def take_usage(self):
-        """(SoC busy s, tx/rx bytes and packets) since the previous call; resets the counters.
-        Busy s weighted by the share of the SoC's busy power drawn (``InferenceTimer.power_share``)."""
+        """(SoC busy s weighted by the share of its busy power drawn, tx/rx bytes and
+        packets, SoC busy s) since the previous call (``InferenceTimer.power_share``)."""
         a, b = self._usage_t, self._clock
         self._usage_t = b
         if not self._busy and not self._radio:
@@ -215,7 +215,7 @@ class TaskRunner:
                 else:
                     keep.append(rec)
             self._radio = keep
-        return (busy, txb, txp, rxb, rxp)
+        return (busy, txb, txp, rxb, rxp, raw)
 
     # -- timelines ---------------------------------------------------------------
     def _schedule(self, ev: InferenceEvent):

@@ -316,15 +316,15 @@ def test_a_view_costs_a_dispatch_and_moves_no_data():
         (view,) = [n for n in dispatched(with_(op).nodes, "onnxruntime") if n.name == "v"]
         assert view.in_elems == view.out_elems == 0
         assert roofline(with_(op), dev, dep, prm)[0] == pytest.approx(t0 + one_dispatch)
-    copy_t = roofline(with_("Transpose"), dev, dep, prm)[0] - t0
-    assert copy_t > one_dispatch + 2 * el * 4 / (25.6e9)      # a real pass over 3.2 MB x 2
+    t, per = roofline(with_("Transpose"), dev, dep, prm)
+    (copy,) = [p for p in per if p[0] == "v"]
+    assert copy[3] == "memory" and t - t0 > 10 * one_dispatch     # a pass over its tensor
 
 
 def test_the_fit_keeps_weights_at_half_the_sustained_bandwidth_or_more():
-    """Weights are one sequential read per layer: the tuner's floor holds in the stored
-    table for every target."""
+    """Weights are one sequential read per layer: the stored table was fitted under the
+    tuner's current floor (a table left from before a change of the bounds fails here)."""
     from pytest_flockai.compute.tuning import BOUNDS
     lo, hi = BOUNDS["mem_weights"]
-    assert lo == 0.5
     for target, figs in efficiencies()["targets"].items():
         assert lo - 1e-9 <= figs["mem_weights"] <= hi, target

@@ -272,7 +272,7 @@ def _fly(task, *, seconds=20.0, dt=0.05, frame=None, truth=None, pos=(0.0, 0.0, 
     """Drive a runner like the mission loop: on_frame when due, advance, take_usage."""
     r = TaskRunner(task).bind(np.random.default_rng(seed))
     frame = np.zeros((48, 64, 3), np.uint8) if frame is None else frame
-    usage = np.zeros(5)
+    usage = np.zeros(6)
     events = []
     n = int(round(seconds / dt))
     for i in range(n + 1):
