@@ -5,7 +5,8 @@ Reads ``pytest_flockai/compute/data/published_latency.csv`` and ``latency_source
 chosen) and the networks' per-node costs (``data/networks/``), fits the few shared
 efficiencies on the tuning rows only (the procedure: ``pytest_flockai/compute/tuning.py``),
 chooses the rule for deployments without tuning rows by leaving each tuned group out in
-turn (``tuning.fallback_cv``, tuning rows only; about two minutes),
+turn (``tuning.fallback_cv``, tuning rows only; about two minutes), scores each board
+with a fit that never saw it (``tuning.loco``: the band of a team's own computer),
 then writes ``pytest_flockai/compute/data/latency_efficiencies.json``: the parameters, the
 fit's statistics, the tuning and held-out ratios predicted/published, and the held-out
 ranges per computer/runtime that ``predict_latency(...).band`` reports. The held-out rows
@@ -55,6 +56,11 @@ def main(argv=None) -> int:
     table["rows"] = {"tuning": sum(r.half == "tuning" for r in rows),
                      "heldout": sum(r.half == "heldout" for r in rows), "skipped": len(skipped)}
     table["bands"] = published.bands(rows, table)
+    # computers never tuned (a team's own datasheet): leave each board out of the fit in turn
+    cv = tuning.loco(rows, table["fallback"])
+    table["bands"].update(tuning.loco_bands(cv))
+    table["loco"] = {"per_board": cv["per_board"], "all": cv["all"]}
+    table["tuned_computers"] = tuning.tuned_computers(rows)
     s = published.summary(rows, table)
     table["validation"] = {h: v["all"] for h, v in s.items()}
     text = json.dumps(table, indent=1, sort_keys=True) + "\n"
@@ -64,6 +70,10 @@ def main(argv=None) -> int:
         print(f"{half:8s} n={al['n']:3d} median ratio {al['median_ratio']:.2f} "
               f"median |ln| {al['median_abs_ln']:.3f} worst {al['worst_ratio']:.2f} "
               f"within 2x {al['within_2x']}/{al['n']}")
+    print("a board never tuned (leave-one-computer-out, median |ln|, within 2x): " + "; ".join(
+        f"{b} " + ", ".join(f"{h} {v['median_abs_ln']:.3f} {v['within_2x']}/{v['n']}"
+                            for h, v in hv.items())
+        for b, hv in {**table["loco"]["per_board"], "all": table["loco"]["all"]}.items()))
     fb = table["fallback"]
     print("untuned deployments (leave-one-group-out on the tuning half, median |ln|): "
           + ", ".join(f"{c['rule']['scale']}/{c['rule']['dispatch']} {c['median_abs_ln']:.3f}"

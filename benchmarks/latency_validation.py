@@ -78,6 +78,32 @@ def fresh_lines(rows, table) -> list[str]:
     return out
 
 
+def loco_lines(table: dict, s: dict) -> list[str]:
+    """A board never tuned (``tuning.loco``, stored by latency_tune.py): each board predicted
+    by a fit that left it out, against the same rows predicted by the full fit."""
+    loco = table.get("loco") or {}
+    if not loco:
+        return []
+    board = published.BOARD
+    out = ["A board never tuned (leave-one-computer-out: fitted without any row of that board, "
+           "its power modes included; what a team's own datasheet, fa.compute.computer, gets):",
+           "", "| board | half | rows | median abs ln, never tuned | within 2x | median abs ln, "
+           "tuned (its computers) |", "|---|---|---|---|---|---|"]
+    for b, halves in {**loco["per_board"], "all boards": loco["all"]}.items():
+        for half in ("tuning", "heldout"):
+            if half not in halves:
+                continue
+            v = halves[half]
+            tuned = ([s[half]["all"]] if b == "all boards" else
+                     [st for name, st in s.get(half, {}).get("computer", {}).items()
+                      if board.get(name, name) == b])
+            t = (f"{tuned[0]['median_abs_ln']:.3f}" if len(tuned) == 1 else
+                 ", ".join(f"{st['median_abs_ln']:.3f}" for st in tuned) or "-")
+            out.append(f"| {b} | {half} | {v['n']} | {v['median_abs_ln']:.3f} | "
+                       f"{v['within_2x']}/{v['n']} | {t} |")
+    return out
+
+
 def table_lines(s: dict) -> list[str]:
     out = ["| half | by | name | rows | median ratio | median abs ln | worst ratio | within 2x | "
            "target met |", "|---|---|---|---|---|---|---|---|---|"]
@@ -124,6 +150,10 @@ def main(argv=None) -> int:
     if fresh:
         print()
         print("\n".join(fresh))
+    loco = loco_lines(table, s)
+    if loco:
+        print()
+        print("\n".join(loco))
     if a.rows:
         for r, q in zip(rows, published.ratios(rows, table)):
             print(f"{r.half:8s} {r.row_id:>6s} {r.computer:24s} {r.group:26s} "

@@ -131,7 +131,9 @@ class LatencyPrediction:
     published/predicted for this computer and runtime; when that pair has fewer than
     ``MIN_BAND_ROWS`` held-out rows or they come from fewer than ``MIN_BAND_SOURCES``
     publishers, for every runtime of this computer on the same unit (by the same rule);
-    failing that, for every computer's rows on that unit), ``energy_j`` above idle, and
+    failing that, for every computer's rows on that unit; for a computer no published row
+    was fitted on (a team's own datasheet, ``compute.computer``), the leave-one-computer-out
+    range on that unit), ``energy_j`` above idle, and
     ``per_node``: ((node, kind, seconds, bound), ...)."""
 
     seconds: float
@@ -273,6 +275,10 @@ def above_idle_w(dev: Device, dep: _rt.Deployment | None) -> float:
 def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tuple[float, float]:
     bands = table.get("bands", {})
     b = None
+    tuned = table.get("tuned_computers")
+    if tuned is not None and dev.name not in tuned and bands.get(f"untuned/*/{dep.target}"):
+        b = bands[f"untuned/*/{dep.target}"]
+        return (seconds * float(b["min"]), seconds * float(b["max"]))
     for key in (f"{dev.name}/{dep.runtime}", f"{dev.name}/*/{dep.target}"):
         b = bands.get(key)
         if (b and b.get("n", 0) >= MIN_BAND_ROWS

@@ -153,6 +153,12 @@ def load_rows(table: Path = TABLE, sources: Path = SOURCES, networks: Path = NET
     return rows, skipped
 
 
+#: profiles of one board in another power mode (a board never tuned leaves them out together:
+#: ``tuning.loco``)
+BOARD = {"jetson-nano-5w": "jetson-nano", "jetson-nano-10w": "jetson-nano",
+         "jetson-orin-nano-super": "jetson-orin-nano"}
+
+
 def predict_row(row: Row, table: dict) -> float:
     """Predicted seconds of one row with the efficiency table ``table``."""
     dev = row.device

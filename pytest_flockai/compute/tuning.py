@@ -47,6 +47,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from . import runtimes as _rt
+from .devices import DEVICES
 from .predict import (
     PRIOR_TARGET,
     PRIOR_WINOGRAD,
@@ -60,7 +61,7 @@ from .predict import (
     thread_share,
     winograd_3x3,
 )
-from .published import predict_row
+from .published import BOARD, predict_row
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s",
@@ -251,5 +252,61 @@ def loso(rows, fallback: dict | None = None) -> dict:
             "pooled_median": float(np.median(pooled)), "pooled_mean": float(np.mean(pooled))}
 
 
-__all__ = ["BOUNDS", "FALLBACK_RULES", "PRIOR_WEIGHT", "TARGET_PARAMS", "fallback_cv", "loso",
-           "tune"]
+def loco(rows, fallback: dict | None = None, boards=None) -> dict:
+    """Leave-one-computer-out: for each board (its power modes together, ``BOARD``), fit on
+    the tuning rows of the other boards and predict every row of that board, tuning and
+    held out: how the model does on a computer it was never tuned on, as a computer a user
+    describes by its own datasheet (``compute.computer``) is.
+
+    Returns {"per_board": {board: {half: {"n", "median_abs_ln", "within_2x"}}}, "all":
+    {half: the same over every board's rows}, "ratios": [(board, half, target,
+    predicted/published), ...]}; ``boards``: only these (None: all)."""
+    tuning = [r for r in rows if r.half == "tuning"]
+    rule = efficiencies().get("fallback", {}) if fallback is None else fallback
+    per: dict = {}
+    out = []
+    every = sorted({BOARD.get(r.computer, r.computer) for r in rows})
+    for board in every if boards is None else [b for b in every if b in boards]:
+        mine = [r for r in rows if BOARD.get(r.computer, r.computer) == board]
+        table = {**tune([r for r in tuning if BOARD.get(r.computer, r.computer) != board]),
+                 "fallback": rule}
+        for half in ("tuning", "heldout"):
+            rr = [predict_row(r, table) / r.latency_s for r in mine if r.half == half]
+            out += [(board, half, r.target, v)
+                    for r, v in zip((r for r in mine if r.half == half), rr)]
+            if rr:
+                per.setdefault(board, {})[half] = _abs_ln_stats(rr)
+    pooled = {h: _abs_ln_stats([v for _, hh, _, v in out if hh == h])
+              for h in ("tuning", "heldout") if any(hh == h for _, hh, _, _ in out)}
+    return {"per_board": per, "all": pooled, "ratios": out}
+
+
+def _abs_ln_stats(ratios) -> dict:
+    a = np.abs(np.log(ratios))
+    return {"n": len(a), "median_abs_ln": float(np.median(a)),
+            "within_2x": int(np.sum(a <= math.log(2.0)))}
+
+
+def loco_bands(cv: dict) -> dict:
+    """{"untuned/*/<target>": {"min", "max", "n", "sources"}}: the range of published /
+    predicted over the held-out rows of ``loco``'s boards, each predicted by a fit that never
+    saw it (``sources``: the boards)."""
+    out: dict = {}
+    for board, half, target, ratio in cv["ratios"]:
+        if half != "heldout":
+            continue
+        b = out.setdefault(f"untuned/*/{target}", {"v": [], "boards": set()})
+        b["v"].append(1.0 / ratio)
+        b["boards"].add(board)
+    return {k: {"min": min(b["v"]), "max": max(b["v"]), "n": len(b["v"]),
+                "sources": len(b["boards"])} for k, b in out.items()}
+
+
+def tuned_computers(rows) -> list[str]:
+    """The profiles whose board has tuning rows (its power modes included: ``BOARD``)."""
+    boards = {BOARD.get(r.computer, r.computer) for r in rows if r.half == "tuning"}
+    return sorted(n for n in DEVICES if BOARD.get(n, n) in boards)
+
+
+__all__ = ["BOARD", "BOUNDS", "FALLBACK_RULES", "PRIOR_WEIGHT", "TARGET_PARAMS", "fallback_cv",
+           "loco", "loco_bands", "loso", "tune", "tuned_computers"]

@@ -175,6 +175,8 @@ def test_a_band_needs_rows_of_two_publishers():
     table = predict.efficiencies()
     held = [r for r in rows if r.half == "heldout"]
     for key, b in table["bands"].items():
+        if key.startswith("untuned/"):      # leave-one-computer-out: test_own_computer.py
+            continue
         comp, _, rest = key.partition("/")
         mine = [r for r in held if comp in ("*", r.computer) and (
             rest == f"*/{r.target}" if rest.startswith("*/") else
