@@ -151,6 +151,32 @@ def computers() -> str:
                rows)
 
 
+def loco() -> str:
+    """A board never tuned: leave-one-computer-out (stored by benchmarks/latency_tune.py)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from latency_validation import loco_lines
+
+    from pytest_flockai.compute import predict, published
+
+    rows, _ = published.load_rows()
+    table = predict.efficiencies()
+    lines = loco_lines(table, published.summary(rows, table))
+    return "\n".join(lines[2:]) + "\n" if lines else "(not computed yet)\n"
+
+
+def datasheet_fields() -> str:
+    """The fields of a computer's datasheet (``compute.datasheets.SCHEMA``)."""
+    from pytest_flockai.compute.datasheets import SCHEMA
+
+    what = {"num": "number > 0", "num0": "number >= 0", "int": "whole number > 0",
+            "int0": "whole number >= 0", "str": "text", "list": "list of runtime names"}
+    rows = [[f"`[computers.NAME{'.' + sub if sub else ''}]`", f"`{k}`", what[v]]
+            for sub, fields in SCHEMA.items() for k, v in fields.items()]
+    rows.append(["`[computers.NAME]`", "`based_on`", "a profile's name (your own datasheets "
+                 "only): start from its tables, field by field"])
+    return _md(["table", "field", "value"], rows)
+
+
 def latency_validation() -> str:
     """Predicted / published latency per half and computer (benchmarks/latency_validation.py)."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -181,7 +207,8 @@ def limits() -> str:
 
 TABLES = {"options": options, "markers": markers, "kpis": kpis, "cli": cli, "layers": layers,
           "step_order": step_order, "blueprints": blueprints, "devices": devices, "limits": limits,
-          "computers": computers, "latency_validation": latency_validation}
+          "computers": computers, "latency_validation": latency_validation,
+          "datasheet_fields": datasheet_fields, "loco": loco}
 
 
 def public_modules() -> dict:

@@ -15,10 +15,12 @@ from importlib import resources
 from pathlib import Path
 
 from .. import _check
-from ..compute import device as _device
+from ..compute import Device
+from ..compute.latency import device_value
 from ..compute.runtimes import check_names
 from ..energy import EnergyModel
 from ..energy import battery as _cells
+from ..energy.factory import carry_computer
 from ..errors import ConfigError, close_matches
 from ..physics import RHO_SEA_LEVEL, G  # G re-exported: airframe.drone.G
 from ..sensors import Sensor
@@ -61,9 +63,12 @@ class Drone:
 
     Attributes: ``name``, ``airframe``, ``rotor``, ``battery``, ``radio``,
     ``camera`` (or None), ``sim`` (physics and control rates), ``device``
-    (on-board computer profile name or "none"), ``sensors`` (names),
-    ``payload_kg`` and ``energy`` (the composable energy model).
+    (on-board computer profile name or "none"; ``computer`` is its profile: set ``device``
+    to a ``Device`` of your own, ``fa.compute.computer``, and it holds that one's name),
+    ``sensors`` (names), ``payload_kg`` and ``energy`` (the composable energy model).
     """
+
+    _computer: Device | None
 
     def __init__(self, data: dict, *, source: str = "<dict>") -> None:
         where = source
@@ -106,8 +111,7 @@ class Drone:
         self.payload_kg = 0.0
         self.extra_sensors: list = []
         energy = EnergyParams(data["energy"], where=f"{where} [energy]")
-        self.energy = EnergyModel.from_params(
-            energy, device=_device(self.device) if self.device != "none" else None, radio=self.radio)
+        self.energy = EnergyModel.from_params(energy, device=self.computer, radio=self.radio)
         object.__setattr__(self, "_ready", True)
         self.check(where)
 
@@ -115,7 +119,10 @@ class Drone:
         if name == "payload_kg":
             value = _check.non_negative("payload_kg", value, where=self.name)
         elif name == "device":
-            value = _check_str("device", value, getattr(self, "name", ""))
+            value, computer = device_value(value, getattr(self, "name", ""))
+            object.__setattr__(self, "_computer", computer)
+            if getattr(self, "_ready", False):     # its idle and busy power from now on
+                carry_computer(self.energy, computer)
         elif name in _DEPLOY:
             check_names(**{name: value}, where=getattr(self, "name", ""))
         elif name in _SECTIONS and not isinstance(value, _SECTIONS[name]) and not (
@@ -124,6 +131,13 @@ class Drone:
                               f"{_SECTIONS[name].__name__} section"
                               f"{' or None' if name == 'camera' else ''}")
         object.__setattr__(self, name, value)
+
+    @property
+    def computer(self) -> Device | None:
+        """The on-board computer's profile (None: ``device = "none"``): a profile of the
+        package by its name, or the ``Device`` given (a team's own datasheet,
+        ``fa.compute.computer``; a measured profile)."""
+        return self._computer
 
     # derived quantities -------------------------------------------------
     @property

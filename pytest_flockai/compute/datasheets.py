@@ -17,8 +17,14 @@ for a model known only by its MAC count, an estimate). ``from_datasheet`` reads 
   ``tensor_tflops_sparse`` (NVIDIA's sparse figures are twice the dense ones);
 - a unit without a clock or a peak is left out (no deployment can use it);
 - each runtime runs on the units ``TARGET_ORDER`` lists for it that the computer has;
+- a GPU runs the CUDA runtimes (TensorRT, PyTorch, ONNX Runtime, OpenCV's DNN) only when
+  its table gives ``cuda_cores`` (an NVIDIA GPU; ncnn's Vulkan runs on any), and an NPU runs
+  ``edgetpu`` only when its ``kind`` is the Edge TPU;
 - a missing ``memory_mb``, ``[.power]`` figure or ``[.mac_rule]`` figure is a
-  ``ConfigError`` naming the computer and the field.
+  ``ConfigError`` naming the computer and the field; so is a field the schema
+  (``SCHEMA``) does not know, or a figure that is not a positive number.
+
+``computer(source, name)`` reads a team's own datasheet (``compute.own``).
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ import tomllib
 from dataclasses import replace
 from pathlib import Path
 
-from ..errors import ConfigError
+from ..errors import ConfigError, close_matches
 from ._device import Device, Unit
 
 DATA = Path(__file__).with_name("data")
@@ -37,6 +43,66 @@ COMPUTERS = DATA / "computers.toml"
 TARGET_ORDER = {"tensorrt": ("gpu",), "edgetpu": ("npu",), "pytorch": ("gpu", "cpu"),
                 "onnxruntime": ("gpu", "cpu"), "opencv-dnn": ("cpu", "gpu"),
                 "ncnn": ("cpu", "gpu"), "tflite": ("cpu",), "openvino": ("cpu",)}
+
+
+#: the runtimes a GPU runs only through CUDA (an NVIDIA GPU: ``cuda_cores`` in its table)
+CUDA_RUNTIMES = ("tensorrt", "pytorch", "onnxruntime", "opencv-dnn")
+
+#: the fields of a computer's table, per sub-table ("": the computer's own), each with its
+#: type ("num": a number > 0, "int": a whole number > 0; "num0", "int0": 0 allowed too);
+#: every field may have a
+#: ``<field>_source`` next to it
+SCHEMA: dict[str, dict[str, str]] = {
+    "": {"name": "str", "memory_mb": "num", "memory_bandwidth_gbs": "num",
+         "memory_bandwidth_stream_gbs": "num", "runtimes": "list", "edgetpu_link_gbs": "num",
+         "mode_budget_w": "num"},
+    "cpu": {"cores": "int", "clock_ghz": "num", "fp32_flop_per_cycle_per_core": "num",
+            "fp16_flop_per_cycle_per_core": "num", "int8_ops_per_cycle_per_core": "num",
+            "core_type": "str", "isa": "str"},
+    "gpu": {"clock_ghz": "num", "fp32_tflops": "num", "fp16_tflops": "num",
+            "fp16_tensor_tflops": "num", "int8_tops": "num", "int8_tops_sparse": "num",
+            "tensor_tflops_sparse": "num", "module_ai_tops_sparse": "num", "cuda_cores": "int",
+            "tensor_cores": "int0", "arch": "str"},
+    "npu": {"int8_tops": "num", "on_chip_memory_mb": "num", "watts_per_tops": "num",
+            "kind": "str"},
+    "power": {"idle_w": "num0", "busy_w": "num", "typical_active_w": "num", "tpu_peak_w": "num"},
+    "mac_rule": {"macs_per_s": "num", "overhead_s": "num"},
+}
+
+
+def check(name: str, t, where: str) -> None:
+    """ConfigError naming the field, the value and what is allowed for anything in the table
+    ``t`` of computer ``name`` the schema does not allow (``where``: the file, for the
+    message)."""
+    if not isinstance(t, dict):
+        raise ConfigError(f"{where}: [computers.{name}] must be a table of fields, got "
+                          f"{type(t).__name__}")
+    for sub, fields in SCHEMA.items():
+        tab = t.get(sub, {}) if sub else t
+        at = f"[computers.{name}.{sub}]" if sub else f"[computers.{name}]"
+        if not isinstance(tab, dict):
+            raise ConfigError(f"{where}: {at} must be a table, got {tab!r}")
+        for key, v in tab.items():
+            if key.endswith("_source") or (not sub and key in SCHEMA):
+                continue
+            if key not in fields:
+                allowed = sorted(fields) + ([k for k in SCHEMA if k] if not sub else [])
+                raise ConfigError(f"{where}: {at} {key} is not a field"
+                                  f"{close_matches(key, allowed)}; allowed: "
+                                  f"{', '.join(allowed)} (and <field>_source)")
+            kind = fields[key]
+            zero = kind.endswith("0")
+            ok = (isinstance(v, str) if kind == "str" else
+                  isinstance(v, list) and all(isinstance(x, str) for x in v) if kind == "list"
+                  else isinstance(v, (int, float)) and not isinstance(v, bool)
+                  and (0 <= v if zero else 0 < v) and v < float("inf")
+                  and (kind.startswith("num") or float(v).is_integer()))
+            if not ok:
+                what = {"str": "a string", "list": "a list of strings",
+                        "int": "a whole number > 0", "num": "a number > 0",
+                        "int0": "a whole number >= 0", "num0": "a number >= 0"}[kind]
+                raise ConfigError(f"{where}: {at} {key} = {v!r} is not allowed; it must be "
+                                  f"{what}")
 
 
 def _peaks(kind: str, u: dict) -> dict:
@@ -94,7 +160,7 @@ def from_datasheet(name: str, t: dict) -> Device:
                 units.append(unit)
     have = {u.kind for u in units}
     deps = tuple(f"{r}/{k}" for r in t.get("runtimes", ()) for k in TARGET_ORDER.get(r, ())
-                 if k in have)
+                 if k in have and runs_on(r, k, t))
     sources = tuple((k, str(v)) for k, v in _flat(t) if k.endswith("_source"))
     est = [k.removesuffix("_source") for k, v in sources if v.startswith("estimate")]
     src = f"{name}: compute/data/computers.toml" + (
@@ -110,6 +176,17 @@ def from_datasheet(name: str, t: dict) -> Device:
                   deployments=deps, mode=str(t.get("name", "")), sources=sources)
 
 
+def runs_on(runtime: str, kind: str, t: dict) -> bool:
+    """Whether ``runtime`` can use the ``kind`` unit of the computer table ``t``: the CUDA
+    runtimes need an NVIDIA GPU, ``edgetpu`` an Edge TPU."""
+    u = t.get(kind, {})
+    if kind == "gpu" and runtime in CUDA_RUNTIMES:
+        return bool(u.get("cuda_cores"))
+    if kind == "npu" and runtime == "edgetpu":
+        return "edge" in str(u.get("kind", "")).lower().replace(" ", "")
+    return True
+
+
 def _flat(t: dict, prefix: str = ""):
     for k, v in t.items():
         if isinstance(v, dict):
@@ -122,7 +199,11 @@ def load_devices(path: Path = COMPUTERS) -> dict[str, Device]:
     """The profiles of ``computers.toml``."""
     with Path(path).open("rb") as fh:
         data = tomllib.load(fh)
-    return {n: from_datasheet(n, t) for n, t in data.get("computers", {}).items()}
+    comps = data.get("computers", {})
+    for n, t in comps.items():
+        check(n, t, Path(path).name)
+    return {n: from_datasheet(n, t) for n, t in comps.items()}
 
 
-__all__ = ["COMPUTERS", "TARGET_ORDER", "from_datasheet", "load_devices"]
+__all__ = ["COMPUTERS", "CUDA_RUNTIMES", "SCHEMA", "TARGET_ORDER", "check", "from_datasheet",
+           "load_devices", "runs_on"]

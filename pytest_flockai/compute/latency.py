@@ -54,6 +54,24 @@ def resolve_device(dev, field: str = "device") -> Device:
                       f"(fa.compute.profile(path))")
 
 
+def device_value(value, where: str) -> tuple[str, Device | None]:
+    """(the name ``Drone.device`` holds, the profile) of a profile name, "none", a ``Device``
+    (``fa.compute.computer``) or a measured profile (``fa.compute.profile``); ConfigError
+    naming ``where`` otherwise."""
+    if isinstance(value, str) and value == "none":
+        return value, None
+    if isinstance(value, str) and value:
+        try:
+            return value, _device(value)
+        except ConfigError as e:
+            raise ConfigError(f"{where}: device = {value!r}: {e}") from None
+    try:
+        dev = resolve_device(value, "device")
+    except ConfigError as e:
+        raise ConfigError(f"{where}: {e}; or \"none\"") from None
+    return dev.name, dev
+
+
 def compute_seconds(macs: float, device) -> float:
     """Seconds of pure compute for ``macs`` on ``device`` (no per-call overhead)."""
     return float(macs) / resolve_device(device).macs_per_s
@@ -171,6 +189,6 @@ def measured_latency(fn, *args, device, calibration: Calibration | None = None):
     return out, scale_to_device(wall, device, cal), wall
 
 
-__all__ = ["LATENCY_MODES", "Calibration", "calibrate", "compute_seconds", "measured_latency",
+__all__ = ["LATENCY_MODES", "Calibration", "calibrate", "compute_seconds", "device_value", "measured_latency",
            "modeled_latency",
            "resolve_device", "scale_to_device"]

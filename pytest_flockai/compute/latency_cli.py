@@ -4,6 +4,7 @@ runtime it lists, or for the ones asked for).
 
     flockai predict-latency yolov8n.onnx --input-shape 1x3x640x640
     flockai predict-latency model.onnx --computer raspberry-pi-5 --runtime ncnn --precision int8
+    flockai predict-latency model.onnx --computers my_boards.toml --computer rock-5b
 
 One row per (computer, runtime): the deployment (runtime/target/precision and threads), the
 predicted milliseconds, the held-out range around it (``LatencyPrediction.band``) and the
@@ -21,6 +22,7 @@ from pathlib import Path
 
 from .._io import atomic_write
 from ..errors import ConfigError
+from . import own as _own
 from . import runtimes as _rt
 from .devices import device, devices
 from .graph import DynamicInputError, NetworkCost, analyze
@@ -43,6 +45,10 @@ def add_parser(sub) -> None:
     p.add_argument("--computer", action="append", default=None, metavar="NAME",
                    help="a computer profile (repeat for several; default: every profile with "
                         "a datasheet)")
+    p.add_argument("--computers", type=Path, default=None, metavar="FILE.toml",
+                   help="your own computers' datasheets ([computers.NAME] tables, the layout "
+                        "of the package's computers.toml): added to the profiles, or, with "
+                        "--computer, nameable")
     p.add_argument("--runtime", default=None, help="one runtime (default: each the computer "
                                                    "lists)")
     p.add_argument("--precision", default=None, help="fp32, fp16 or int8 (default: the "
@@ -57,11 +63,21 @@ def add_parser(sub) -> None:
 
 
 def rows(model, computers=None, *, runtime=None, precision=None, target=None, threads=None,
-         input_shape=None) -> tuple[NetworkCost, list[dict], list[str]]:
+         input_shape=None, own=None) -> tuple[NetworkCost, list[dict], list[str]]:
     """(the model's ``NetworkCost``, one dict per predicted deployment, why each left-out
-    deployment was left out); ``model`` an ONNX path. The names are checked before the graph
-    is read."""
+    deployment was left out); ``model`` an ONNX path; ``own``: a datasheet file of the
+    team's own computers (``own.computers``), added after the profiles. The names and the
+    datasheets are checked before the graph is read."""
     _rt.check_names(runtime, precision, target, threads)
+    mine = _own.computers(own) if own is not None else {}
+    for name in computers or ():
+        if name not in mine:
+            try:
+                device(name)
+            except ConfigError as e:
+                raise ConfigError(f"--computer = {name!r}: {e}"
+                                  + (f"; or one of {own}: {', '.join(mine)}" if mine else "")
+                                  ) from None
     try:
         cost = analyze(model, input_shape)
     except DynamicInputError as e:      # in the shell's terms: --input-shape, not input_shape=
@@ -69,11 +85,11 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
         raise ConfigError(f"--input-shape = {given!r}: input {e.input_name!r} of "
                           f"{Path(model).stem!r} has dims {e.dims}; give its full shape, e.g. "
                           f"--input-shape 1x3x480x640") from None
-    names = list(computers) if computers else devices()
+    names = list(computers) if computers else devices() + list(mine)
     strict = bool(computers) and runtime is not None
     out, left = [], []
     for name in names:
-        dev = device(name)
+        dev = mine[name] if name in mine else device(name)
         if not dev.deployments:
             left.append(f"{name}: no datasheet")
             continue
@@ -97,7 +113,7 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
 def run_cli(a) -> int:
     cost, found, left = rows(a.model, a.computer, runtime=a.runtime, precision=a.precision,
                              target=a.target, threads=a.threads,
-                             input_shape=_parse_shape(a.input_shape))
+                             input_shape=_parse_shape(a.input_shape), own=a.computers)
     print(f"flockai predict-latency: {cost.name}: {cost.macs / 1e9:.3g} GMAC, "
           f"{len(cost.run_nodes)} kernels, input {'x'.join(map(str, cost.input_shape or ()))}"
           + (f", quantized ({cost.meta['int8']})" if cost.meta.get("int8") else ""))

@@ -47,3 +47,21 @@ def flight_energy_model(base, *, extra_sensors=(), device=None, blueprint_device
         if sn.name not in group:
             group.add(Constant(sn.name, sn.power_w, f"{type(sn).__name__} sensor"))
     return model
+
+
+def carry_computer(model, dev) -> None:
+    """The energy model ``model``'s on-board computer (``proc.soc``) becomes ``dev``'s (a
+    compute ``Device``; None: no computer): its idle power all flight, its busy power while
+    tasks compute."""
+    proc = model.component("proc") if "proc" in model else None
+    if not isinstance(proc, Group):
+        return
+    if dev is None:
+        if "soc" in proc:
+            proc.remove("soc")
+        return
+    soc = SoC("soc", dev.idle_w, dev.active_w, f"on-board computer {dev.name}")
+    if "soc" in proc:
+        proc.replace("soc", soc)
+    else:
+        proc.add(soc)

@@ -22,7 +22,6 @@ import numpy as np
 from .. import _check, limits
 from ..airframe.drone import Drone
 from ..clock import Clocked
-from ..compute import device as _device
 from ..compute import runtimes as _rt
 from ..control.pilots import Pilot
 from ..errors import ConfigError
@@ -206,9 +205,9 @@ def onboard_device(tasks, drone):
     for tk in tasks:
         if tk.execution == "onboard" and tk.device is not None:
             return tk.device
-    if drone.device == "none":
+    if drone.computer is None:
         return None
-    return with_defaults(_device(drone.device), drone)
+    return with_defaults(drone.computer, drone)
 
 
 def with_defaults(dev, drone):
