@@ -20,12 +20,15 @@
   them (``GATE_FUSED``, ``ACT_UNFUSED``).
 - ``quantization``: how a graph is quantized: ``"qdq"``, ``"qoperator"`` (QLinearConv,
   QLinearMatMul, ConvInteger, MatMulInteger, ONNX Runtime's QLinear* operators),
-  ``"dynamic"`` (DynamicQuantizeLinear + MatMulInteger / ConvInteger), or None.
+  ``"dynamic"`` (DynamicQuantizeLinear + MatMulInteger / ConvInteger, ONNX Runtime's
+  DynamicQuantizeLSTM), or None.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+
+import onnx
 
 from ._ops import ACTIVATIONS
 
@@ -40,8 +43,8 @@ QOPERATOR = frozenset(("QLinearConv", "QLinearMatMul", "ConvInteger", "MatMulInt
 def quantization(g) -> str | None:
     """``"dynamic"``, ``"qoperator"``, ``"qdq"`` or None: how ``g``'s layers are quantized."""
     ops = {n.op_type for n in g.node}
-    if "DynamicQuantizeLinear" in ops or "DynamicQuantizeMatMul" in ops \
-            or "MatMulIntegerToFloat" in ops:
+    if ops & {"DynamicQuantizeLinear", "DynamicQuantizeMatMul", "MatMulIntegerToFloat",
+              "DynamicQuantizeLSTM"}:
         return "dynamic"
     if ops & QOPERATOR:
         return "qoperator"
@@ -53,6 +56,17 @@ def quantization(g) -> str | None:
            for n in g.node):
         return "qdq"
     return None
+
+
+def half_weights(g) -> bool:
+    """Whether ``g`` computes in fp16: most of its convolutions' and matrix products' stored
+    weights are fp16 (``model.half()`` exported, or onnxconverter-common's
+    ``convert_float_to_float16``, which keeps fp32 inputs behind Cast nodes)."""
+    f16 = {t.name for t in g.initializer if t.data_type == onnx.TensorProto.FLOAT16}
+    f32 = {t.name for t in g.initializer if t.data_type == onnx.TensorProto.FLOAT}
+    w = [n.input[1] for n in g.node if n.op_type in ("Conv", "ConvTranspose", "MatMul", "Gemm")
+         and len(n.input) > 1 and n.input[1] in f16 | f32]
+    return bool(w) and 2 * sum(x in f16 for x in w) > len(w)
 
 
 def fuse_qdq(g, nodes: list) -> list:
@@ -191,4 +205,4 @@ def dispatched(nodes, runtime: str) -> list:
 
 
 __all__ = ["ACT_UNFUSED", "FOLDED", "GATE_FUSED", "QDQ", "QOPERATOR", "VIEWS", "dispatched", "fuse",
-           "fuse_qdq", "quantization"]
+           "fuse_qdq", "half_weights", "quantization"]

@@ -59,7 +59,7 @@ MS_OPS = {
     "Gelu": "Gelu", "FastGelu": "Gelu", "BiasGelu": "Gelu", "QuickGelu": "Gelu",
     "BiasAdd": "Add", "SkipLayerNormalization": "LayerNormalization",
     "QuantizeLinear": "QuantizeLinear", "DequantizeLinear": "DequantizeLinear",
-    "NhwcMaxPool": "MaxPool",
+    "NhwcMaxPool": "MaxPool", "DynamicQuantizeLSTM": "LSTM",
 }
 _WEIGHT_TYPES = frozenset((onnx.TensorProto.FLOAT, onnx.TensorProto.FLOAT16,
                            onnx.TensorProto.DOUBLE, onnx.TensorProto.BFLOAT16,

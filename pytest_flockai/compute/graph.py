@@ -54,7 +54,7 @@ import onnx
 
 from .._io import atomic_write
 from ..errors import ConfigError
-from ._fusion import FOLDED, fuse, fuse_qdq, quantization
+from ._fusion import FOLDED, fuse, fuse_qdq, half_weights, quantization
 from ._ops import is_folded, node_cost, weight_names
 from ._shapes import (
     constant_shapes,
@@ -308,10 +308,12 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
                               FOLDED if is_const else None))
     nodes = fuse_qdq(g, fuse(g, nodes))
     shape = next(iter(shapes.get(i.name) for i in graph_inputs(fixed)), None)
-    meta = {"shapes": how}
+    meta: dict = {"shapes": how}
     quant = quantization(g)
     if quant:
         meta["int8"] = quant
+    elif half_weights(g):
+        meta["fp16"] = True
     cost = NetworkCost(tuple(nodes), name or default_name, shape, tuple(uncounted), meta)
     if uncounted:
         _refuse_or_warn(cost, error, allow_uncounted)

@@ -96,7 +96,7 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
         for rt in [runtime] if runtime is not None else list(dev.runtimes):
             try:
                 with warnings.catch_warnings(record=True) as said:
-                    warnings.simplefilter("always", _rt.QuantizedModelWarning)
+                    warnings.simplefilter("always", _rt.ModelPrecisionWarning)
                     p = predict_latency(cost, dev, runtime=rt, precision=precision,
                                         target=target, threads=threads)
             except ConfigError as e:            # what this computer cannot run
@@ -104,9 +104,12 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
                     raise
                 left.append(f"{name}/{rt}: {e}")
                 continue
-            fell_back = any(issubclass(w.category, _rt.QuantizedModelWarning) for w in said)
+            notes = [str(w.message) for w in said
+                     if issubclass(w.category, _rt.ModelPrecisionWarning)]
             out.append({"computer": name, **p.to_dict(), "milliseconds": p.milliseconds,
-                        "int8_fallback": fell_back})
+                        "int8_fallback": any(issubclass(w.category, _rt.QuantizedModelWarning)
+                                             for w in said),
+                        "precision_warning": notes[0] if notes else None})
     return cost, out, left
 
 
@@ -120,7 +123,8 @@ def run_cli(a) -> int:
     print(f"{'computer':24s} {'runtime/target/precision':26s} {'threads':>7s} {'ms':>10s} "
           f"{'held-out range (ms)':>21s} {'mJ above idle':>13s}")
     for r in found:
-        dep = f"{r['runtime']}/{r['target']}/{r['precision']}" + ("*" if r["int8_fallback"] else "")
+        dep = f"{r['runtime']}/{r['target']}/{r['precision']}" + (
+            "*" if r["precision_warning"] else "")
         lo, hi = (1e3 * b for b in r["band"])
         thr = "-" if r["target"] != "cpu" else r["threads"] or "all"
         print(f"{r['computer']:24s} {dep:26s} {thr:>7} "
@@ -129,6 +133,9 @@ def run_cli(a) -> int:
     if any(r["int8_fallback"] for r in found):
         print("  * the model is quantized (int8) and this deployment cannot run int8: its "
               "default precision is shown")
+    elif any(r["precision_warning"] for r in found):
+        print("  * " + next(r["precision_warning"] for r in found if r["precision_warning"])
+              .split(": ", 1)[-1])
     for why in left:
         print(f"  left out: {why}")
     if a.json is not None:

@@ -335,7 +335,8 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
     _rt.check_names(runtime, precision, target, threads, where="predict_latency")
     cost = _cost(model, tuple(input_shape) if input_shape is not None else None)
     dep = _rt.resolve(dev, runtime, precision, target, threads, where="predict_latency",
-                      quantized=getattr(cost, "meta", {}).get("int8"))
+                      quantized=getattr(cost, "meta", {}).get("int8"),
+                      half=bool(getattr(cost, "meta", {}).get("fp16")))
     table = efficiencies(efficiencies_path)
     secs, per = roofline(cost, dev, dep, params_for(table, dep))
     macs = float(sum(n.macs for n in cost.nodes))

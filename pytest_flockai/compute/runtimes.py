@@ -49,9 +49,19 @@ RUNTIME_PRECISIONS: dict[str, tuple[str, ...]] = {r: PRECISIONS for r in RUNTIME
 RUNTIME_PRECISIONS["edgetpu"] = ("int8",)
 
 
-class QuantizedModelWarning(UserWarning):
+class ModelPrecisionWarning(UserWarning):
+    """A model is predicted at another precision than its graph's: the deployment cannot run
+    the graph's (``QuantizedModelWarning``, ``HalfModelWarning``), or runs only int8 and the
+    graph is float (the Edge TPU)."""
+
+
+class QuantizedModelWarning(ModelPrecisionWarning):
     """An int8 (quantized) model is predicted at another precision: the deployment cannot
     run int8."""
+
+
+class HalfModelWarning(ModelPrecisionWarning):
+    """An fp16 model is predicted at another precision: the deployment cannot run fp16."""
 
 
 @dataclass(frozen=True)
@@ -171,12 +181,16 @@ def check_names(runtime=None, precision=None, target=None, threads=None, *,
 
 
 def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
-            where: str = "", quantized: str | bool | None = None) -> Deployment:
+            where: str = "", quantized: str | bool | None = None,
+            half: bool = False) -> Deployment:
     """The deployment on ``device`` (a ``Device``) with the defaults filled in.
 
     ``quantized``: the model is an int8 graph (``NetworkCost.meta["int8"]``): with no
     precision stated (by the call or the drone's defaults) it runs at int8 where the
     runtime can, else at the runtime's default precision with a ``QuantizedModelWarning``.
+    ``half``: the model's weights are fp16 (``NetworkCost.meta["fp16"]``): likewise at fp16,
+    else with a ``HalfModelWarning``. A float graph on the Edge TPU, which runs only
+    full-integer models, is predicted at int8 with a ``ModelPrecisionWarning``.
     ConfigError for an unknown name, or for what this computer cannot run (naming the
     computer, the runtime and what it can run)."""
     check_names(runtime, precision, target, threads, where=where)
@@ -217,6 +231,18 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
                           f"int8 (allowed there: {', '.join(precs) or 'none'}); predicted at "
                           f"the runtime's default precision", QuantizedModelWarning,
                           stacklevel=3)
+    elif precision is None and half:      # an fp16 graph runs its fp16 kernels
+        if "fp16" in precs:
+            precision = "fp16"
+        else:
+            warnings.warn(f"{w}the model's weights are fp16 but runtime {runtime!r} on the "
+                          f"{target} of computer {device.name!r} cannot run fp16 (allowed "
+                          f"there: {', '.join(precs) or 'none'}); predicted at the runtime's "
+                          f"default precision", HalfModelWarning, stacklevel=3)
+    if precision is None and runtime == "edgetpu" and not quantized:
+        warnings.warn(f"{w}the model is a float graph; the Edge TPU runs only full-integer "
+                      f"(int8) models compiled by its compiler: predicted as if quantized to "
+                      f"int8", ModelPrecisionWarning, stacklevel=3)
     if precision is None:       # what the runtime runs by default: fp32 but on TensorRT/Edge TPU
         precision = ("fp32" if "fp32" in precs and runtime not in ("tensorrt", "edgetpu")
                      else precs[0] if precs else unit.precisions[0])
@@ -233,5 +259,6 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
 
 
 __all__ = ["BYTES", "DEFAULT_THREADS", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
-           "TF32_BY_DEFAULT", "Deployment", "QuantizedModelWarning", "check_names", "compute_precision", "peak_macs", "power_share",
+           "TF32_BY_DEFAULT", "Deployment", "HalfModelWarning", "ModelPrecisionWarning",
+           "QuantizedModelWarning", "check_names", "compute_precision", "peak_macs", "power_share",
            "resolve"]

@@ -21,7 +21,7 @@ import warnings
 import numpy as np
 
 from ..compute import runtimes as _rt
-from ..compute.graph import quantization
+from ..compute.graph import half_weights, quantization
 from ..compute.predict import mac_rule_seconds, predict_latency
 from .models import OnnxModel
 
@@ -65,10 +65,11 @@ class InferenceTimer:
             self.method = "macs"
         if device.deployments and not is_measured(device):
             quant = quantization(gm._proto.graph) if gm is not None else None
+            half = not quant and gm is not None and half_weights(gm._proto.graph)
             self.deployment = _rt.resolve(device, task.runtime, task.precision, task.target,
                                           task.threads, where=f"task {task.name!r} on "
                                                               f"{device.name!r}",
-                                          quantized=quant)
+                                          quantized=quant, half=half)
         #: the share of the computer's busy power above idle an inference draws (on a CPU,
         #: the deployment's threads over its cores: ``compute.runtimes.power_share``); 1 for
         #: a measured profile (its busy power was measured at its own threads)

@@ -12,6 +12,7 @@ from onnx import TensorProto, helper, numpy_helper
 from onnxruntime.quantization import CalibrationDataReader, QuantFormat, quantize_static
 
 import pytest_flockai as fa
+from pytest_flockai.compute import runtimes
 from pytest_flockai.compute.graph import FOLDED, analyze
 from pytest_flockai.compute.predict import predict_latency
 from pytest_flockai.compute.runtimes import QuantizedModelWarning
@@ -151,3 +152,64 @@ def test_weight_only_quantization_computes_in_float():
     cost = analyze(m)
     assert "int8" not in cost.meta and cost.nodes[0].fused_into == FOLDED
     assert predict_latency(cost, "raspberry-pi-4").precision == "fp32"
+
+
+def test_a_dynamically_quantized_lstm_counts_as_its_lstm(tmp_path):
+    """``quantize_dynamic`` writes an LSTM as ONNX Runtime's DynamicQuantizeLSTM (int8 W
+    and R, stored transposed): the same multiply-accumulates as the float LSTM, run at int8."""
+    from onnxruntime.quantization import quantize_dynamic
+    rng = np.random.default_rng(1)
+    seq, inp, hid = 12, 16, 32
+    w = rng.standard_normal((1, 4 * hid, inp)).astype(np.float32)
+    r = rng.standard_normal((1, 4 * hid, hid)).astype(np.float32)
+    g = helper.make_graph(
+        [helper.make_node("LSTM", ["x", "W", "R"], ["y", "yh"], name="lstm", hidden_size=hid)],
+        "lstm", [helper.make_tensor_value_info("x", TensorProto.FLOAT, [seq, 1, inp])],
+        [helper.make_tensor_value_info("y", TensorProto.FLOAT, [seq, 1, 1, hid])],
+        [numpy_helper.from_array(w, "W"), numpy_helper.from_array(r, "R")])
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    onnx.save(m, str(tmp_path / "f.onnx"))
+    quantize_dynamic(str(tmp_path / "f.onnx"), str(tmp_path / "q.onnx"))
+    q = onnx.load(str(tmp_path / "q.onnx"))
+    assert [n.op_type for n in q.graph.node if n.domain == "com.microsoft"] == ["DynamicQuantizeLSTM"]
+    fq, ff = analyze(tmp_path / "q.onnx"), analyze(tmp_path / "f.onnx")
+    assert fq.macs == ff.macs == seq * (w.size + r.size)
+    assert fq.meta["int8"] == "dynamic"
+    assert predict_latency(fq, "raspberry-pi-5", runtime="onnxruntime").precision == "int8"
+
+
+def _half_net(path):
+    """The float net with fp16 weights and input (what ``model.half()`` exports)."""
+    m = onnx.load(str(_float_net(path)))
+    for t in m.graph.initializer:
+        t.CopyFrom(numpy_helper.from_array(numpy_helper.to_array(t).astype(np.float16), t.name))
+    for v in list(m.graph.input) + list(m.graph.output):
+        v.type.tensor_type.elem_type = TensorProto.FLOAT16
+    onnx.save(m, str(path))
+    return path
+
+
+def test_an_fp16_graph_runs_at_fp16_where_it_can_and_warns_where_not(nets, tmp_path):
+    half = analyze(_half_net(tmp_path / "half.onnx"))
+    assert half.meta.get("fp16") is True and "fp16" not in analyze(nets["float"]).meta
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p = predict_latency(half, "jetson-orin-nano", runtime="tensorrt")
+        assert p.precision == "fp16"
+        assert predict_latency(half, "raspberry-pi-5", runtime="ncnn").precision == "fp16"
+        # a stated precision wins, silently
+        assert predict_latency(half, "raspberry-pi-4", runtime="ncnn", precision="fp32").precision == "fp32"
+    with pytest.warns(runtimes.HalfModelWarning, match="weights are fp16 but runtime 'ncnn' on "
+                                                       "the cpu of computer 'raspberry-pi-4'"):
+        p4 = predict_latency(half, "raspberry-pi-4", runtime="ncnn")      # Cortex-A72: no fp16
+    assert p4.precision == "fp32"
+    assert p4.seconds == predict_latency(nets["float"], "raspberry-pi-4", runtime="ncnn").seconds
+
+
+def test_a_float_graph_on_the_edge_tpu_warns_that_it_needs_int8(nets):
+    with pytest.warns(runtimes.ModelPrecisionWarning, match="runs only full-integer"):
+        assert predict_latency(nets["float"], "coral-dev-board", runtime="edgetpu").precision == "int8"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        predict_latency(nets["qdq"], "coral-dev-board", runtime="edgetpu")
