@@ -144,10 +144,119 @@ def fuse(g, nodes: list) -> list:
     return [replace(n, fused_into=fused[i]) if i in fused else n for i, n in enumerate(nodes)]
 
 
+def fuse_patterns(g, nodes: list) -> list:
+    """Fold the element-wise chains an exporter writes for one operator into one kernel, as
+    the runtimes' graph optimizers do: GELU written with Erf (``x * 0.5 * (1 + erf(x /
+    sqrt 2))``, the legacy ``torch.onnx`` exporter's form; ONNX Runtime's GeluFusion, TensorRT's
+    and OpenVINO's GELU fusions) and layer normalization written as ReduceMean, Sub, Pow,
+    ReduceMean, Add, Sqrt, Div and the affine Mul and Add (opsets before 17; ONNX Runtime's
+    LayerNormFusion, OpenVINO's MVN fusion). The chain's last node runs it: it reads the
+    chain's input and writes its output once, one operation per element, as a ``Gelu`` or
+    ``LayerNormalization`` node of a newer exporter does; the others are fused into it."""
+    outputs = {o.name for o in g.output}
+    consts = frozenset(_constant_names(g))
+    prod: dict[str, int] = {}
+    cons: dict[str, list[int]] = {}
+    for i, node in enumerate(g.node):
+        for o in node.output:
+            prod[o] = i
+        for t in node.input:
+            cons.setdefault(t, []).append(i)
+    taken: set[int] = set()
+
+    def free(i) -> bool:
+        return i is not None and i not in taken and nodes[i].fused_into is None
+
+    def next_of(i, op):
+        """The one consumer of node ``i``'s output, if it is ``op`` and free."""
+        t = g.node[i].output[0]
+        c = cons.get(t, [])
+        return c[0] if len(c) == 1 and t not in outputs and g.node[c[0]].op_type == op \
+            and free(c[0]) else None
+
+    def other(i, t):
+        """The input of node ``i`` that is not ``t``."""
+        ins = list(g.node[i].input)
+        return ins[1 - ins.index(t)] if len(ins) == 2 and t in ins else None
+
+    chains = []
+    for i, node in enumerate(g.node):
+        if not free(i) or not node.input:
+            continue
+        if node.op_type == "Erf":                   # Div/Mul -> Erf -> Add -> Mul(x) [-> Mul]
+            p = prod.get(node.input[0])
+            if p is None or not free(p) or g.node[p].op_type not in ("Div", "Mul"):
+                continue
+            x = g.node[p].input[0]
+            if g.node[p].input[1] not in consts or x in consts:
+                continue
+            a = next_of(i, "Add")
+            m = next_of(a, "Mul") if a is not None else None
+            if m is None or other(a, node.output[0]) not in consts:
+                continue
+            chain = [p, i, a, m]
+            mx = other(m, g.node[a].output[0])
+            h = prod.get(mx) if mx is not None else None
+            if mx != x and not (h is not None and free(h) and g.node[h].op_type == "Mul"
+                                and cons.get(mx) == [m] and other(h, x) in consts):
+                continue                         # x * (1 + erf), or (x * 0.5) * (1 + erf)
+            if mx != x:
+                chain.insert(0, h)
+            f = next_of(m, "Mul")
+            if f is not None and other(f, g.node[m].output[0]) in consts:
+                chain.append(f)
+            chains.append((x, chain))
+        elif node.op_type == "ReduceMean":          # the layer-norm chain, from its mean
+            x = node.input[0]
+            sub = next_of(i, "Sub")
+            if sub is None or list(g.node[sub].input) != [x, node.output[0]]:
+                continue
+            d = g.node[sub].output[0]
+            two = sorted(cons.get(d, []), key=lambda k: g.node[k].op_type != "Div")
+            if len(two) != 2 or d in outputs or not all(free(k) for k in two):
+                continue
+            div, sq = two
+            if g.node[div].op_type != "Div" or g.node[sq].op_type not in ("Pow", "Mul"):
+                continue
+            r2 = next_of(sq, "ReduceMean")
+            eps = next_of(r2, "Add") if r2 is not None else None
+            rt = next_of(eps, "Sqrt") if eps is not None else None
+            if rt is None or list(g.node[div].input) != [d, g.node[rt].output[0]]:
+                continue
+            chain = [i, sub, sq, r2, eps, rt, div]
+            for op in ("Mul", "Add"):                # the affine scale and shift
+                k = next_of(chain[-1], op)
+                if k is None or other(k, g.node[chain[-1]].output[0]) not in consts:
+                    break
+                chain.append(k)
+            chains.append((x, chain))
+        else:
+            continue
+        taken.update(chains[-1][1])
+
+    out = list(nodes)
+    for _x, chain in chains:
+        last = chain[-1]
+        n = out[last]
+        size = n.out_elems
+        out[last] = replace(n, kind="elementwise", macs=size, in_elems=size,
+                            weight_elems=sum(out[k].weight_elems for k in chain))
+        for k in chain[:-1]:
+            out[k] = replace(out[k], fused_into=n.name)
+    return out
+
+
 def _constant_names(g) -> list[str]:
-    """Names of the graph's initializers and ``Constant`` outputs."""
-    return [t.name for t in g.initializer] + [n.output[0] for n in g.node
-                                              if n.op_type == "Constant" and n.output]
+    """Names of the graph's initializers, ``Constant`` outputs and ``Identity`` copies of
+    them (the legacy exporter reads shared weights and biases through Identity nodes)."""
+    out = [t.name for t in g.initializer] + [n.output[0] for n in g.node
+                                             if n.op_type == "Constant" and n.output]
+    known = set(out)
+    for n in g.node:                            # topological order: chains of copies too
+        if n.op_type == "Identity" and n.input and n.input[0] in known and n.output:
+            out.append(n.output[0])
+            known.add(n.output[0])
+    return out
 
 
 #: runtimes that fuse a gated activation ``x * gate(x)`` into the convolution before it, by
@@ -187,15 +296,18 @@ def dispatched(nodes, runtime: str) -> list:
     move), plus, where the runtime does not fuse a
     gated activation (``GATE_FUSED``), that activation's Mul as one element-wise pass over
     its output (one read, one write, one op per element), and, for the runtimes of
-    ``ACT_UNFUSED``, every other activation fused into a convolution as its own pass."""
+    ``ACT_UNFUSED``, every other activation fused into a convolution or matrix product as its
+    own pass (an exporter's chain written for one operator, ``fuse_patterns``, stays one
+    kernel: eager PyTorch runs that operator as one)."""
     gates = {n.fused_into: n.op_type for n in nodes
              if n.fused_into and n.op_type in ("Sigmoid", "HardSigmoid")}
     fused = GATE_FUSED.get(runtime, ())
+    layers = {n.name for n in nodes if n.kind in ("conv", "dwconv", "matmul")}
     out = []
     for n in nodes:
         if not n.fused_into:
             out.append(replace(n, in_elems=0, out_elems=0) if n.op_type in VIEWS else n)
-        elif (runtime in ACT_UNFUSED and n.kind == "elementwise"
+        elif (runtime in ACT_UNFUSED and n.kind == "elementwise" and n.fused_into in layers
               and n.op_type not in ("Sigmoid", "HardSigmoid", "Mul")):
             out.append(replace(n, fused_into=None))
         elif (n.op_type == "Mul" and n.fused_into in gates
@@ -205,4 +317,4 @@ def dispatched(nodes, runtime: str) -> list:
 
 
 __all__ = ["ACT_UNFUSED", "FOLDED", "GATE_FUSED", "QDQ", "QOPERATOR", "VIEWS", "dispatched", "fuse",
-           "fuse_qdq", "half_weights", "quantization"]
+           "fuse_patterns", "fuse_qdq", "half_weights", "quantization"]

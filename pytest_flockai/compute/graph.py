@@ -54,7 +54,7 @@ import onnx
 
 from .._io import atomic_write
 from ..errors import ConfigError
-from ._fusion import FOLDED, fuse, fuse_qdq, half_weights, quantization
+from ._fusion import FOLDED, fuse, fuse_patterns, fuse_qdq, half_weights, quantization
 from ._ops import is_folded, node_cost, weight_names
 from ._shapes import (
     constant_shapes,
@@ -306,7 +306,7 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
         nodes.append(NodeCost(label, node.op_type, kind, int(macs), elems(node.input, weight=True),
                               elems(node.input), elems(node.output),
                               FOLDED if is_const else None))
-    nodes = fuse_qdq(g, fuse(g, nodes))
+    nodes = fuse_qdq(g, fuse_patterns(g, fuse(g, nodes)))
     shape = next(iter(shapes.get(i.name) for i in graph_inputs(fixed)), None)
     meta: dict = {"shapes": how}
     quant = quantization(g)
