@@ -116,6 +116,12 @@ def winograd_3x3(n) -> bool:
 
 #: held-out rows a (computer, runtime) needs for its own band (else its target's band)
 MIN_BAND_ROWS = 4
+#: a band of this many held-out rows or more is the central ``BAND_COVER`` of their ratios
+#: (the 5th to the 95th percentile): one doubtful row among a hundred would otherwise set it
+#: (the CPU's band was x0.29..x8.1, set by four OpenVINO rows of one guide); with fewer
+#: rows it is their whole range
+BAND_QUANTILE_ROWS = 20
+BAND_COVER = 0.90
 #: publishers those rows must come from: rows of one publisher (two revisions of one maker's
 #: guide) measure that publisher's agreement with itself, not the spread a user will see
 MIN_BAND_SOURCES = 2
@@ -278,7 +284,7 @@ def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tupl
     tuned = table.get("tuned_computers")
     if tuned is not None and dev.name not in tuned and bands.get(f"untuned/*/{dep.target}"):
         b = bands[f"untuned/*/{dep.target}"]
-        return (seconds * float(b["min"]), seconds * float(b["max"]))
+        return (seconds * float(b.get("lo", b["min"])), seconds * float(b.get("hi", b["max"])))
     for key in (f"{dev.name}/{dep.runtime}", f"{dev.name}/*/{dep.target}"):
         b = bands.get(key)
         if (b and b.get("n", 0) >= MIN_BAND_ROWS
@@ -288,7 +294,7 @@ def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tupl
         b = bands.get(f"*/{dep.target}")
     if not b:
         return (seconds / 2.0, seconds * 2.0)       # untuned: the 2x bound
-    return (seconds * float(b["min"]), seconds * float(b["max"]))
+    return (seconds * float(b.get("lo", b["min"])), seconds * float(b.get("hi", b["max"])))
 
 
 def _cost(model, input_shape):
@@ -377,7 +383,7 @@ def _measured(model, dev) -> LatencyPrediction:
                              math.nan)
 
 
-__all__ = ["ACT_UNFUSED", "EFFICIENCIES", "FALLBACK", "KINDS", "MIN_BAND_ROWS", "MIN_BAND_SOURCES", "param_stream", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
+__all__ = ["ACT_UNFUSED", "BAND_COVER", "BAND_QUANTILE_ROWS", "EFFICIENCIES", "FALLBACK", "KINDS", "MIN_BAND_ROWS", "MIN_BAND_SOURCES", "param_stream", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",
            "stream_gbs", "winograd_3x3", "LatencyFallbackWarning", "LatencyPrediction",
            "above_idle_w", "efficiencies", "mac_rule_seconds", "params_for", "predict_latency",
            "roofline"]

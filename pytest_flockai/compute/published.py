@@ -22,7 +22,7 @@ from ..errors import ConfigError
 from . import runtimes as _rt
 from .devices import DEVICES
 from .graph import NetworkCost
-from .predict import above_idle_w, params_for, roofline
+from .predict import BAND_COVER, BAND_QUANTILE_ROWS, above_idle_w, params_for, roofline
 
 DATA = Path(__file__).with_name("data")
 TABLE = DATA / "published_latency.csv"
@@ -199,6 +199,17 @@ def summary(rows: list[Row], table: dict) -> dict:
     return out
 
 
+def band_of(values) -> dict:
+    """{"min", "max", "lo", "hi", "n"} of published/predicted ratios: ``lo``..``hi`` is what
+    ``LatencyPrediction.band`` scales by: the central ``BAND_COVER`` of them (5th to 95th
+    percentile) with ``BAND_QUANTILE_ROWS`` or more, else their whole range."""
+    v = np.asarray(values, dtype=float)
+    tail = (1.0 - BAND_COVER) / 2.0
+    lo, hi = ((float(np.quantile(v, tail)), float(np.quantile(v, 1.0 - tail)))
+              if v.size >= BAND_QUANTILE_ROWS else (float(v.min()), float(v.max())))
+    return {"min": float(v.min()), "max": float(v.max()), "lo": lo, "hi": hi, "n": int(v.size)}
+
+
 def bands(rows: list[Row], table: dict) -> dict:
     """Held-out published/predicted ranges per ``computer/runtime``, per ``computer/*/target``
     (every runtime of that computer on that unit) and per ``*/target`` (what
@@ -218,7 +229,7 @@ def bands(rows: list[Row], table: dict) -> dict:
             groups.setdefault(key(x), []).append(float(v))
             who.setdefault(key(x), set()).add(x.publisher or x.source_id)
         for k, v in groups.items():
-            out[k] = {"min": min(v), "max": max(v), "n": len(v), "sources": len(who[k])}
+            out[k] = {**band_of(v), "sources": len(who[k])}
     return out
 
 
@@ -264,5 +275,5 @@ def energy_check(table: dict, path: Path = ENERGY, networks: Path = NETWORKS) ->
     return out
 
 
-__all__ = ["ENERGY", "NETWORKS", "at_cpu_clock", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
+__all__ = ["ENERGY", "NETWORKS", "at_cpu_clock", "band_of", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
            "predict_row", "ratios", "summary"]

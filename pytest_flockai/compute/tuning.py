@@ -61,7 +61,7 @@ from .predict import (
     thread_share,
     winograd_3x3,
 )
-from .published import BOARD, predict_row
+from .published import BOARD, band_of, predict_row
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s",
@@ -288,7 +288,7 @@ def _abs_ln_stats(ratios) -> dict:
 
 
 def loco_bands(cv: dict) -> dict:
-    """{"untuned/*/<target>": {"min", "max", "n", "sources"}}: the range of published /
+    """{"untuned/*/<target>": {"min", "max", "lo", "hi", "n", "sources"}}: the range of published /
     predicted over the held-out rows of ``loco``'s boards, each predicted by a fit that never
     saw it (``sources``: the boards)."""
     out: dict = {}
@@ -298,8 +298,7 @@ def loco_bands(cv: dict) -> dict:
         b = out.setdefault(f"untuned/*/{target}", {"v": [], "boards": set()})
         b["v"].append(1.0 / ratio)
         b["boards"].add(board)
-    return {k: {"min": min(b["v"]), "max": max(b["v"]), "n": len(b["v"]),
-                "sources": len(b["boards"])} for k, b in out.items()}
+    return {k: {**band_of(b["v"]), "sources": len(b["boards"])} for k, b in out.items()}
 
 
 def tuned_computers(rows) -> list[str]:

@@ -182,6 +182,23 @@ def test_a_band_needs_rows_of_two_publishers():
             rest == f"*/{r.target}" if rest.startswith("*/") else
             rest == r.target if comp == "*" else rest == r.runtime)]
         assert b["n"] == len(mine) and b["sources"] == len({r.publisher for r in mine}), key
+        inv = 1.0 / published.ratios(mine, table)
+        assert (b["min"], b["max"]) == pytest.approx((inv.min(), inv.max())), key
+
+
+def test_a_band_of_many_rows_is_their_central_ninety_percent():
+    """One doubtful row among many does not set the band; a few rows give their range."""
+    from pytest_flockai.compute import predict, published
+    many = [1.0] * 10 + [1.1] * 10 + [0.9] * 10 + [8.0]          # 31 rows, one far out
+    b = published.band_of(many)
+    assert (b["min"], b["max"], b["n"]) == (0.9, 8.0, 31)
+    assert b["lo"] == pytest.approx(0.9) and b["hi"] == pytest.approx(1.1)
+    few = published.band_of([0.5, 1.0, 3.0])
+    assert few["lo"] == 0.5 and few["hi"] == 3.0 and predict.BAND_QUANTILE_ROWS > 3
+    pi4 = DEVICES["raspberry-pi-4"]
+    dep = runtimes.resolve(pi4, "onnxruntime", "fp32", "cpu")
+    table = {"bands": {"*/cpu": {**b, "sources": 5}}}
+    assert predict._band(table, pi4, dep, 2.0) == pytest.approx((1.8, 2.2))
 
 
 def test_a_row_measured_at_another_cpu_clock_is_predicted_at_that_clock():

@@ -59,7 +59,7 @@ def test_a_copied_datasheet_predicts_what_the_profile_does_with_the_untuned_band
         assert b.seconds == pytest.approx(a.seconds, rel=1e-12)
         assert b.energy_j == pytest.approx(a.energy_j, rel=1e-12)
         u = table["bands"]["untuned/*/cpu"]
-        assert b.band == pytest.approx((b.seconds * u["min"], b.seconds * u["max"]))
+        assert b.band == pytest.approx((b.seconds * u["lo"], b.seconds * u["hi"]))
     assert mine.deployments == DEVICES["raspberry-pi-4"].deployments
     assert "never tuned" in mine.source
 
