@@ -117,6 +117,16 @@ def fuse(g, nodes: list) -> list:
         c = consumers.get(t, [])
         return c[0] if len(c) == 1 and t not in outputs and c[0] not in fused else None
 
+    def through(t):
+        """``t``, or past a QuantizeLinear -> DequantizeLinear pair that alone reads it (a
+        QDQ graph: the pair is absorbed by ``fuse_qdq``, the layer fuses as in float)."""
+        q = only(t)
+        if q is not None and g.node[q].op_type == "QuantizeLinear":
+            dq = only(g.node[q].output[0])
+            if dq is not None and g.node[dq].op_type == "DequantizeLinear":
+                return g.node[dq].output[0]
+        return t
+
     for i, node in enumerate(g.node):
         op = node.op_type
         if nodes[i].fused_into is not None or i in fused or not node.output:
@@ -133,13 +143,20 @@ def fuse(g, nodes: list) -> list:
         if j is not None and g.node[j].op_type in ACTIVATIONS:
             fused[j] = head
             continue
+        t = through(t)
+        j = only(t)
+        if j is not None and g.node[j].op_type in ACTIVATIONS:
+            fused[j] = head
+            continue
         c = consumers.get(t, [])          # x * Sigmoid(x), x * HardSigmoid(x)
         if len(c) == 2 and t not in outputs and not (set(c) & set(fused)):
             a, b = sorted(c, key=lambda k: g.node[k].op_type != "Mul")
             gate = g.node[b]
-            if (g.node[a].op_type == "Mul" and gate.op_type in ("Sigmoid", "HardSigmoid")
-                    and gate.output[0] in g.node[a].input
-                    and consumers.get(gate.output[0]) == [a]):
+            if gate.op_type not in ("Sigmoid", "HardSigmoid") or not gate.output:
+                continue
+            gt = through(gate.output[0])
+            if (g.node[a].op_type == "Mul" and gt in g.node[a].input
+                    and consumers.get(gt) == [a]):
                 fused[a] = fused[b] = head
     return [replace(n, fused_into=fused[i]) if i in fused else n for i, n in enumerate(nodes)]
 

@@ -213,3 +213,33 @@ def test_a_float_graph_on_the_edge_tpu_warns_that_it_needs_int8(nets):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         predict_latency(nets["qdq"], "coral-dev-board", runtime="edgetpu")
+
+
+def test_a_qdq_silu_fuses_as_its_float_graph_does(tmp_path):
+    """SiLU (x * Sigmoid(x)) after a convolution, quantized: its Q/DQ pairs sit between the
+    convolution, the gate and the Mul; the layer fuses through them as in float, so the QDQ
+    graph and its float graph run the same kernels at int8 (it ran two more passes per layer)."""
+    rng = np.random.default_rng(2)
+    nodes, inits, src, c = [], [], "x", 3
+    for i, co in enumerate((16, 32, 32)):
+        nodes += [helper.make_node("Conv", [src, f"w{i}", f"b{i}"], [f"c{i}"], name=f"conv{i}",
+                                   pads=[1, 1, 1, 1], kernel_shape=[3, 3]),
+                  helper.make_node("Sigmoid", [f"c{i}"], [f"s{i}"], name=f"sig{i}"),
+                  helper.make_node("Mul", [f"c{i}", f"s{i}"], [f"m{i}"], name=f"silu{i}")]
+        inits += [numpy_helper.from_array(0.1 * rng.standard_normal((co, c, 3, 3)).astype(
+            np.float32), f"w{i}"), numpy_helper.from_array(np.zeros(co, np.float32), f"b{i}")]
+        src, c = f"m{i}", co
+    g = helper.make_graph(nodes, "silu", [helper.make_tensor_value_info(
+        "x", TensorProto.FLOAT, [1, 3, SIDE, SIDE])], [helper.make_tensor_value_info(
+            src, TensorProto.FLOAT, [1, c, SIDE, SIDE])], inits)
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    onnx.save(m, str(tmp_path / "f.onnx"))
+    quantize_static(str(tmp_path / "f.onnx"), str(tmp_path / "q.onnx"), _Frames(),
+                    quant_format=QuantFormat.QDQ)
+    q, f = analyze(tmp_path / "q.onnx"), analyze(tmp_path / "f.onnx")
+    assert {n.op_type for n in q.nodes if n.op_type in ("Sigmoid", "Mul") and n.fused_into}
+    for computer, runtime in (("jetson-orin-nano", "tensorrt"), ("raspberry-pi-5", "onnxruntime")):
+        a = predict_latency(q, computer, runtime=runtime).seconds
+        b = predict_latency(f, computer, runtime=runtime, precision="int8").seconds
+        assert a == pytest.approx(b, rel=0.05), (computer, runtime)
