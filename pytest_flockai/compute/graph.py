@@ -327,6 +327,13 @@ def _refuse_or_warn(cost: NetworkCost, error, allow: bool) -> None:
                                              if len(cost.uncounted) > 8 else "")
     text = (f"{len(cost.uncounted)} of {n_run} nodes of {cost.name or 'the model'!r} "
             f"({share:.1%}) are not counted: {shown}" + (f" ({error})" if error else ""))
+    if error and any("shapes unknown" in u for u in cost.uncounted) and not any(
+            "custom domain" in u for u in cost.uncounted):
+        # the shapes are unknown because the model does not run (not for an operator of
+        # another domain, named first as it is): say that first
+        text = (f"{cost.name or 'the model'!r} does not run in ONNX Runtime, so the shapes of "
+                f"{len(cost.uncounted)} of its {n_run} nodes are unknown ({error}); first "
+                f"nodes: {shown}")
     if not allow:
         raise ConfigError(f"{text}. Its cost would be under-counted; pass allow_uncounted=True "
                           f"to count them as 0 with a warning, or state the MACs yourself "

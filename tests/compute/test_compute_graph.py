@@ -314,3 +314,21 @@ def test_a_transformer_block_as_the_legacy_exporter_writes_it_is_counted():
     assert by["ff1"].macs == seq * d * ff and by["ff2"].macs == seq * ff * d
     assert by["softmax"].macs == seq * seq and by["cumsum"].macs == seq * d
     assert by["ln"].kind == by["gelu/erf"].kind == "elementwise"
+
+
+def test_a_model_that_does_not_run_says_so_first(tmp_path):
+    """Shapes unknown because ONNX Runtime cannot run the model (here a Conv fed fp16 with
+    fp32 weights, as a broken fp16 conversion writes): the error leads with that cause."""
+    w = numpy_helper.from_array(np.ones((4, 3, 3, 3), np.float32), "w")
+    g = helper.make_graph([helper.make_node("Cast", ["x"], ["h"], to=TensorProto.FLOAT16),
+                           helper.make_node("Conv", ["h", "w"], ["y"], kernel_shape=[3, 3])],
+                          "bad", [helper.make_tensor_value_info("x", TensorProto.FLOAT,
+                                                                [1, 3, 8, 8])],
+                          [helper.make_tensor_value_info("y", TensorProto.FLOAT, None)], [w])
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 17)])
+    m.ir_version = 8
+    onnx.save(m, str(tmp_path / "bad.onnx"))
+    with pytest.raises(ConfigError, match=r"^'bad' does not run in ONNX Runtime, so the shapes "
+                                          r"of 1 of its 2 nodes are unknown \(onnxruntime run "
+                                          r"for shapes failed: .*Conv"):
+        analyze(tmp_path / "bad.onnx")
