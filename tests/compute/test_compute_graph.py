@@ -329,6 +329,6 @@ def test_a_model_that_does_not_run_says_so_first(tmp_path):
     m.ir_version = 8
     onnx.save(m, str(tmp_path / "bad.onnx"))
     with pytest.raises(ConfigError, match=r"^'bad' does not run in ONNX Runtime, so the shapes "
-                                          r"of 1 of its 2 nodes are unknown \(onnxruntime run "
-                                          r"for shapes failed: .*Conv"):
+                                          r"of 1 of its 2 nodes are unknown \(.*onnxruntime "
+                                          r"run for shapes failed: .*Conv"):
         analyze(tmp_path / "bad.onnx")
