@@ -72,14 +72,7 @@ def half_weights(g) -> bool:
 def fuse_qdq(g, nodes: list) -> list:
     """Absorb the activations' QuantizeLinear / DequantizeLinear nodes into the layer they
     wrap (the module docstring); folded (weight) DQ nodes stay folded."""
-    producer: dict[str, int] = {}
-    for i, node in enumerate(g.node):
-        for o in node.output:
-            producer[o] = i
-    consumers: dict[str, list[int]] = {}
-    for i, node in enumerate(g.node):
-        for t in node.input:
-            consumers.setdefault(t, []).append(i)
+    producer, consumers = _links(g)
     head: dict[int, str] = {}
 
     def owner(i: int) -> str | None:
@@ -105,10 +98,7 @@ def fuse_qdq(g, nodes: list) -> list:
 
 def fuse(g, nodes: list) -> list:
     """Mark BatchNorm / bias / activation nodes fused into the Conv or MatMul before them."""
-    consumers: dict[str, list[int]] = {}
-    for i, node in enumerate(g.node):
-        for t in node.input:
-            consumers.setdefault(t, []).append(i)
+    _, consumers = _links(g)
     outputs = {o.name for o in g.output}
     fused: dict[int, str] = {}
     inits = frozenset(_constant_names(g))
@@ -172,13 +162,7 @@ def fuse_patterns(g, nodes: list) -> list:
     ``LayerNormalization`` node of a newer exporter does; the others are fused into it."""
     outputs = {o.name for o in g.output}
     consts = frozenset(_constant_names(g))
-    prod: dict[str, int] = {}
-    cons: dict[str, list[int]] = {}
-    for i, node in enumerate(g.node):
-        for o in node.output:
-            prod[o] = i
-        for t in node.input:
-            cons.setdefault(t, []).append(i)
+    prod, cons = _links(g)
     taken: set[int] = set()
 
     def free(i) -> bool:
@@ -196,7 +180,7 @@ def fuse_patterns(g, nodes: list) -> list:
         ins = list(g.node[i].input)
         return ins[1 - ins.index(t)] if len(ins) == 2 and t in ins else None
 
-    chains = []
+    chains: list[list[int]] = []
     for i, node in enumerate(g.node):
         if not free(i) or not node.input:
             continue
@@ -222,7 +206,7 @@ def fuse_patterns(g, nodes: list) -> list:
             f = next_of(m, "Mul")
             if f is not None and other(f, g.node[m].output[0]) in consts:
                 chain.append(f)
-            chains.append((x, chain))
+            chains.append(chain)
         elif node.op_type == "ReduceMean":          # the layer-norm chain, from its mean
             x = node.input[0]
             sub = next_of(i, "Sub")
@@ -246,13 +230,13 @@ def fuse_patterns(g, nodes: list) -> list:
                 if k is None or other(k, g.node[chain[-1]].output[0]) not in consts:
                     break
                 chain.append(k)
-            chains.append((x, chain))
+            chains.append(chain)
         else:
             continue
-        taken.update(chains[-1][1])
+        taken.update(chains[-1])
 
     out = list(nodes)
-    for _x, chain in chains:
+    for chain in chains:
         last = chain[-1]
         n = out[last]
         size = n.out_elems
@@ -261,6 +245,18 @@ def fuse_patterns(g, nodes: list) -> list:
         for k in chain[:-1]:
             out[k] = replace(out[k], fused_into=n.name)
     return out
+
+
+def _links(g) -> tuple[dict[str, int], dict[str, list[int]]]:
+    """({tensor: the node writing it}, {tensor: the nodes reading it}) of the graph ``g``."""
+    producer: dict[str, int] = {}
+    consumers: dict[str, list[int]] = {}
+    for i, node in enumerate(g.node):
+        for o in node.output:
+            producer[o] = i
+        for t in node.input:
+            consumers.setdefault(t, []).append(i)
+    return producer, consumers
 
 
 def _constant_names(g) -> list[str]:

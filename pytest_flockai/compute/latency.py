@@ -58,17 +58,13 @@ def device_value(value, where: str) -> tuple[str, Device | None]:
     """(the name ``Drone.device`` holds, the profile) of a profile name, "none", a ``Device``
     (``fa.compute.computer``) or a measured profile (``fa.compute.profile``); ConfigError
     naming ``where`` otherwise."""
-    if isinstance(value, str) and value == "none":
+    if value == "none":
         return value, None
-    if isinstance(value, str) and value:
-        try:
-            return value, _device(value)
-        except ConfigError as e:
-            raise ConfigError(f"{where}: device = {value!r}: {e}") from None
     try:
         dev = resolve_device(value, "device")
     except ConfigError as e:
-        raise ConfigError(f"{where}: {e}; or \"none\"") from None
+        raise ConfigError(f"{where}: {e}" + ("" if isinstance(value, str) else "; or \"none\"")
+                          ) from None
     return dev.name, dev
 
 

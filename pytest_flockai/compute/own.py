@@ -83,16 +83,15 @@ def _strict(name: str, t: dict, where: str) -> None:
         raise ConfigError(f"{at} has no [cpu], [gpu] or [npu] table; a computer needs at "
                           f"least one unit")
     for k in units:
-        u = t[k]
+        u, unit_at = t[k], f"{where}: [computers.{name}.{k}]"
         need = (("cores", "clock_ghz", "fp32_flop_per_cycle_per_core") if k == "cpu" else
                 ("clock_ghz",) if k == "gpu" else ("int8_tops",))
         for f in need:
             if f not in u:
-                raise ConfigError(f"{at[:-1]}.{k}] {f} is missing; a {k} needs "
-                                  f"{', '.join(need)}")
+                raise ConfigError(f"{unit_at} {f} is missing; a {k} needs {', '.join(need)}")
         if k == "gpu" and not any(u.get(f) for f in ("fp32_tflops", "fp16_tflops",
                                                      "fp16_tensor_tflops", "int8_tops")):
-            raise ConfigError(f"{at[:-1]}.gpu] has no peak; give fp32_tflops, fp16_tflops, "
+            raise ConfigError(f"{unit_at} has no peak; give fp32_tflops, fp16_tflops, "
                               f"fp16_tensor_tflops or int8_tops (dense, not sparse)")
     if ("cpu" in units or "gpu" in units) and "memory_bandwidth_gbs" not in t:
         raise ConfigError(f"{at} memory_bandwidth_gbs is missing; the datasheet's memory "
@@ -150,10 +149,10 @@ def _tables(source) -> tuple[dict, str]:
 
 def computers(source) -> dict[str, Device]:
     """Every computer of the datasheet file ``source``, by name (``computer`` checks each)."""
-    comps, where = _tables(source)
     if isinstance(source, dict):
         raise ConfigError("source: computers() reads a file; for one table use "
                           "computer(table, name=...)")
+    comps, where = _tables(source)
     return {n: _one(n, t, where) for n, t in comps.items()}
 
 

@@ -280,11 +280,20 @@ def above_idle_w(dev: Device, dep: _rt.Deployment | None) -> float:
 
 def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tuple[float, float]:
     bands = table.get("bands", {})
-    b = None
     tuned = table.get("tuned_computers")
     if tuned is not None and dev.name not in tuned and bands.get(f"untuned/*/{dep.target}"):
         b = bands[f"untuned/*/{dep.target}"]
-        return (seconds * float(b.get("lo", b["min"])), seconds * float(b.get("hi", b["max"])))
+    else:
+        b = _own_band(bands, dev, dep)
+    if not b:
+        return (seconds / 2.0, seconds * 2.0)       # untuned: the issue's 2x bound
+    return (seconds * float(b.get("lo", b["min"])), seconds * float(b.get("hi", b["max"])))
+
+
+def _own_band(bands: dict, dev: Device, dep: _rt.Deployment) -> dict | None:
+    """The band of this computer and runtime, else of this computer on the unit, else of
+    every computer on the unit (``LatencyPrediction``)."""
+    b = None
     for key in (f"{dev.name}/{dep.runtime}", f"{dev.name}/*/{dep.target}"):
         b = bands.get(key)
         if (b and b.get("n", 0) >= MIN_BAND_ROWS
@@ -292,9 +301,7 @@ def _band(table: dict, dev: Device, dep: _rt.Deployment, seconds: float) -> tupl
             break
     else:           # too few rows on this computer: the target's held-out range
         b = bands.get(f"*/{dep.target}")
-    if not b:
-        return (seconds / 2.0, seconds * 2.0)       # untuned: the issue's 2x bound
-    return (seconds * float(b.get("lo", b["min"])), seconds * float(b.get("hi", b["max"])))
+    return b
 
 
 def _cost(model, input_shape):

@@ -222,23 +222,19 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
                           f"computer {device.name!r}; allowed: {', '.join(targets)}")
     unit = device.unit(target)
     precs = [p for p in unit.precisions if p in RUNTIME_PRECISIONS[runtime]]
-    if precision is None and quantized:   # an int8 graph runs its int8 kernels
-        if "int8" in precs:
-            precision = "int8"
+    # the graph's own precision (an int8 or an fp16 graph runs its own kernels) where the
+    # deployment runs it
+    own, what, cls = (("int8", f"is quantized (int8, {quantized})", QuantizedModelWarning)
+                      if quantized else ("fp16", "'s weights are fp16", HalfModelWarning)
+                      if half else (None, "", None))
+    if precision is None and own is not None:
+        if own in precs:
+            precision = own
         else:
-            warnings.warn(f"{w}the model is quantized (int8, {quantized}) but runtime "
-                          f"{runtime!r} on the {target} of computer {device.name!r} cannot run "
-                          f"int8 (allowed there: {', '.join(precs) or 'none'}); predicted at "
-                          f"the runtime's default precision", QuantizedModelWarning,
-                          stacklevel=3)
-    elif precision is None and half:      # an fp16 graph runs its fp16 kernels
-        if "fp16" in precs:
-            precision = "fp16"
-        else:
-            warnings.warn(f"{w}the model's weights are fp16 but runtime {runtime!r} on the "
-                          f"{target} of computer {device.name!r} cannot run fp16 (allowed "
-                          f"there: {', '.join(precs) or 'none'}); predicted at the runtime's "
-                          f"default precision", HalfModelWarning, stacklevel=3)
+            warnings.warn(f"{w}the model{what} but runtime {runtime!r} on the {target} of "
+                          f"computer {device.name!r} cannot run {own} (allowed there: "
+                          f"{', '.join(precs) or 'none'}); predicted at the runtime's default "
+                          f"precision", cls, stacklevel=3)
     if precision is None and runtime == "edgetpu" and not quantized:
         warnings.warn(f"{w}the model is a float graph; the Edge TPU runs only full-integer "
                       f"(int8) models compiled by its compiler: predicted as if quantized to "

@@ -61,7 +61,7 @@ from .predict import (
     thread_share,
     winograd_3x3,
 )
-from .published import BOARD, band_of, predict_row
+from .published import BOARD, _stats, band_of, predict_row
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s",
@@ -282,9 +282,9 @@ def loco(rows, fallback: dict | None = None, boards=None) -> dict:
 
 
 def _abs_ln_stats(ratios) -> dict:
-    a = np.abs(np.log(ratios))
-    return {"n": len(a), "median_abs_ln": float(np.median(a)),
-            "within_2x": int(np.sum(a <= math.log(2.0)))}
+    """``published``'s statistics of ratios predicted/published, the ones ``loco`` keeps."""
+    s = _stats(np.asarray(ratios, dtype=float))
+    return {k: s[k] for k in ("n", "median_abs_ln", "within_2x")}
 
 
 def loco_bands(cv: dict) -> dict:
