@@ -386,8 +386,9 @@ def _measured(model, dev) -> LatencyPrediction:
     idle = getattr(dev, "idle_w", None)
     e = p50 * (busy - idle) if busy is not None and idle is not None else math.nan
     return LatencyPrediction(p50, (p5, p95), e, str(getattr(dev, "name", "measured")),
-                             getattr(dev, "runtime", None), None, None, None, "measured",
-                             math.nan)
+                             getattr(dev, "runtime", None), getattr(dev, "target", None),
+                             getattr(dev, "precision", None), getattr(dev, "threads", None),
+                             "measured", math.nan)
 
 
 __all__ = ["ACT_UNFUSED", "BAND_COVER", "BAND_QUANTILE_ROWS", "EFFICIENCIES", "FALLBACK", "KINDS", "MIN_BAND_ROWS", "MIN_BAND_SOURCES", "param_stream", "GATE_FUSED", "PRIOR_WINOGRAD", "dispatched", "STREAM_OF_PEAK", "WINOGRAD",

@@ -1,13 +1,16 @@
 """``flockai profile-device``: time models on this computer and write a profile.
 
-    flockai profile-device MODEL.onnx [MODEL2.onnx ...] --runtime onnxruntime
+    flockai profile-device MODEL.onnx [MODEL2.onnx ...] --runtime onnxruntime|opencv-dnn|openvino
         [--target cpu|gpu] [--threads N] [--runs N] [--warmup N] [--input-shape 1x3x640x640]
         [--power-csv FILE [--idle-w W]] [--jetson-rails] [--name NAME] --out profile.json
 
 Each model runs ``warmup`` times untimed, then ``runs`` times timed one by one
 (``time.perf_counter`` around the runtime's call, batch 1, a fixed seeded input). The
 profile records every timed latency, the runtime and its version, the threads, the
-host's facts (CPU, cores, board model, memory, OS) and, when given, the busy power:
+host's facts (CPU, cores, board model, memory, OS), what the runtime reports it
+computed with (``runtime.execution``: ONNX Runtime's providers; OpenVINO's device, threads
+and precision, which it picks itself: a float graph timed in bf16 or f16 is recorded as
+``fp16``) and, when given, the busy power. The runtimes are in ``runners``. Busy power:
 
 - ``--power-csv``: a watt meter's log, a CSV with a power column (``power_w``, ``watts``
   or ``power``) and optionally ``time_s`` (Unix seconds). With times, busy power is the
@@ -41,8 +44,7 @@ from .._io import atomic_write
 from ..errors import ConfigError
 from .graph import analyze
 from .profile import RUNTIMES, SCHEMA, from_dict, model_sha256
-
-MEASURABLE = ("onnxruntime", "opencv-dnn")
+from .runners import MEASURABLE, OV_PRECISION, runner, targets
 
 
 def add_parser(sub) -> None:
@@ -50,7 +52,8 @@ def add_parser(sub) -> None:
                                               "runtime and write a device profile")
     p.add_argument("models", type=Path, nargs="+", metavar="MODEL.onnx")
     p.add_argument("--runtime", default="onnxruntime", help=f"one of {', '.join(MEASURABLE)}")
-    p.add_argument("--target", default="cpu", help="cpu or gpu (onnxruntime's CUDA provider)")
+    p.add_argument("--target", default="cpu", help="cpu or gpu (onnxruntime's CUDA provider, "
+                                                   "OpenVINO's GPU device)")
     p.add_argument("--threads", type=int, default=None, help="intra-op threads (runtime "
                                                              "default when absent)")
     p.add_argument("--runs", type=int, default=50, help="timed runs per model (default 50)")
@@ -114,9 +117,9 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
         where = "known but not measurable here" if runtime in RUNTIMES else "unknown"
         raise ConfigError(f"--runtime = {runtime!r} is not allowed ({where}); profile-device "
                           f"measures with: {', '.join(MEASURABLE)}")
-    if target not in ("cpu", "gpu") or (runtime == "opencv-dnn" and target != "cpu"):
+    if target not in targets(runtime):
         raise ConfigError(f"--target = {target!r} is not allowed with --runtime {runtime}; "
-                          f"allowed: {['cpu', 'gpu'] if runtime == 'onnxruntime' else ['cpu']}")
+                          f"allowed: {list(targets(runtime))}")
     _check_int("runs", runs, 1)
     _check_int("warmup", warmup, 0)
     if threads is not None:
@@ -132,11 +135,12 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
         rails.start()
         time.sleep(2.0)
         rails.mark_busy()
-    out_models, version = [], ""
+    out_models, version, execution = [], "", {}
     try:
         for path in models:
             sha = model_sha256(path)
-            run, feed_shape, version = _runner(path, runtime, target, threads, shape, seed)
+            r = runner(path, runtime, target, threads, shape, seed)
+            run, feed_shape, version, execution = r.run, r.input_shape, r.version, r.execution
             for _ in range(warmup):
                 run()
             t_busy = time.time()
@@ -156,67 +160,19 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
     for m in out_models:
         del m["t_busy"]
     host = host_facts()
+    precision = _precision(models[0])
+    if precision == "fp32":     # the runtime's own choice (OpenVINO: bf16 or f16 on some CPUs)
+        precision = OV_PRECISION.get(str(execution.get("precision", "f32")), precision)
+    libraries = {"onnxruntime": ort.__version__, "opencv": cv2.__version__,
+                 "onnx": onnx.__version__, "numpy": np.__version__}
+    if runtime == "openvino":
+        libraries["openvino"] = version
     return {"schema": SCHEMA, "name": name or host.get("board") or host["machine"],
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "runtime": {"name": runtime, "version": version, "target": target,
-                        "precision": _precision(models[0]), "threads": threads,
-                        "libraries": {"onnxruntime": ort.__version__, "opencv": cv2.__version__,
-                                      "onnx": onnx.__version__, "numpy": np.__version__}},
+                        "precision": precision, "threads": threads, "execution": execution,
+                        "libraries": libraries},
             "host": host, "power": power, "models": out_models}
-
-
-def _runner(path, runtime, target, threads, shape, seed):
-    """(a no-argument call running one inference, the input shape, runtime version)."""
-    proto = onnx.load(os.fspath(path), load_external_data=False)
-    inits = {i.name for i in proto.graph.initializer}
-    inp = next(i for i in proto.graph.input if i.name not in inits)
-    dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else None
-            for d in inp.type.tensor_type.shape.dim]
-    if shape is not None:       # it fills the dims the model leaves open; fixed dims stay
-        if len(shape) != len(dims):
-            raise ConfigError(f"--input-shape = {'x'.join(map(str, shape))!r} has rank "
-                              f"{len(shape)}; {str(path)!r} input {inp.name!r} has rank {len(dims)}")
-        dims = [g if d is None else d for d, g in zip(dims, shape)]
-    elif dims and dims[0] is None:
-        dims[0] = 1
-    if any(d is None for d in dims):
-        raise ConfigError(f"model {str(path)!r}: input {inp.name!r} has dims "
-                          f"{[d or '?' for d in dims]}; give --input-shape")
-    rng = np.random.default_rng(seed)
-    elem = inp.type.tensor_type.elem_type
-    dtype = {onnx.TensorProto.FLOAT16: np.float16, onnx.TensorProto.UINT8: np.uint8,
-             onnx.TensorProto.INT8: np.int8}.get(elem, np.float32)
-    x = (rng.integers(0, 128, dims).astype(dtype) if dtype in (np.uint8, np.int8)
-         else rng.random(dims).astype(dtype))
-    if runtime == "opencv-dnn":
-        try:
-            net = cv2.dnn.readNetFromONNX(os.fspath(path))
-        except cv2.error as e:
-            raise ConfigError(f"model {str(path)!r}: --runtime opencv-dnn ({cv2.__version__}) "
-                              f"cannot load it: {str(e).strip()[-200:]}") from None
-        if threads is not None:
-            cv2.setNumThreads(threads)
-
-        def run_cv():
-            net.setInput(x)
-            net.forward()
-        return run_cv, tuple(dims), cv2.__version__
-    opts = ort.SessionOptions()
-    if threads is not None:
-        opts.intra_op_num_threads = threads
-    providers = ["CPUExecutionProvider"]
-    if target == "gpu":
-        if "CUDAExecutionProvider" not in ort.get_available_providers():
-            raise ConfigError(f"--target = 'gpu' is not allowed here: onnxruntime "
-                              f"{ort.__version__} has providers {ort.get_available_providers()}")
-        providers.insert(0, "CUDAExecutionProvider")
-    try:
-        sess = ort.InferenceSession(os.fspath(path), opts, providers=providers)
-    except Exception as e:  # noqa: BLE001 (onnxruntime's own exception types)
-        raise ConfigError(f"model {str(path)!r}: --runtime onnxruntime ({ort.__version__}) "
-                          f"cannot load it: {str(e).strip()[:200]}") from None
-    feeds = {inp.name: x}
-    return (lambda: sess.run(None, feeds)), tuple(dims), ort.__version__
 
 
 def _macs(path, shape):

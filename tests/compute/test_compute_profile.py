@@ -3,6 +3,7 @@ compute.profile(): the measured samples, seeded draws, power, and bad profile fi
 
 import hashlib
 import json
+import sys
 import time
 
 import cv2
@@ -168,3 +169,52 @@ def test_input_shape_fills_the_open_dims_and_keeps_the_fixed_ones(tmp_path):
     dev = fa.compute.profile(tmp_path / "p.json")
     assert dev.model(open_net).input_shape == (1, 3, 48, 48)
     assert dev.model(fixed).input_shape == (1, 3, 32, 32)
+
+
+def test_openvino_times_the_onnx_file_itself_and_records_what_it_computed_with(tmp_path):
+    """--runtime openvino reads the ONNX file a task flies (its SHA-256 matches), runs it at
+    the threads asked, records the precision OpenVINO chose, and the measured samples are
+    what predict_latency and a flight's draws answer with."""
+    ov = pytest.importorskip("openvino")
+    small, wide = _net(tmp_path, "s.onnx", 8), _net(tmp_path, "w.onnx", 32)
+    doc = measure([small, wide], runtime="openvino", threads=1, runs=40, warmup=3,
+                  input_shape="1x3x64x64", name="ov-host")
+    write(doc, tmp_path / "ov.json")
+    dev = fa.compute.profile(tmp_path / "ov.json")
+    rt = doc["runtime"]
+    assert dev.runtime == "openvino" and dev.runtime_version == ov.__version__
+    assert rt["libraries"]["openvino"] == ov.__version__
+    assert rt["execution"]["device"] == "CPU" and rt["execution"]["threads"] == 1
+    # the precision OpenVINO computed in, as the profile's precision class
+    chosen = rt["execution"]["precision"]
+    assert chosen in ("f32", "bf16", "f16")
+    assert dev.precision == ("fp32" if chosen == "f32" else "fp16")
+    assert set(dev.models) == {model_sha256(small), model_sha256(wide)}
+    assert np.median(dev.latency_samples(wide)) > np.median(dev.latency_samples(small))
+    p = fa.compute.predict_latency(small, dev)
+    assert p.method == "measured" and p.seconds == pytest.approx(
+        np.percentile(dev.latency_samples(small), 50))
+    assert (p.runtime, p.target, p.precision, p.threads) == ("openvino", "cpu",
+                                                            dev.precision, 1)
+
+
+def test_openvino_refusals_say_why(tmp_path, monkeypatch, capsys):
+    """Not installed, a device it does not have, a file it cannot read: one-line errors."""
+    pytest.importorskip("openvino")
+    net, out = _net(tmp_path, "n.onnx", 8), tmp_path / "p.json"
+    bad = tmp_path / "bad.onnx"
+    bad.write_bytes(net.read_bytes()[:-40])
+    with pytest.raises(ConfigError, match="bad.onnx"):
+        measure([bad], runtime="openvino", runs=1, warmup=0)
+    import openvino
+    if "GPU" not in openvino.Core().available_devices:
+        assert main(["profile-device", str(net), "--runtime", "openvino", "--target", "gpu",
+                     "--out", str(out)]) == 2
+        assert "--target = 'gpu' is not allowed here: OpenVINO" in capsys.readouterr().err
+    assert main(["profile-device", str(net), "--runtime", "opencv-dnn", "--target", "gpu",
+                 "--out", str(out)]) == 2
+    assert "allowed: ['cpu']" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "openvino", None)      # as if it were not installed
+    with pytest.raises(ConfigError, match=r"OpenVINO is not installed.*pip install openvino"):
+        measure([net], runtime="openvino", runs=1, warmup=0)
+    assert not out.exists()
