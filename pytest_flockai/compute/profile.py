@@ -32,24 +32,40 @@ TARGETS = ("cpu", "gpu", "npu")
 PRECISIONS = ("fp32", "fp16", "int8")
 
 
+def model_format(path) -> str:
+    """``tflite`` for a ``.tflite`` file (by name, then by its FlatBuffer identifier
+    ``TFL3``), else ``onnx``."""
+    p = os.fspath(path)
+    if p.lower().endswith(".tflite"):
+        return "tflite"
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(8)
+    except OSError:
+        return "onnx"
+    return "tflite" if head[4:8] == b"TFL3" else "onnx"
+
+
 def model_sha256(path) -> str:
     """SHA-256 of an ONNX file's bytes, then (when it has any) of each external data file
-    it names, in sorted order; the plain ``sha256sum`` of a self-contained file. Memoised
-    on the path, size and modification time."""
+    it names, in sorted order; the plain ``sha256sum`` of a self-contained file (and of a
+    ``.tflite`` file). Memoised on the path, size and modification time."""
     p = os.fspath(path)
     if not os.path.isfile(p):
         raise ConfigError(f"model path = {p!r} does not exist or is not a file; expected an "
-                          f".onnx file")
+                          f".onnx (or .tflite) file")
     st = os.stat(p)
-    return _sha256(os.path.abspath(p), st.st_size, st.st_mtime_ns)
+    return _sha256(os.path.abspath(p), st.st_size, st.st_mtime_ns, model_format(p))
 
 
 @functools.lru_cache(maxsize=256)
-def _sha256(p: str, size: int, mtime_ns: int) -> str:
+def _sha256(p: str, size: int, mtime_ns: int, fmt: str = "onnx") -> str:
     h = hashlib.sha256()
     with open(p, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
+    if fmt == "tflite":
+        return h.hexdigest()
     try:
         proto = onnx.load(p, load_external_data=False)
     except Exception as e:
@@ -234,4 +250,5 @@ def profile(path) -> MeasuredDevice:
     return MeasuredDevice(**{**dev.__dict__, "path": p})
 
 
-__all__ = ["MeasuredDevice", "MeasuredModel", "from_dict", "model_sha256", "profile"]
+__all__ = ["MeasuredDevice", "MeasuredModel", "from_dict", "model_format", "model_sha256",
+           "profile"]

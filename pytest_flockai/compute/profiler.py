@@ -10,7 +10,7 @@ profile records every timed latency, the runtime and its version, the threads, t
 host's facts (CPU, cores, board model, memory, OS), what the runtime reports it
 computed with (``runtime.execution``: ONNX Runtime's providers; OpenVINO's device, threads
 and precision, which it picks itself: a float graph timed in bf16 or f16 is recorded as
-``fp16``) and, when given, the busy power. The runtimes are in ``runners``. Busy power:
+``fp16``) and, when given, the busy power. The runtimes are in ``timed``. Busy power:
 
 - ``--power-csv``: a watt meter's log, a CSV with a power column (``power_w``, ``watts``
   or ``power``) and optionally ``time_s`` (Unix seconds). With times, busy power is the
@@ -43,17 +43,18 @@ import onnxruntime as ort
 from .._io import atomic_write
 from ..errors import ConfigError
 from .graph import analyze
-from .profile import RUNTIMES, SCHEMA, from_dict, model_sha256
-from .runners import MEASURABLE, OV_PRECISION, runner, targets
+from .profile import RUNTIMES, SCHEMA, from_dict, model_format, model_sha256
+from .timed import MEASURABLE, OV_PRECISION, runner, targets
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("profile-device", help="time ONNX models on this computer with its "
                                               "runtime and write a device profile")
-    p.add_argument("models", type=Path, nargs="+", metavar="MODEL.onnx")
+    p.add_argument("models", type=Path, nargs="+", metavar="MODEL.onnx",
+                   help="ONNX files (.tflite files for --runtime tflite or edgetpu)")
     p.add_argument("--runtime", default="onnxruntime", help=f"one of {', '.join(MEASURABLE)}")
-    p.add_argument("--target", default="cpu", help="cpu or gpu (onnxruntime's CUDA provider, "
-                                                   "OpenVINO's GPU device)")
+    p.add_argument("--target", default=None, help="cpu (default), gpu (onnxruntime's CUDA provider, "
+                                                   "OpenVINO's GPU device) or npu (edgetpu)")
     p.add_argument("--threads", type=int, default=None, help="intra-op threads (runtime "
                                                              "default when absent)")
     p.add_argument("--runs", type=int, default=50, help="timed runs per model (default 50)")
@@ -68,13 +69,17 @@ def add_parser(sub) -> None:
     p.add_argument("--name", default=None, help="the computer's name (default: board model "
                                                 "or host machine)")
     p.add_argument("--seed", type=int, default=0, help="seed of the input tensor")
+    p.add_argument("--onnx", type=Path, action="append", default=None, metavar="MODEL.onnx",
+                   help="for .tflite models: the ONNX file each stands for, once per model "
+                        "in order (a task flying that ONNX file then draws these latencies)")
     p.add_argument("--out", type=Path, required=True, help="the profile JSON to write")
 
 
 def run_cli(a) -> int:
     doc = measure(a.models, runtime=a.runtime, target=a.target, threads=a.threads, runs=a.runs,
                   warmup=a.warmup, input_shape=a.input_shape, power_csv=a.power_csv,
-                  idle_w=a.idle_w, jetson_rails=a.jetson_rails, name=a.name, seed=a.seed)
+                  idle_w=a.idle_w, jetson_rails=a.jetson_rails, name=a.name, seed=a.seed,
+                  stands_for=a.onnx)
     write(doc, a.out)
     for m in doc["models"]:
         lat = np.asarray(m["latency_s"]) * 1e3
@@ -89,6 +94,39 @@ def write(doc: dict, path) -> None:
     """Check ``doc`` as ``profile()`` would, then write it atomically."""
     from_dict(doc, "profile to write")
     atomic_write(path, lambda fh: fh.write(json.dumps(doc, indent=1) + "\n"))
+
+
+def _stands_for(models, onnx_paths) -> list:
+    """One ONNX file (or None) per model; ConfigError unless ``--onnx`` is given once per
+    model, each an ONNX file, and only for models that are not ONNX themselves."""
+    if not onnx_paths:
+        return [None] * len(models)
+    if len(onnx_paths) != len(models):
+        raise ConfigError(f"--onnx given {len(onnx_paths)} time(s) for {len(models)} model(s); "
+                          f"expected once per model, in order")
+    for m, o in zip(models, onnx_paths):
+        if model_format(m) == "onnx":
+            raise ConfigError(f"--onnx = {str(o)!r} is not allowed for {str(m)!r}, an ONNX "
+                              f"model itself; --onnx names the ONNX file a .tflite model "
+                              f"stands for")
+        if not os.path.isfile(o) or model_format(o) != "onnx":
+            raise ConfigError(f"--onnx = {str(o)!r} is not allowed; expected an existing "
+                              f".onnx file")
+    return list(onnx_paths)
+
+
+def _same_input(path, shape, onnx_path) -> None:
+    """The ONNX file a .tflite model stands for takes as many input values (NHWC and NCHW
+    hold the same count); ConfigError where its input's dims are fixed and differ."""
+    proto = onnx.load(os.fspath(onnx_path), load_external_data=False)
+    inits = {i.name for i in proto.graph.initializer}
+    inp = next(i for i in proto.graph.input if i.name not in inits)
+    dims = [d.dim_value if d.HasField("dim_value") else 0 for d in inp.type.tensor_type.shape.dim]
+    if all(d > 0 for d in dims) and int(np.prod(dims)) != int(np.prod(shape)):
+        raise ConfigError(f"--onnx = {str(onnx_path)!r} is not allowed for {str(path)!r}: its "
+                          f"input {'x'.join(map(str, dims))} and the .tflite input "
+                          f"{'x'.join(map(str, shape))} differ in size, so they are not one "
+                          f"network at one input size")
 
 
 def _parse_shape(text):
@@ -109,14 +147,19 @@ def _check_int(name, value, low):
         raise ConfigError(f"--{name} = {value!r} is not allowed; expected a whole number >= {low}")
 
 
-def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=50, warmup=5,
+def measure(models, *, runtime="onnxruntime", target=None, threads=None, runs=50, warmup=5,
             input_shape=None, power_csv=None, idle_w=None, jetson_rails=False, name=None,
-            seed=0) -> dict:
-    """Time each model and return the profile document (``write`` saves it)."""
+            seed=0, stands_for=None) -> dict:
+    """Time each model and return the profile document (``write`` saves it).
+    ``stands_for``: for ``.tflite`` models, the ONNX file each stands for (in order): the
+    profile identifies the model by that file's SHA-256 (and counts its MACs), so a task
+    flying it draws these latencies; the timed file is kept under ``file``."""
     if runtime not in MEASURABLE:
         where = "known but not measurable here" if runtime in RUNTIMES else "unknown"
         raise ConfigError(f"--runtime = {runtime!r} is not allowed ({where}); profile-device "
                           f"measures with: {', '.join(MEASURABLE)}")
+    if target is None:
+        target = targets(runtime)[0]
     if target not in targets(runtime):
         raise ConfigError(f"--target = {target!r} is not allowed with --runtime {runtime}; "
                           f"allowed: {list(targets(runtime))}")
@@ -129,18 +172,25 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
     if power_csv is not None and jetson_rails:
         raise ConfigError("--power-csv and --jetson-rails are not allowed together; give one")
     shape = _parse_shape(input_shape)
+    stands_for = _stands_for(models, stands_for)
     rails = _Rails() if jetson_rails else None
     t_start = time.time()
     if rails is not None:
         rails.start()
         time.sleep(2.0)
         rails.mark_busy()
-    out_models, version, execution = [], "", {}
+    out_models: list = []
+    version = ""
+    execution: dict = {}
     try:
-        for path in models:
-            sha = model_sha256(path)
+        for path, onnx_path in zip(models, stands_for):
+            ident = onnx_path or path
+            sha = model_sha256(ident)
             r = runner(path, runtime, target, threads, shape, seed)
-            run, feed_shape, version, execution = r.run, r.input_shape, r.version, r.execution
+            if onnx_path is not None:
+                _same_input(path, r.input_shape, onnx_path)
+            run, feed_shape, version = r.run, r.input_shape, r.version
+            execution = execution or r.execution        # the first model's, as its precision
             for _ in range(warmup):
                 run()
             t_busy = time.time()
@@ -149,10 +199,14 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
                 t0 = time.perf_counter()
                 run()
                 lat.append(time.perf_counter() - t0)
-            out_models.append({"name": Path(path).stem, "path": os.fspath(path), "sha256": sha,
-                               "input_shape": list(feed_shape), "warmup": warmup, "runs": runs,
-                               "macs": _macs(path, feed_shape), "latency_s": lat,
-                               "t_busy": [t_busy, time.time()]})
+            entry = {"name": Path(ident).stem, "path": os.fspath(ident), "sha256": sha,
+                     "input_shape": list(feed_shape), "warmup": warmup, "runs": runs,
+                     "macs": _macs(ident, feed_shape) if model_format(ident) == "onnx"
+                     else None, "latency_s": lat, "t_busy": [t_busy, time.time()]}
+            if onnx_path is not None or model_format(path) != "onnx":
+                entry["file"] = {"path": os.fspath(path), "format": model_format(path),
+                                 "sha256": model_sha256(path)}
+            out_models.append(entry)
     finally:
         power = rails.stop() if rails is not None else None
     if power_csv is not None:
@@ -160,13 +214,16 @@ def measure(models, *, runtime="onnxruntime", target="cpu", threads=None, runs=5
     for m in out_models:
         del m["t_busy"]
     host = host_facts()
-    precision = _precision(models[0])
+    precision = (_precision(models[0]) if model_format(models[0]) == "onnx"
+                 else execution["precision"])
     if precision == "fp32":     # the runtime's own choice (OpenVINO: bf16 or f16 on some CPUs)
         precision = OV_PRECISION.get(str(execution.get("precision", "f32")), precision)
     libraries = {"onnxruntime": ort.__version__, "opencv": cv2.__version__,
                  "onnx": onnx.__version__, "numpy": np.__version__}
     if runtime == "openvino":
         libraries["openvino"] = version
+    elif runtime in ("tflite", "edgetpu"):
+        libraries[execution["package"]] = version
     return {"schema": SCHEMA, "name": name or host.get("board") or host["machine"],
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "runtime": {"name": runtime, "version": version, "target": target,

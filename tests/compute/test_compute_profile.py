@@ -1,10 +1,14 @@
 """flockai profile-device on this computer (ONNX Runtime standing in for the drone's) and
 compute.profile(): the measured samples, seeded draws, power, and bad profile files."""
 
+import ctypes
 import hashlib
+import importlib.metadata
 import json
+import subprocess
 import sys
 import time
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -218,3 +222,102 @@ def test_openvino_refusals_say_why(tmp_path, monkeypatch, capsys):
     with pytest.raises(ConfigError, match=r"OpenVINO is not installed.*pip install openvino"):
         measure([net], runtime="openvino", runs=1, warmup=0)
     assert not out.exists()
+
+
+DATA = Path(__file__).resolve().parent / "data"       # written by data/make_tflite.py
+
+
+def test_tflite_times_a_tflite_file_for_the_onnx_file_it_stands_for(tmp_path):
+    """--runtime tflite times .tflite files with LiteRT; --onnx names the ONNX file each
+    stands for, so the profile matches the model a task flies (and counts its MACs),
+    while the timed file is kept beside it."""
+    pytest.importorskip("ai_edge_litert")
+    flt, q8 = DATA / "tiny_cnn.tflite", DATA / "tiny_cnn_int8.tflite"
+    a = conv_net(tmp_path / "a.onnx", 8, side=64, batch=1)
+    b = conv_net(tmp_path / "b.onnx", 16, side=64, batch=1)
+    doc = measure([flt, q8], runtime="tflite", threads=1, runs=30, warmup=2,
+                  stands_for=[a, b], name="pi")
+    write(doc, tmp_path / "t.json")
+    dev = fa.compute.profile(tmp_path / "t.json")
+    assert dev.runtime == "tflite" and dev.target == "cpu" and dev.threads == 1
+    assert dev.runtime_version == importlib.metadata.version("ai-edge-litert")
+    assert dev.precision == "fp32"                      # the first model's: a float graph
+    assert doc["runtime"]["execution"]["package"] == "ai-edge-litert"
+    assert set(dev.models) == {model_sha256(a), model_sha256(b)}
+    entry = doc["models"][1]
+    assert entry["file"] == {"path": str(q8), "format": "tflite",
+                             "sha256": hashlib.sha256(q8.read_bytes()).hexdigest()}
+    assert entry["input_shape"] == [1, 64, 64, 3] and entry["macs"] == dev.model(b).macs > 0
+    p = fa.compute.predict_latency(b, dev)
+    assert p.method == "measured" and p.seconds == pytest.approx(
+        np.percentile(dev.latency_samples(b), 50))
+    # without --onnx the .tflite file is the model: matched by its own SHA-256
+    alone = fa.compute.profile(write_doc(measure([q8], runtime="tflite", runs=3, warmup=1),
+                                         tmp_path / "q.json"))
+    assert alone.precision == "int8" and alone.latency_samples(q8).shape == (3,)
+    assert alone.model(q8).macs is None
+
+
+def write_doc(doc, path):
+    write(doc, path)
+    return path
+
+
+@pytest.mark.parametrize("models, kw, text", [
+    (["a.onnx"], {"runtime": "tflite"}, "is an ONNX file; --runtime tflite runs .tflite"),
+    ([DATA / "tiny_cnn.tflite"], {}, r"is a TF Lite \(.tflite\) file; --runtime onnxruntime"),
+    ([DATA / "tiny_cnn.tflite"], {"runtime": "tflite", "stands_for": ["a.onnx", "a.onnx"]},
+     "--onnx given 2 time"),
+    (["a.onnx"], {"stands_for": ["a.onnx"]}, "an ONNX model itself"),
+    ([DATA / "tiny_cnn.tflite"], {"runtime": "tflite", "stands_for": ["big.onnx"]},
+     "differ in size"),
+    ([DATA / "tiny_cnn.tflite"], {"runtime": "tflite", "stands_for": ["none.onnx"]},
+     "expected an existing .onnx file"),
+    ([DATA / "tiny_cnn_int8.tflite"], {"runtime": "edgetpu", "target": "cpu"},
+     r"--target = 'cpu' is not allowed with --runtime edgetpu; allowed: \['npu'\]"),
+])
+def test_tflite_refusals_name_the_input(tmp_path, models, kw, text):
+    pytest.importorskip("ai_edge_litert")
+    conv_net(tmp_path / "a.onnx", 8, side=64, batch=1)
+    conv_net(tmp_path / "big.onnx", 8, side=96, batch=1)
+    where = {m: m if isinstance(m, Path) else tmp_path / m for m in models}
+    kw = dict(kw, runs=1, warmup=0)
+    if "stands_for" in kw:
+        kw["stands_for"] = [tmp_path / o for o in kw["stands_for"]]
+    with pytest.raises(ConfigError, match=text):
+        measure([where[m] for m in models], **kw)
+
+
+def test_edgetpu_without_its_delegate_and_no_litert(monkeypatch):
+    """The Edge TPU's delegate library missing, and no LiteRT at all: one-line errors."""
+    pytest.importorskip("ai_edge_litert")
+    q8 = DATA / "tiny_cnn_int8.tflite"
+    try:
+        ctypes.CDLL("libedgetpu.so.1")
+    except OSError:
+        with pytest.raises(ConfigError, match="Edge TPU delegate libedgetpu.so.1 does not load"):
+            measure([q8], runtime="edgetpu", runs=1, warmup=0)
+    for mod in ("ai_edge_litert.interpreter", "tflite_runtime.interpreter", "tensorflow"):
+        monkeypatch.setitem(sys.modules, mod, None)        # as if none were installed
+    with pytest.raises(ConfigError, match="no LiteRT is installed.*pip install ai-edge-litert"):
+        measure([q8], runtime="tflite", runs=1, warmup=0)
+
+
+def test_openvino_then_a_flight_with_a_watchdog_in_one_process(tmp_path):
+    """Two models profiled with OpenVINO, then a flight whose max_wall_s watchdog fires
+    (SIGALRM), in one fresh process: it used to die in the signal handler (exit -11)
+    once OpenVINO's Core was destroyed; the Core is now kept for the process."""
+    pytest.importorskip("openvino")
+    a, b = _net(tmp_path, "a.onnx", 8), _net(tmp_path, "b.onnx", 32)
+    code = (
+        "import pytest_flockai as fa\n"
+        "from pytest_flockai.compute.profiler import measure\n"
+        f"measure([{str(a)!r}, {str(b)!r}], runtime='openvino', threads=1, runs=3, warmup=1,\n"
+        "        input_shape='1x3x64x64')\n"
+        "try:\n"
+        "    fa.Mission(fa.drone('crazyflie-2-1'), fa.pilots.Hover(1.0), until=600,\n"
+        "               max_wall_s=0.2).run()\n"
+        "except fa.SimulationError as e:\n"
+        "    print(e.result.end_reason)\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0 and p.stdout.strip() == "wall_time", (p.returncode, p.stderr[-500:])

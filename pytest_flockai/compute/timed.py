@@ -11,12 +11,21 @@ the runtime, a seeded input of its shape, and a call that runs one inference:
   ``LATENCY`` performance hint for ``CPU`` (``target="gpu"``: OpenVINO's ``GPU`` device
   where this computer has one). OpenVINO picks the precision it computes in
   (``INFERENCE_PRECISION_HINT``: bf16 on x86 CPUs with AMX or AVX-512 BF16, f16 on ARM);
-  it is read back and recorded (``Runner.execution``). OpenVINO is an optional
-  dependency: without it, ``--runtime openvino`` is a ConfigError saying how to get it.
+  it is read back and recorded (``Runner.execution``);
+- ``tflite`` and ``edgetpu``: a ``.tflite`` file (the format these runtimes run; an
+  ONNX file is refused) in LiteRT's ``Interpreter`` (``ai_edge_litert``, else
+  ``tflite_runtime``, else ``tensorflow.lite``), on the CPU with XNNPACK at ``threads``,
+  or with the Edge TPU's delegate (``libedgetpu.so.1``) for a model compiled by
+  ``edgetpu_compiler``.
+
+OpenVINO and LiteRT are optional dependencies: without them, their ``--runtime`` is a
+ConfigError saying how to get them.
 """
 
 from __future__ import annotations
 
+import ctypes
+import importlib.metadata
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -27,9 +36,14 @@ import onnx
 import onnxruntime as ort
 
 from ..errors import ConfigError
+from .profile import model_format
 
 #: runtimes profile-device times (each reads the ONNX file itself)
-MEASURABLE = ("onnxruntime", "opencv-dnn", "openvino")
+MEASURABLE = ("onnxruntime", "opencv-dnn", "openvino", "tflite", "edgetpu")
+#: runtimes that run a ``.tflite`` file, not the ONNX one
+TFLITE = ("tflite", "edgetpu")
+#: the Edge TPU delegate's shared library (Coral's libedgetpu, Linux)
+EDGETPU_LIB = "libedgetpu.so.1"
 #: OpenVINO's element types -> the profile's precision (bf16 and f16 both compute in 16 bits)
 OV_PRECISION = {"f32": "fp32", "f16": "fp16", "bf16": "fp16", "i8": "int8", "u8": "int8"}
 
@@ -46,12 +60,22 @@ class Runner:
 
 
 def targets(runtime: str) -> tuple[str, ...]:
-    return ("cpu",) if runtime == "opencv-dnn" else ("cpu", "gpu")
+    return {"opencv-dnn": ("cpu",), "tflite": ("cpu",), "edgetpu": ("npu",)}.get(
+        runtime, ("cpu", "gpu"))
 
 
 def runner(path, runtime: str, target: str, threads: int | None, shape, seed: int) -> Runner:
     """``path`` loaded by ``runtime`` (see the module docstring); ``shape`` fills the
     input's open dims (fixed ones stay); ``seed``: the input tensor's."""
+    fmt = model_format(path)
+    if (fmt == "tflite") != (runtime in TFLITE):
+        want = ".tflite" if runtime in TFLITE else ".onnx"
+        what = "a TF Lite (.tflite)" if fmt == "tflite" else "an ONNX"
+        raise ConfigError(f"model {os.fspath(path)!r} is {what} file; --runtime {runtime} runs "
+                          f"{want} files" + ("" if runtime in TFLITE else
+                                             " (a .tflite file: --runtime tflite or edgetpu)"))
+    if fmt == "tflite":
+        return _tflite(os.fspath(path), runtime, threads, shape, seed)
     proto = onnx.load(os.fspath(path), load_external_data=False)
     inits = {i.name for i in proto.graph.initializer}
     inp = next(i for i in proto.graph.input if i.name not in inits)
@@ -113,13 +137,25 @@ def _onnxruntime(path, name, x, target, threads) -> Runner:
                   {"providers": sess.get_providers()})
 
 
+#: the process's one OpenVINO Core: made once and kept, as OpenVINO advises (a Core's
+#: destruction unloads its device plugins; a process that went on to fly with a SIGALRM
+#: watchdog was seen to crash in the signal handler after that, OpenVINO 2026.4)
+_CORE: list = []
+
+
+def _ov_core(ov):
+    if not _CORE:
+        _CORE.append(ov.Core())
+    return _CORE[0]
+
+
 def _openvino(path, name, x, target, threads) -> Runner:
     try:
         import openvino as ov
     except ImportError:
         raise ConfigError("--runtime = 'openvino' is not allowed here: OpenVINO is not "
                           "installed in this environment (pip install openvino)") from None
-    core = ov.Core()
+    core = _ov_core(ov)
     device = "GPU" if target == "gpu" else "CPU"
     if device not in core.available_devices:
         raise ConfigError(f"--target = {target!r} is not allowed here: OpenVINO "
@@ -142,4 +178,68 @@ def _openvino(path, name, x, target, threads) -> Runner:
     return Runner(lambda: request.infer(feeds), tuple(x.shape), ov.__version__, execution)
 
 
-__all__ = ["MEASURABLE", "OV_PRECISION", "Runner", "runner", "targets"]
+def _interpreter():
+    """LiteRT's (Interpreter, load_delegate, package name), whichever is installed."""
+    try:
+        from ai_edge_litert.interpreter import Interpreter, load_delegate
+        return Interpreter, load_delegate, "ai-edge-litert"
+    except ImportError:
+        pass
+    try:
+        from tflite_runtime.interpreter import Interpreter, load_delegate
+        return Interpreter, load_delegate, "tflite-runtime"
+    except ImportError:
+        pass
+    try:
+        import tensorflow as tf
+        return tf.lite.Interpreter, tf.lite.experimental.load_delegate, "tensorflow"
+    except ImportError:
+        raise ConfigError("--runtime tflite/edgetpu is not allowed here: no LiteRT is "
+                          "installed in this environment (pip install ai-edge-litert, or "
+                          "tflite-runtime)") from None
+
+
+def _tflite(path, runtime, threads, shape, seed) -> Runner:
+    interpreter, load_delegate, package = _interpreter()
+    version = importlib.metadata.version(package)
+    delegates = []
+    if runtime == "edgetpu":
+        try:
+            ctypes.CDLL(EDGETPU_LIB)        # first: a failed load_delegate leaves a bad object
+            delegates = [load_delegate(EDGETPU_LIB)]
+        except (ValueError, OSError) as e:
+            raise ConfigError(f"--runtime = 'edgetpu' is not allowed here: the Edge TPU "
+                              f"delegate {EDGETPU_LIB} does not load ({str(e).strip()[:160]})") from None
+    try:
+        it = interpreter(model_path=path, num_threads=threads, experimental_delegates=delegates)
+        inp = it.get_input_details()[0]
+        dims = [int(d) for d in inp["shape"]]
+        if shape is not None:
+            if len(shape) != len(dims):
+                raise ConfigError(f"--input-shape = {'x'.join(map(str, shape))!r} has rank "
+                                  f"{len(shape)}; {path!r} input {inp['name']!r} has rank {len(dims)}")
+            if list(shape) != dims:
+                it.resize_tensor_input(inp["index"], list(shape))
+                dims = list(shape)
+        it.allocate_tensors()
+    except (ValueError, RuntimeError) as e:
+        raise ConfigError(f"model {path!r}: --runtime {runtime} ({package} {version}) cannot "
+                          f"load it: {str(e).strip()[:200]}") from None
+    rng = np.random.default_rng(seed)
+    dtype = np.dtype(inp["dtype"])
+    x = (rng.integers(0, 128, dims).astype(dtype) if dtype.kind in "iu"
+         else rng.random(dims).astype(dtype))
+    index, invoke, set_tensor = inp["index"], it.invoke, it.set_tensor
+
+    def run_tflite():
+        set_tensor(index, x)
+        invoke()
+    quantized = dtype.kind in "iu" or any(
+        np.dtype(t["dtype"]) == np.int8 for t in it.get_tensor_details())
+    execution = {"package": package, "precision": "int8" if quantized or delegates else "fp32",
+                 "delegate": EDGETPU_LIB if delegates else "default (XNNPACK)"}
+    return Runner(run_tflite, tuple(dims), version, execution)
+
+
+__all__ = ["EDGETPU_LIB", "MEASURABLE", "OV_PRECISION", "TFLITE", "Runner", "runner",
+           "targets"]
