@@ -34,10 +34,12 @@ PRECISIONS = ("fp32", "fp16", "int8")
 
 def model_format(path) -> str:
     """``tflite`` for a ``.tflite`` file (by name, then by its FlatBuffer identifier
-    ``TFL3``), else ``onnx``."""
+    ``TFL3``), ``ncnn`` for an ncnn ``.param`` file, else ``onnx``."""
     p = os.fspath(path)
     if p.lower().endswith(".tflite"):
         return "tflite"
+    if p.lower().endswith(".param"):
+        return "ncnn"
     try:
         with open(p, "rb") as fh:
             head = fh.read(8)
@@ -49,11 +51,11 @@ def model_format(path) -> str:
 def model_sha256(path) -> str:
     """SHA-256 of an ONNX file's bytes, then (when it has any) of each external data file
     it names, in sorted order; the plain ``sha256sum`` of a self-contained file (and of a
-    ``.tflite`` file). Memoised on the path, size and modification time."""
+    ``.tflite`` file; of an ncnn ``.param`` file followed by its ``.bin``). Memoised on the path, size and modification time."""
     p = os.fspath(path)
     if not os.path.isfile(p):
         raise ConfigError(f"model path = {p!r} does not exist or is not a file; expected an "
-                          f".onnx (or .tflite) file")
+                          f".onnx (or .tflite, ncnn .param) file")
     st = os.stat(p)
     return _sha256(os.path.abspath(p), st.st_size, st.st_mtime_ns, model_format(p))
 
@@ -64,6 +66,13 @@ def _sha256(p: str, size: int, mtime_ns: int, fmt: str = "onnx") -> str:
     with open(p, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
+    if fmt == "ncnn":                   # the .param, then its .bin
+        weights = p[:-len(".param")] + ".bin"
+        if os.path.isfile(weights):
+            with open(weights, "rb") as fh:
+                for block in iter(lambda: fh.read(1 << 20), b""):
+                    h.update(block)
+        return h.hexdigest()
     if fmt == "tflite":
         return h.hexdigest()
     try:

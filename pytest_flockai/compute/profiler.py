@@ -3,6 +3,8 @@
     flockai profile-device MODEL.onnx [MODEL2.onnx ...] --runtime onnxruntime|opencv-dnn|openvino
         [--target cpu|gpu] [--threads N] [--runs N] [--warmup N] [--input-shape 1x3x640x640]
         [--power-csv FILE [--idle-w W]] [--jetson-rails] [--name NAME] --out profile.json
+    flockai profile-device MODEL.tflite|MODEL.param ... --runtime tflite|edgetpu|ncnn
+        [--onnx MODEL.onnx ...] ...
 
 Each model runs ``warmup`` times untimed, then ``runs`` times timed one by one
 (``time.perf_counter`` around the runtime's call, batch 1, a fixed seeded input). The
@@ -51,7 +53,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("profile-device", help="time ONNX models on this computer with its "
                                               "runtime and write a device profile")
     p.add_argument("models", type=Path, nargs="+", metavar="MODEL.onnx",
-                   help="ONNX files (.tflite files for --runtime tflite or edgetpu)")
+                   help="ONNX files (.tflite files for --runtime tflite or edgetpu, "
+                        ".param files with their .bin for ncnn)")
     p.add_argument("--runtime", default="onnxruntime", help=f"one of {', '.join(MEASURABLE)}")
     p.add_argument("--target", default=None, help="cpu (default), gpu (onnxruntime's CUDA provider, "
                                                    "OpenVINO's GPU device) or npu (edgetpu)")
@@ -70,8 +73,9 @@ def add_parser(sub) -> None:
                                                 "or host machine)")
     p.add_argument("--seed", type=int, default=0, help="seed of the input tensor")
     p.add_argument("--onnx", type=Path, action="append", default=None, metavar="MODEL.onnx",
-                   help="for .tflite models: the ONNX file each stands for, once per model "
-                        "in order (a task flying that ONNX file then draws these latencies)")
+                   help="for .tflite and ncnn models: the ONNX file each stands for, once "
+                        "per model in order (a task flying that ONNX file then draws these "
+                        "latencies; ncnn takes its input shape from it)")
     p.add_argument("--out", type=Path, required=True, help="the profile JSON to write")
 
 
@@ -107,21 +111,26 @@ def _stands_for(models, onnx_paths) -> list:
     for m, o in zip(models, onnx_paths):
         if model_format(m) == "onnx":
             raise ConfigError(f"--onnx = {str(o)!r} is not allowed for {str(m)!r}, an ONNX "
-                              f"model itself; --onnx names the ONNX file a .tflite model "
-                              f"stands for")
+                              f"model itself; --onnx names the ONNX file a .tflite or ncnn "
+                              f"model stands for")
         if not os.path.isfile(o) or model_format(o) != "onnx":
             raise ConfigError(f"--onnx = {str(o)!r} is not allowed; expected an existing "
                               f".onnx file")
     return list(onnx_paths)
 
 
+def _onnx_dims(path) -> list:
+    """The dims of an ONNX file's (first) input, 0 where open."""
+    proto = onnx.load(os.fspath(path), load_external_data=False)
+    inits = {i.name for i in proto.graph.initializer}
+    inp = next(i for i in proto.graph.input if i.name not in inits)
+    return [d.dim_value if d.HasField("dim_value") else 0 for d in inp.type.tensor_type.shape.dim]
+
+
 def _same_input(path, shape, onnx_path) -> None:
     """The ONNX file a .tflite model stands for takes as many input values (NHWC and NCHW
     hold the same count); ConfigError where its input's dims are fixed and differ."""
-    proto = onnx.load(os.fspath(onnx_path), load_external_data=False)
-    inits = {i.name for i in proto.graph.initializer}
-    inp = next(i for i in proto.graph.input if i.name not in inits)
-    dims = [d.dim_value if d.HasField("dim_value") else 0 for d in inp.type.tensor_type.shape.dim]
+    dims = _onnx_dims(onnx_path)
     if all(d > 0 for d in dims) and int(np.prod(dims)) != int(np.prod(shape)):
         raise ConfigError(f"--onnx = {str(onnx_path)!r} is not allowed for {str(path)!r}: its "
                           f"input {'x'.join(map(str, dims))} and the .tflite input "
@@ -151,7 +160,7 @@ def measure(models, *, runtime="onnxruntime", target=None, threads=None, runs=50
             input_shape=None, power_csv=None, idle_w=None, jetson_rails=False, name=None,
             seed=0, stands_for=None) -> dict:
     """Time each model and return the profile document (``write`` saves it).
-    ``stands_for``: for ``.tflite`` models, the ONNX file each stands for (in order): the
+    ``stands_for``: for ``.tflite`` and ncnn models, the ONNX file each stands for: the
     profile identifies the model by that file's SHA-256 (and counts its MACs), so a task
     flying it draws these latencies; the timed file is kept under ``file``."""
     if runtime not in MEASURABLE:
@@ -186,7 +195,11 @@ def measure(models, *, runtime="onnxruntime", target=None, threads=None, runs=50
         for path, onnx_path in zip(models, stands_for):
             ident = onnx_path or path
             sha = model_sha256(ident)
-            r = runner(path, runtime, target, threads, shape, seed)
+            mshape = shape
+            if mshape is None and onnx_path is not None and model_format(path) == "ncnn":
+                dims = _onnx_dims(onnx_path)        # ncnn's files do not hold the input's
+                mshape = tuple(dims) if all(d > 0 for d in dims) else None
+            r = runner(path, runtime, target, threads, mshape, seed)
             if onnx_path is not None:
                 _same_input(path, r.input_shape, onnx_path)
             run, feed_shape, version = r.run, r.input_shape, r.version
@@ -224,6 +237,8 @@ def measure(models, *, runtime="onnxruntime", target=None, threads=None, runs=50
         libraries["openvino"] = version
     elif runtime in ("tflite", "edgetpu"):
         libraries[execution["package"]] = version
+    elif runtime == "ncnn":
+        libraries["ncnn"] = version
     return {"schema": SCHEMA, "name": name or host.get("board") or host["machine"],
             "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "runtime": {"name": runtime, "version": version, "target": target,

@@ -12,13 +12,18 @@ the runtime, a seeded input of its shape, and a call that runs one inference:
   where this computer has one). OpenVINO picks the precision it computes in
   (``INFERENCE_PRECISION_HINT``: bf16 on x86 CPUs with AMX or AVX-512 BF16, f16 on ARM);
   it is read back and recorded (``Runner.execution``);
+- ``ncnn``: an ncnn model (``MODEL.param`` with ``MODEL.bin`` beside it, as ``pnnx`` or
+  ``onnx2ncnn`` writes them) in ncnn's Python binding, at ``threads``, on the CPU (ncnn's
+  own defaults: fp16 storage and arithmetic where the CPU has them, recorded), or on the
+  GPU through Vulkan (``target="gpu"``); its input shape comes from ``--input-shape`` or
+  the ONNX file it stands for (ncnn's files do not hold it), batch 1;
 - ``tflite`` and ``edgetpu``: a ``.tflite`` file (the format these runtimes run; an
   ONNX file is refused) in LiteRT's ``Interpreter`` (``ai_edge_litert``, else
   ``tflite_runtime``, else ``tensorflow.lite``), on the CPU with XNNPACK at ``threads``,
   or with the Edge TPU's delegate (``libedgetpu.so.1``) for a model compiled by
   ``edgetpu_compiler``.
 
-OpenVINO and LiteRT are optional dependencies: without them, their ``--runtime`` is a
+OpenVINO, ncnn and LiteRT are optional dependencies: without them, their ``--runtime`` is a
 ConfigError saying how to get them.
 """
 
@@ -39,9 +44,12 @@ from ..errors import ConfigError
 from .profile import model_format
 
 #: runtimes profile-device times (each reads the ONNX file itself)
-MEASURABLE = ("onnxruntime", "opencv-dnn", "openvino", "tflite", "edgetpu")
-#: runtimes that run a ``.tflite`` file, not the ONNX one
+MEASURABLE = ("onnxruntime", "opencv-dnn", "openvino", "ncnn", "tflite", "edgetpu")
+#: the file format each runtime runs (the rest run the ONNX file)
+FORMAT = {"tflite": "tflite", "edgetpu": "tflite", "ncnn": "ncnn"}
 TFLITE = ("tflite", "edgetpu")
+#: what each format's files are called
+SUFFIX = {"onnx": ".onnx", "tflite": ".tflite", "ncnn": ".param (with its .bin)"}
 #: the Edge TPU delegate's shared library (Coral's libedgetpu, Linux)
 EDGETPU_LIB = "libedgetpu.so.1"
 #: OpenVINO's element types -> the profile's precision (bf16 and f16 both compute in 16 bits)
@@ -67,15 +75,16 @@ def targets(runtime: str) -> tuple[str, ...]:
 def runner(path, runtime: str, target: str, threads: int | None, shape, seed: int) -> Runner:
     """``path`` loaded by ``runtime`` (see the module docstring); ``shape`` fills the
     input's open dims (fixed ones stay); ``seed``: the input tensor's."""
-    fmt = model_format(path)
-    if (fmt == "tflite") != (runtime in TFLITE):
-        want = ".tflite" if runtime in TFLITE else ".onnx"
-        what = "a TF Lite (.tflite)" if fmt == "tflite" else "an ONNX"
+    fmt, want = model_format(path), FORMAT.get(runtime, "onnx")
+    if fmt != want:
+        what = {"tflite": "a TF Lite (.tflite)", "ncnn": "an ncnn (.param)"}.get(fmt, "an ONNX")
+        by = sorted(r for r in MEASURABLE if FORMAT.get(r, "onnx") == fmt)
         raise ConfigError(f"model {os.fspath(path)!r} is {what} file; --runtime {runtime} runs "
-                          f"{want} files" + ("" if runtime in TFLITE else
-                                             " (a .tflite file: --runtime tflite or edgetpu)"))
+                          f"{SUFFIX[want]} files ({what} file: --runtime {' or '.join(by)})")
     if fmt == "tflite":
         return _tflite(os.fspath(path), runtime, threads, shape, seed)
+    if fmt == "ncnn":
+        return _ncnn(os.fspath(path), target, threads, shape, seed)
     proto = onnx.load(os.fspath(path), load_external_data=False)
     inits = {i.name for i in proto.graph.initializer}
     inp = next(i for i in proto.graph.input if i.name not in inits)
@@ -176,6 +185,59 @@ def _openvino(path, name, x, target, threads) -> Runner:
     execution = {"device": device, "precision": hint.get_type_name(),
                  "threads": int(compiled.get_property("INFERENCE_NUM_THREADS"))}
     return Runner(lambda: request.infer(feeds), tuple(x.shape), ov.__version__, execution)
+
+
+def _ncnn(path, target, threads, shape, seed) -> Runner:
+    try:
+        import ncnn
+    except ImportError:
+        raise ConfigError("--runtime = 'ncnn' is not allowed here: ncnn's Python binding is "
+                          "not installed in this environment (pip install ncnn)") from None
+    weights = path[:-len(".param")] + ".bin"
+    if not os.path.isfile(weights):
+        raise ConfigError(f"model {path!r}: its weights {weights!r} do not exist; an ncnn "
+                          f"model is a .param file with its .bin beside it")
+    if shape is None:
+        raise ConfigError(f"model {path!r}: ncnn's files do not hold the input shape; give "
+                          f"--input-shape (e.g. 1x3x640x640) or --onnx")
+    if len(shape) not in (3, 4) or (len(shape) == 4 and shape[0] != 1):
+        raise ConfigError(f"--input-shape = {'x'.join(map(str, shape))!r} is not allowed for "
+                          f"ncnn; expected 1xCxHxW (batch 1) or CxHxW")
+    net = ncnn.Net()
+    if threads is not None:
+        net.opt.num_threads = threads
+    if target == "gpu":
+        if ncnn.get_gpu_count() < 1:
+            raise ConfigError(f"--target = 'gpu' is not allowed here: ncnn "
+                              f"{ncnn.__version__} finds no Vulkan GPU")
+        net.opt.use_vulkan_compute = True
+    if net.load_param(path) != 0 or net.load_model(weights) != 0:
+        raise ConfigError(f"model {path!r}: --runtime ncnn ({ncnn.__version__}) cannot load "
+                          f"it (or its {os.path.basename(weights)})")
+    inp, out = net.input_names()[0], net.output_names()[0]
+    chw = tuple(int(d) for d in shape[-3:])
+    x = np.ascontiguousarray(np.random.default_rng(seed).random(chw).astype(np.float32))
+    mat = ncnn.Mat(x)
+
+    def run_ncnn():
+        ex = net.create_extractor()         # an extractor keeps its blobs: one per run
+        ex.input(inp, mat)
+        ex.extract(out)
+    o = net.opt
+    execution = {"threads": int(o.num_threads), "vulkan": bool(o.use_vulkan_compute),
+                 "fp16_storage": bool(o.use_fp16_storage),
+                 "fp16_arithmetic": bool(o.use_fp16_arithmetic),
+                 "precision": "int8" if _ncnn_int8(path) else "fp32"}
+    return Runner(run_ncnn, (1, *chw), str(ncnn.__version__), execution)
+
+
+def _ncnn_int8(path) -> bool:
+    """An ncnn graph quantized by ncnn2int8: a Convolution or InnerProduct layer with an
+    int8 scale term (parameter 8)."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        return any(line.split()[:1] and line.split()[0].startswith(("Convolution", "InnerProduct"))
+                   and any(t.startswith("8=") and t != "8=0" for t in line.split()[4:])
+                   for line in fh)
 
 
 def _interpreter():

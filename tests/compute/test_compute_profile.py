@@ -288,6 +288,56 @@ def test_tflite_refusals_name_the_input(tmp_path, models, kw, text):
         measure([where[m] for m in models], **kw)
 
 
+def test_ncnn_times_a_param_file_with_the_input_shape_of_its_onnx(tmp_path):
+    """--runtime ncnn times MODEL.param (with its .bin) in ncnn's binding: the input shape
+    from --onnx (ncnn's files do not hold it) or --input-shape; identified by the ONNX
+    file it stands for, or else by the .param and .bin bytes."""
+    ncnn = pytest.importorskip("ncnn")
+    param = DATA / "tiny.ncnn.param"                  # conv_net(8, 64x64) by pnnx
+    a = conv_net(tmp_path / "tiny.onnx", 8, side=64, batch=1)
+    doc = measure([param], runtime="ncnn", threads=1, runs=30, warmup=2, stands_for=[a])
+    write(doc, tmp_path / "n.json")
+    dev = fa.compute.profile(tmp_path / "n.json")
+    assert dev.runtime == "ncnn" and dev.runtime_version == str(ncnn.__version__)
+    assert dev.precision == "fp32" and doc["runtime"]["execution"]["threads"] == 1
+    assert doc["runtime"]["execution"]["vulkan"] is False
+    assert dev.model(a).input_shape == (1, 3, 64, 64) and dev.model(a).macs > 0
+    assert doc["models"][0]["file"]["format"] == "ncnn"
+    assert fa.compute.predict_latency(a, dev).seconds == pytest.approx(
+        np.percentile(dev.latency_samples(a), 50))
+    # alone: --input-shape, and the model is the .param and .bin bytes
+    alone = fa.compute.profile(write_doc(
+        measure([param], runtime="ncnn", runs=3, warmup=1, input_shape="1x3x64x64"),
+        tmp_path / "m.json"))
+    want = hashlib.sha256(param.read_bytes() + (DATA / "tiny.ncnn.bin").read_bytes())
+    assert set(alone.models) == {want.hexdigest()}
+    assert alone.latency_samples(param).shape == (3,)
+
+
+@pytest.mark.parametrize("kw, text", [
+    ({}, "ncnn's files do not hold the input shape; give --input-shape"),
+    ({"input_shape": "2x3x64x64"}, "expected 1xCxHxW"),
+    ({"runtime": "onnxruntime"}, r"is an ncnn \(.param\) file; --runtime onnxruntime runs "
+                                 r".onnx files \(an ncnn \(.param\) file: --runtime ncnn\)"),
+])
+def test_ncnn_refusals_name_the_input(kw, text):
+    pytest.importorskip("ncnn")
+    with pytest.raises(ConfigError, match=text):
+        measure([DATA / "tiny.ncnn.param"], **{"runtime": "ncnn", "runs": 1, "warmup": 0, **kw})
+
+
+def test_ncnn_without_its_weights_or_its_binding(tmp_path, monkeypatch):
+    pytest.importorskip("ncnn")
+    lone = tmp_path / "lone.param"
+    lone.write_bytes((DATA / "tiny.ncnn.param").read_bytes())
+    with pytest.raises(ConfigError, match=r"its weights .*lone.bin' do not exist"):
+        measure([lone], runtime="ncnn", runs=1, warmup=0, input_shape="1x3x64x64")
+    monkeypatch.setitem(sys.modules, "ncnn", None)          # as if it were not installed
+    with pytest.raises(ConfigError, match=r"ncnn's Python binding is not installed.*pip install ncnn"):
+        measure([DATA / "tiny.ncnn.param"], runtime="ncnn", runs=1, warmup=0,
+                input_shape="1x3x64x64")
+
+
 def test_edgetpu_without_its_delegate_and_no_litert(monkeypatch):
     """The Edge TPU's delegate library missing, and no LiteRT at all: one-line errors."""
     pytest.importorskip("ai_edge_litert")

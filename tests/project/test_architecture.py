@@ -18,11 +18,11 @@ PKG = Path(__file__).resolve().parents[2] / "pytest_flockai"
 LAYERS = list(_LAYERS)
 PYTEST_SIDE = LAYERS[-1] - {"plots", "cli", "__main__", "__init__", "sweeps"}
 #: function-level imports that are fine: optional extras (dask and distributed: the
-#: "dask" extra; openvino and LiteRT: profile-device's runtimes), GL backends loaded on demand, and
-#: scipy.stats (a dependency, but ~1 s to import: only the Latin-hypercube design needs it)
+#: "dask" extra; openvino, ncnn and LiteRT: profile-device's runtimes), GL backends
+#: loaded on demand, and scipy.stats (a dependency, but ~1 s to import: only the Latin-hypercube design needs it)
 OPTIONAL = {"matplotlib", "pyarrow", "pyinstrument", "torch", "pytest_html", "albumentations",
             "mujoco.egl", "mujoco.osmesa", "mujoco.glfw", "scipy.stats", "distributed", "dask",
-            "openvino", "ai_edge_litert", "tflite_runtime", "tensorflow"}
+            "openvino", "ai_edge_litert", "tflite_runtime", "tensorflow", "ncnn"}
 #: the import-time MuJoCo/GL guard (``_mujoco.py``, see its docstring), and the
 #: sweep runner loading the batched backend, whose modules import JAX (the optional
 #: extra ``mjx``), only when ``backend="mjx"`` is asked for
