@@ -50,7 +50,7 @@ from .timed import MEASURABLE, OV_PRECISION, runner, targets
 
 
 def add_parser(sub) -> None:
-    p = sub.add_parser("profile-device", help="time ONNX models on this computer with its "
+    p = sub.add_parser("profile-device", help="time models on this computer with its "
                                               "runtime and write a device profile")
     p.add_argument("models", type=Path, nargs="+", metavar="MODEL.onnx",
                    help="ONNX files (.tflite files for --runtime tflite or edgetpu, "

@@ -1,4 +1,4 @@
-"""The runtimes ``flockai profile-device`` times an ONNX model with, each behind one call.
+"""The runtimes ``flockai profile-device`` times a model with, each behind one call.
 
 ``runner(path, runtime, target, threads, shape, seed) -> Runner``: the model loaded by
 the runtime, a seeded input of its shape, and a call that runs one inference:
@@ -43,11 +43,10 @@ import onnxruntime as ort
 from ..errors import ConfigError
 from .profile import model_format
 
-#: runtimes profile-device times (each reads the ONNX file itself)
+#: runtimes profile-device times
 MEASURABLE = ("onnxruntime", "opencv-dnn", "openvino", "ncnn", "tflite", "edgetpu")
-#: the file format each runtime runs (the rest run the ONNX file)
+#: the file format each runtime runs (the rest run the ONNX file itself)
 FORMAT = {"tflite": "tflite", "edgetpu": "tflite", "ncnn": "ncnn"}
-TFLITE = ("tflite", "edgetpu")
 #: what each format's files are called
 SUFFIX = {"onnx": ".onnx", "tflite": ".tflite", "ncnn": ".param (with its .bin)"}
 #: the Edge TPU delegate's shared library (Coral's libedgetpu, Linux)
@@ -303,5 +302,5 @@ def _tflite(path, runtime, threads, shape, seed) -> Runner:
     return Runner(run_tflite, tuple(dims), version, execution)
 
 
-__all__ = ["EDGETPU_LIB", "MEASURABLE", "OV_PRECISION", "TFLITE", "Runner", "runner",
+__all__ = ["EDGETPU_LIB", "FORMAT", "MEASURABLE", "OV_PRECISION", "SUFFIX", "Runner", "runner",
            "targets"]
