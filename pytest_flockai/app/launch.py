@@ -193,6 +193,11 @@ def _fly(cmd, mission, timeout_s, app_env, cwd, port, speed) -> AppResult:
         err.result = res
         raise err
     if code is None:
+        raised = raised_in(output)
+        if raised:          # an app that raised but did not exit: say so first
+            diagnosis = (f"the app raised {raised} (its output ends in a Python traceback) "
+                         f"but did not exit: a thread or child process (MAVSDK's "
+                         f"mavsdk_server) kept it alive; {diagnosis}")
         e = AppError(f"app {cmd!r} was still running after timeout_s = {timeout_s:g} s and was "
                      f"killed with its process group; {diagnosis}; the drone was "
                      f"{'in the air' if ap.in_air else 'on the ground'} in mode {ap.mode} at "
@@ -200,6 +205,18 @@ def _fly(cmd, mission, timeout_s, app_env, cwd, port, speed) -> AppResult:
         e.result, e.output = res, output
         raise e
     return AppResult(int(code), res, output, time.perf_counter() - wall0, port)
+
+
+def raised_in(output: str) -> str | None:
+    """The exception line of the last Python traceback in ``output`` (e.g. ``KeyError:
+    'x'``), or None when it has none."""
+    at = output.rfind("Traceback (most recent call last):")
+    if at < 0:
+        return None
+    for line in reversed(output[at:].splitlines()[1:]):
+        if line.strip() and not line[0].isspace():
+            return line.strip()[:200]
+    return None
 
 
 def marker_flight(request, mission, mark) -> FlightResult:

@@ -178,6 +178,20 @@ def test_a_hanging_app_fails_in_time_naming_what_it_waited_for_and_leaves_nothin
     assert err.result.end_reason == "app_timeout"
 
 
+@pytest.mark.slow
+def test_an_app_that_raised_but_stayed_alive_is_named_by_its_exception():
+    """A traceback and a process kept alive by a thread: the hang's message leads with
+    the exception, not only with the last MAVLink message."""
+    with pytest.raises(fa.app.AppError) as info:
+        fa.app.run(app("pymavlink_hang.py"), fa.drone(DRONE), timeout_s=5,
+                   env={"HANG_RAISE": "1"})
+    msg = str(info.value)
+    assert "the app raised RuntimeError: lost the vehicle (its output ends in a Python " \
+           "traceback) but did not exit" in msg
+    assert "ESTIMATOR_STATUS" in msg                 # what it waited for is still said
+    assert fa.app.launch.raised_in("ok\n") is None
+
+
 def test_an_app_dying_in_the_air_leaves_the_drone_to_return_and_land():
     r = fa.app.run(app("pymavlink_hop.py"), fa.drone(DRONE), speed=4.0, timeout_s=60,
                    env={"HOP_CRASH": "1"})
