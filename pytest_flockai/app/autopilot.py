@@ -333,6 +333,13 @@ class Autopilot(Policy, Commands):
         self.unsupported += 1
         self.run.event(self.t_last, "app_mission_refused", seq=int(seq), item=name, reason=why)
 
+    def not_emulated(self, kind: str, what: str) -> None:
+        """The app sent ``kind``, an input PX4 flies and this front-end does not (named
+        once per kind; the link's thread)."""
+        self.unsupported += 1
+        self.run.event(self.t_last, "app_not_emulated", message=kind,
+                       reason=f"{what} are not flown")
+
     def off_flight(self, msg) -> None:
         """A command while no flight is being simulated (after it ended)."""
         kind = msg.get_type()

@@ -40,6 +40,12 @@ MISSION_FRAMES = {M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_RELATIVE_ALT, M.MAV_FRA
 PARAMS = {"MIS_TAKEOFF_ALT": 2.5, "MPC_XY_CRUISE": 5.0, "MPC_LAND_SPEED": 0.7,
           "MPC_TKO_SPEED": 1.5}
 
+#: inputs PX4 flies that this front-end does not: each kind is named once, in the flight's
+#: events (``app_not_emulated``), in ``commands_unsupported`` and in a hang's diagnosis
+NOT_FLOWN = {"SET_ATTITUDE_TARGET": "attitude setpoints",
+             "SET_ACTUATOR_CONTROL_TARGET": "actuator controls",
+             "MANUAL_CONTROL": "manual control (sticks)", "RC_CHANNELS_OVERRIDE": "RC overrides"}
+
 #: bytes: the largest datagram of queued telemetry (within an Ethernet MTU of 1500;
 #: MAVSDK's UDP connection reads datagrams of up to 2048 bytes)
 MAX_DATAGRAM = 1400
@@ -247,6 +253,11 @@ class Link:
                 self.inbox.put((time.monotonic(), msg))     # acted on by its arrival
             else:
                 self.ap.off_flight(msg)
+        elif kind in NOT_FLOWN:
+            what = f"{kind} ({NOT_FLOWN[kind]} are not flown)"
+            if what not in self.asked_missing:
+                self.asked_missing.add(what)
+                self.ap.not_emulated(kind, NOT_FLOWN[kind])
         elif kind.startswith("PARAM_"):
             self._param(kind, msg)
         elif kind.startswith("MISSION_"):

@@ -192,6 +192,18 @@ def test_an_app_that_raised_but_stayed_alive_is_named_by_its_exception():
     assert fa.app.launch.raised_in("ok\n") is None
 
 
+def test_an_input_px4_flies_and_the_front_end_does_not_is_named_once():
+    """Attitude setpoints (SET_ATTITUDE_TARGET, three of them): one app_not_emulated event,
+    one more unsupported; the rest of the flight goes on."""
+    r = fa.app.run(app("pymavlink_hop.py"), fa.drone(DRONE), speed=4.0, timeout_s=60,
+                   env={"HOP_ATTITUDE": "1"})
+    assert r.exit_code == 0, r.output
+    (ev,) = events(r.result, "app_not_emulated")
+    assert ev["message"] == "SET_ATTITUDE_TARGET" and "attitude setpoints" in ev["reason"]
+    assert r.result.kpis["app.commands_unsupported"] == 2.0       # and DO_SET_HOME
+    assert r.result.end_reason == "landed"
+
+
 def test_an_app_dying_in_the_air_leaves_the_drone_to_return_and_land():
     r = fa.app.run(app("pymavlink_hop.py"), fa.drone(DRONE), speed=4.0, timeout_s=60,
                    env={"HOP_CRASH": "1"})

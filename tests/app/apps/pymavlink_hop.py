@@ -1,6 +1,7 @@
 """A pymavlink program (written for the tests): arm, climb to 4 m, fly $HOP_NORTH_M (10) m north with
 DO_REPOSITION, land; exits 0 once the autopilot reports it is on the ground
-(with $HOP_CRASH set it exits 3 at 4 m instead, as a crashing app)."""
+(with $HOP_CRASH set it exits 3 at 4 m instead, as a crashing app; with $HOP_ATTITUDE set
+it also sends attitude setpoints at 4 m, which the simulated autopilot does not fly)."""
 
 import math
 import os
@@ -45,6 +46,10 @@ wait(lambda x: x.get_type() == "GLOBAL_POSITION_INT" and x.relative_alt > 3800, 
 if os.environ.get("HOP_CRASH"):
     print("crashing in the air", flush=True)
     os._exit(3)
+if os.environ.get("HOP_ATTITUDE"):
+    for _ in range(3):
+        m.mav.set_attitude_target_send(0, m.target_system, 1, 0b00000111, [1.0, 0.0, 0.0, 0.0],
+                                       0.0, 0.0, 0.0, 0.5)
 north = float(os.environ.get("HOP_NORTH_M", "10"))
 lat = home.latitude * 1e-7 + north / 111195.0
 m.mav.command_int_send(m.target_system, 1, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
