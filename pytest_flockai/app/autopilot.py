@@ -83,7 +83,7 @@ class Autopilot(Policy, Commands):
         self._due = dict.fromkeys(RATES, 0.0)
         self._next_tel = 0.0
         self.cruise = 5.0
-        self.setpoint: tuple | None = None   # (pos, vel, yaw, wall time) from the app
+        self.setpoint: tuple | None = None   # (pos, vel, yaw, wall time, yaw rate) from the app
         self.sp_pilot: Setpoint | None = None
         self.mission_reset()
         self.link = Link(self.port, self)

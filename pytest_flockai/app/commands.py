@@ -1,9 +1,7 @@
-"""The commands of the simulated autopilot (a mixin of ``Autopilot``): each MAVLink
-command the app sends, what it does to the flight and the COMMAND_ACK result (PX4's
-behaviour where it is emulated; UNSUPPORTED where it is not), the offboard setpoints,
-and the mission executor (waypoints at the cruise speed heading to the next one,
-speed changes, delays, return to launch, land; MISSION_CURRENT and
-MISSION_ITEM_REACHED as PX4 reports them)."""
+"""The commands of the simulated autopilot (a mixin of ``Autopilot``): each MAVLink command
+the app sends, what it does and its COMMAND_ACK (PX4's behaviour where emulated, else
+UNSUPPORTED), the offboard setpoints, and the mission executor (waypoints at the cruise
+speed, speed changes, delays, RTL, land; MISSION_CURRENT and MISSION_ITEM_REACHED)."""
 
 from __future__ import annotations
 
@@ -264,6 +262,8 @@ class Commands:
         m, g = msg.type_mask, self.geo
         pos = vel = None
         yaw = None if m & M.POSITION_TARGET_TYPEMASK_YAW_IGNORE else frames.yaw_enu(msg.yaw)
+        rate = None if yaw is not None or m & M.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE \
+            else -float(msg.yaw_rate)       # NED's clockwise yaw rate, where no yaw is given
         if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
             if msg.coordinate_frame not in (M.MAV_FRAME_LOCAL_NED, M.MAV_FRAME_BODY_NED):
                 self.link.asked_missing.add(f"setpoint frame {msg.coordinate_frame}")
@@ -277,15 +277,14 @@ class Commands:
                     vel = (msg.vx * math.cos(h) + msg.vy * math.sin(h),
                            msg.vx * math.sin(h) - msg.vy * math.cos(h), -msg.vz)
         else:
-            rel_frames = (M.MAV_FRAME_GLOBAL_RELATIVE_ALT, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)
             if not m & M.POSITION_TARGET_TYPEMASK_X_IGNORE:
-                rel = msg.alt if msg.coordinate_frame in rel_frames else msg.alt - g.amsl0
+                rel = msg.alt if msg.coordinate_frame in RELATIVE_FRAMES else msg.alt - g.amsl0
                 pos = g.to_world(msg.lat_int * 1e-7, msg.lon_int * 1e-7, rel)
             if not m & M.POSITION_TARGET_TYPEMASK_VX_IGNORE:
                 vel = (msg.vy, msg.vx, -msg.vz)
-        self.setpoint = (pos, vel, yaw, self.wall)
+        self.setpoint = (pos, vel, yaw, self.wall, rate)
         if self.mode == "OFFBOARD" and self.sp_pilot is not None:
-            self.sp_pilot.set(pos, vel, yaw)
+            self.sp_pilot.set(pos, vel, yaw, yaw_rate=rate)
 
     def offboard(self, t) -> int:
         """Enter OFFBOARD: PX4 refuses it without a recent setpoint; on the pad, armed,
@@ -296,9 +295,10 @@ class Commands:
             return DENIED
         if self.stages.grounded:
             self.stages.take_off(t, self.st.home[2] + 0.1)
-        pos, vel, yaw, _ = self.setpoint
+        pos, vel, yaw, _, rate = self.setpoint
         q = self.st.qc
-        sp = Setpoint(q[2], self.cruise, pos=pos, vel=vel, yaw=self._yaw() if yaw is None else yaw)
+        sp = Setpoint(q[2], self.cruise, pos=pos, vel=vel, yaw=self._yaw() if yaw is None else yaw,
+                      yaw_rate=rate)
         self.mission_active = False
         self.fly(t, sp)
         self.sp_pilot = sp

@@ -23,23 +23,29 @@ Z_SPEED = 3.0
 ORBIT_YAW = {0: "center", 1: "initial", 2: "initial", 3: "tangent"}
 #: 1/s: the position gain that turns the distance to a position setpoint into a speed
 GAIN = 1.0
+#: rad/s: the fastest yaw rate a setpoint turns at (PX4's MC_YAWRATE_MAX default, 200 deg/s)
+YAW_RATE_MAX = math.radians(200.0)
 
 
 class Setpoint(Pilot):
     """Fly to ``pos`` (x, y, z) or at ``vel`` (vx, vy, vz), heading ``yaw`` (rad,
-    the simulator's; None: keep the heading); never done."""
+    the simulator's; None: keep the heading) or turning at ``yaw_rate`` (rad/s,
+    counter-clockwise seen from above, at most ``YAW_RATE_MAX``); never done."""
 
     def __init__(self, altitude: float, speed: float, pos=None, vel=None,
-                 yaw: float | None = None):
+                 yaw: float | None = None, yaw_rate: float | None = None):
         self.altitude, self.speed = float(altitude), float(speed)
         self.pos, self.vel, self.yaw = pos, vel, yaw
+        self.yaw_rate = _rate(yaw_rate)
         self.path_length = None
 
-    def set(self, pos=None, vel=None, yaw=None, speed=None) -> None:
-        """A new setpoint (from the app); ``yaw`` None keeps the one flown."""
+    def set(self, pos=None, vel=None, yaw=None, speed=None, yaw_rate=None) -> None:
+        """A new setpoint (from the app); ``yaw`` None keeps the one flown, turning at
+        ``yaw_rate`` where one is given."""
         self.pos, self.vel = pos, vel
         if yaw is not None:
             self.yaw = yaw
+        self.yaw_rate = _rate(yaw_rate)
         if speed is not None and speed > 0:
             self.speed = float(speed)
 
@@ -84,11 +90,19 @@ class Setpoint(Pilot):
             v[i] += dv[i]
             p[i] += v[i] * dt
             sp[i], sp[3 + i] = p[i], v[i]
+        if self.yaw_rate is not None:
+            y = (self._yaw0 if self.yaw is None else self.yaw) + self.yaw_rate * dt
+            self.yaw = (y + math.pi) % (2.0 * math.pi) - math.pi
         sp[9] = self._yaw0 if self.yaw is None else self.yaw
         return False
 
     def to_dict(self):
-        return {"type": "Setpoint", "pos": self.pos, "vel": self.vel, "yaw": self.yaw}
+        return {"type": "Setpoint", "pos": self.pos, "vel": self.vel, "yaw": self.yaw,
+                "yaw_rate": self.yaw_rate}
+
+
+def _rate(r) -> float | None:
+    return None if r is None else max(-YAW_RATE_MAX, min(YAW_RATE_MAX, float(r)))
 
 
 class Leg(Pilot):

@@ -88,6 +88,28 @@ def test_mavsdk_offboard_position_setpoints_fly_a_square_with_headings():
 
 @pytest.mark.slow
 @needs_mavsdk
+def test_mavsdk_velocity_body_setpoints_turn_at_the_yaw_rate_asked():
+    """MAVSDK's set_velocity_body with a yaw speed (30 deg/s clockwise, 2 m/s forward):
+    the drone turns at that rate (PX4 flies a yaw rate where no yaw is given), its
+    heading telemetry follows, and it flies a curve, not a line."""
+    r = fa.app.run(app("mavsdk_velocity_body.py"), fa.drone(DRONE), speed=2.0, timeout_s=120)
+    assert r.exit_code == 0, r.output
+    tel = r.result.telemetry
+    yaw = np.unwrap(tel["yaw"].to_numpy())
+    rate = np.degrees(np.diff(yaw) / np.diff(tel.index.to_numpy()))
+    turning = rate[np.abs(rate) > 5.0]
+    assert len(turning) > 20 and np.median(turning) == pytest.approx(-30.0, abs=2.0)
+    before, after = (float(line.split()[-1]) for line in r.output.splitlines()
+                     if line.startswith("heading "))
+    turned = (after - before) % 360.0                  # clockwise, as MAVLink's headings
+    assert turned == pytest.approx(np.degrees(yaw[0] - yaw[-1]) % 360.0, abs=3.0)
+    assert turned > 90.0
+    xy = tel[["x", "y"]].to_numpy()
+    assert np.ptp(xy[:, 0]) > 2.0 and np.ptp(xy[:, 1]) > 2.0        # a curve
+
+
+@pytest.mark.slow
+@needs_mavsdk
 def test_mavsdk_mission_gives_the_same_kpis_at_speed_1_and_20():
     runs = {}
     for speed in (20.0, 1.0):
