@@ -48,13 +48,13 @@ import io
 import math
 import os
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import onnx
 
 from .._io import atomic_write
 from ..errors import ConfigError
-from ._fusion import FOLDED, fuse, fuse_patterns, fuse_qdq, half_weights, quantization
+from ._fusion import FOLDED, QOPERATOR, fuse, fuse_patterns, fuse_qdq, half_weights, quantization
 from ._ops import is_folded, node_cost, weight_names
 from ._shapes import (
     constant_shapes,
@@ -91,6 +91,9 @@ class NodeCost:
     in_elems: int
     out_elems: int
     fused_into: str | None = None
+    #: a layer a quantized graph's runtime computes in float (``ort_graph``: one ONNX
+    #: Runtime did not fuse into an int8 operator); it runs at fp32 on an int8 deployment
+    in_float: bool = False
 
 
 @dataclass(frozen=True)
@@ -147,7 +150,8 @@ class NetworkCost:
         if self.input_shape is not None:
             buf.write(f"# input_shape={'x'.join(str(d) for d in self.input_shape)}\n")
         for k, v in self.meta.items():
-            buf.write(f"# {k}={str(v).replace(chr(10), ' ')}\n")
+            if not k.startswith("_"):           # "_graph": the model itself, not written
+                buf.write(f"# {k}={str(v).replace(chr(10), ' ')}\n")
         for u in self.uncounted:
             buf.write(f"# uncounted={u}\n")
         w = csv.writer(buf, lineterminator="\n")
@@ -262,10 +266,13 @@ def _input_shapes(proto, input_shape):
 
 
 def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
-            name: str | None = None) -> NetworkCost:
+            name: str | None = None, as_run: bool = False) -> NetworkCost:
     """Per-node costs of one inference of ``model`` (ONNX path, bytes, ModelProto or
     OnnxModel). ``input_shape``: the first input's full shape, its square side (an int,
-    batch 1), or ``{input name: shape}``; dynamic batch dims default to 1."""
+    batch 1), or ``{input name: shape}``; dynamic batch dims default to 1. ``as_run``: the
+    graph a runtime's optimizer wrote (``ort_graph``): its Q/DQ nodes are passes of their
+    own, and a float layer in it is marked ``in_float``. A QDQ graph keeps its
+    shape-fixed proto in ``meta["_graph"]`` (not written by ``to_csv``)."""
     proto, shapes_in, default_name = _proto_and_shapes(model, input_shape)
     fixed = fix_input_shapes(proto, shapes_in)
     for inp in graph_inputs(fixed):
@@ -306,12 +313,19 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
         nodes.append(NodeCost(label, node.op_type, kind, int(macs), elems(node.input, weight=True),
                               elems(node.input), elems(node.output),
                               FOLDED if is_const else None))
-    nodes = fuse_qdq(g, fuse_patterns(g, fuse(g, nodes)))
+    nodes = fuse_patterns(g, fuse(g, nodes))
+    if as_run:
+        nodes = [replace(n, in_float=True) if n.kind in ("conv", "dwconv", "matmul")
+                 and n.op_type not in QOPERATOR and n.fused_into is None else n for n in nodes]
+    else:
+        nodes = fuse_qdq(g, nodes)
     shape = next(iter(shapes.get(i.name) for i in graph_inputs(fixed)), None)
     meta: dict = {"shapes": how}
     quant = quantization(g)
     if quant:
         meta["int8"] = quant
+        if quant == "qdq" and not as_run:
+            meta["_graph"] = fixed
     elif half_weights(g):
         meta["fp16"] = True
     cost = NetworkCost(tuple(nodes), name or default_name, shape, tuple(uncounted), meta)

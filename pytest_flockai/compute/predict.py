@@ -41,7 +41,7 @@ import json
 import math
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -54,6 +54,7 @@ from .devices import Device
 from .devices import device as _device
 from .graph import analyze
 from .measured import is_measured
+from .ort_graph import as_run
 
 EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
 KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
@@ -218,15 +219,6 @@ def params_for(table: dict, dep: _rt.Deployment) -> dict:
     return {**tgt, "scale": scale, "winograd": wino, "tuned": g is not None}
 
 
-def thread_share(dep: _rt.Deployment, unit, parallel: float) -> float:
-    """The share of the threads' summed peak a CPU deployment reaches: n threads run as
-    ``1 + (n - 1) * parallel`` of one (1 on other units, or at ``parallel`` = 1)."""
-    if dep.target != "cpu" or unit.cores <= 1:
-        return 1.0
-    n = min(dep.threads or unit.cores, unit.cores)
-    return (1.0 + (n - 1) * parallel) / n
-
-
 def param_stream(nbytes: float, held: float, cache: float) -> tuple[float, float]:
     """(bytes streamed at every inference, bytes held after) of a layer's ``nbytes`` of
     parameters on an accelerator whose ``cache`` bytes of on-chip memory already hold
@@ -242,7 +234,7 @@ def param_stream(nbytes: float, held: float, cache: float) -> tuple[float, float
 def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
     """(seconds, per-node timings) of a network cost on a deployment with efficiencies."""
     unit = dev.unit(dep.target)
-    peak = _rt.peak_macs(dep, unit) * thread_share(dep, unit, prm.get("parallel", 1.0))
+    peak = _rt.peak_macs(dep, unit) * _rt.thread_share(dep, unit, prm.get("parallel", 1.0))
     bw = stream_gbs(dev) * 1e9 * prm["mem"]
     bw_w = stream_gbs(dev) * 1e9 * prm["mem_weights"]
     nbytes = _rt.compute_precision(dep, unit)[1]
@@ -254,16 +246,23 @@ def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, 
     cache = unit.cache_mb * 2 ** 20
     link = unit.link_gbs * 1e9 * prm["mem_weights"]
     held = 0.0
+    # a layer the runtime computes in float inside an int8 graph (``ort_graph``): fp32's
+    # peak, element size and scale (``prm["scale_float"]``, set by predict_latency)
+    as_float = None
+    if "scale_float" in prm:
+        fdep = replace(dep, precision="fp32")
+        as_float = (_rt.peak_macs(fdep, unit) * _rt.thread_share(fdep, unit, prm.get("parallel", 1.0)),
+                    _rt.compute_precision(fdep, unit)[1], prm["scale_float"])
     for n in dispatched(cost.nodes, dep.runtime):
-        eff = min(1.0, prm[n.kind] * (prm["scale"] if n.kind in ("conv", "dwconv", "matmul")
-                                      else 1.0))
-        tc = n.macs / (peak * eff) if n.macs else 0.0
+        pk, nb, sc = as_float if n.in_float and as_float else (peak, nbytes, prm["scale"])
+        eff = min(1.0, prm[n.kind] * (sc if n.kind in ("conv", "dwconv", "matmul") else 1.0))
+        tc = n.macs / (pk * eff) if n.macs else 0.0
         if prm.get("winograd", 1.0) != 1.0 and winograd_3x3(n):
             tc /= prm["winograd"]
-        tm = ((n.in_elems + n.out_elems) * nbytes / bw + n.weight_elems * nbytes / bw_w
+        tm = ((n.in_elems + n.out_elems) * nb / bw + n.weight_elems * nb / bw_w
               if bw > 0 else 0.0)
         if cache > 0 and link > 0 and n.weight_elems:
-            streamed, held = param_stream(n.weight_elems * nbytes, held, cache)
+            streamed, held = param_stream(n.weight_elems * nb, held, cache)
             tm += streamed / link
         t = max(tc, tm) + dispatch
         total += t
@@ -351,7 +350,11 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
                       quantized=getattr(cost, "meta", {}).get("int8"),
                       half=bool(getattr(cost, "meta", {}).get("fp16")))
     table = efficiencies(efficiencies_path)
-    secs, per = roofline(cost, dev, dep, params_for(table, dep))
+    prm = params_for(table, dep)
+    if dep.runtime == "onnxruntime" and dep.precision == "int8" and "_graph" in cost.meta:
+        cost = as_run(cost)             # the layers ONNX Runtime leaves in float (ort_graph)
+        prm["scale_float"] = params_for(table, replace(dep, precision="fp32"))["scale"]
+    secs, per = roofline(cost, dev, dep, prm)
     macs = float(sum(n.macs for n in cost.nodes))
     return LatencyPrediction(secs, _band(table, dev, dep, secs), secs * above_idle_w(dev, dep),
                              dev.name, dep.runtime, dep.target, dep.precision, dep.threads,

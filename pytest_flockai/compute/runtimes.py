@@ -146,6 +146,15 @@ def power_share(dep: Deployment | None, unit) -> float:
     return min(dep.threads or unit.cores, unit.cores) / unit.cores
 
 
+def thread_share(dep: Deployment, unit, parallel: float) -> float:
+    """The share of the threads' summed peak a CPU deployment reaches: n threads run as
+    ``1 + (n - 1) * parallel`` of one (1 on other units, or at ``parallel`` = 1)."""
+    if dep.target != "cpu" or unit.cores <= 1:
+        return 1.0
+    n = min(dep.threads or unit.cores, unit.cores)
+    return (1.0 + (n - 1) * parallel) / n
+
+
 def peak_macs(dep: Deployment, unit) -> float:
     """The unit's peak MAC/s for the deployment (``compute_precision``; threads on a CPU)."""
     p, _ = compute_precision(dep, unit)
@@ -257,4 +266,4 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
 __all__ = ["BYTES", "DEFAULT_THREADS", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
            "TF32_BY_DEFAULT", "Deployment", "HalfModelWarning", "ModelPrecisionWarning",
            "QuantizedModelWarning", "check_names", "compute_precision", "peak_macs", "power_share",
-           "resolve"]
+           "resolve", "thread_share"]

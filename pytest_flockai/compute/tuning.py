@@ -13,7 +13,7 @@ The procedure (``tune``), run by ``benchmarks/latency_tune.py``:
      DRAM), the dispatch cost per
      node and the per-inference overhead (both at 1 GHz, scaled by the unit's clock), and,
      for the CPU, the parallel efficiency of its threads (n threads compute as
-     ``1 + (n - 1) * parallel`` of one: ``predict.thread_share``; prior 1, bounds 0.2-1);
+     ``1 + (n - 1) * parallel`` of one: ``runtimes.thread_share``; prior 1, bounds 0.2-1);
    - per runtime/target/precision with tuning rows: one scale of the compute efficiency;
    - per runtime/target with tuning rows: one factor on the dispatch cost (how much a
      runtime fuses and how cheaply it launches: TensorRT against eager PyTorch).
@@ -58,7 +58,6 @@ from .predict import (
     params_for,
     roofline,
     stream_gbs,
-    thread_share,
     winograd_3x3,
 )
 from .published import BOARD, _stats, band_of, predict_row
@@ -116,7 +115,7 @@ class _Compiled:
         eff = np.array([tgt["conv"] * scale, tgt["dwconv"] * scale, tgt["matmul"] * scale,
                         tgt["elementwise"], tgt["pool"], tgt["data"]])
         eff = np.minimum(eff, 1.0)
-        tc = self.macs / (self.peak * thread_share(self.dep, self.unit, tgt.get("parallel", 1.0))
+        tc = self.macs / (self.peak * _rt.thread_share(self.dep, self.unit, tgt.get("parallel", 1.0))
                           * eff[self.kind])
         if self.uses_wino:
             tc = np.where(self.wino, tc / wino, tc)

@@ -262,7 +262,8 @@ def test_cpu_threads_add_at_the_tuned_parallel_efficiency():
     """n CPU threads run as 1 + (n - 1) * parallel threads' worth of one core's peak: one
     thread is one core whatever the efficiency, every thread at parallel = 1, and a GPU or
     NPU is not touched. The stored table's figure lies between the bounds, below 1."""
-    from pytest_flockai.compute.predict import efficiencies, thread_share
+    from pytest_flockai.compute.predict import efficiencies
+    from pytest_flockai.compute.runtimes import thread_share
     pi5 = DEVICES["raspberry-pi-5"]
     cpu = pi5.unit("cpu")
     one = runtimes.resolve(pi5, "onnxruntime", "fp32", threads=1)

@@ -8,7 +8,12 @@ seeded representative dataset, as for a Coral or a Pi.
     python -m venv /tmp/tf && /tmp/tf/bin/pip install tensorflow-cpu
     /tmp/tf/bin/python tests/compute/data/make_tflite.py
 
-Written with tensorflow-cpu 2.21.0.
+Written with tensorflow-cpu 2.21.0. tiny_cnn_int8_tf2onnx.onnx is the int8 model converted
+to ONNX as teams convert a TF Lite model (a QDQ graph; tests/compute/test_quantized_models.py),
+with tf2onnx 1.16.1 under tensorflow-cpu 2.15.1 (tf2onnx does not install with 2.21):
+
+    python -m tf2onnx.convert --tflite tests/compute/data/tiny_cnn_int8.tflite \
+        --output tests/compute/data/tiny_cnn_int8_tf2onnx.onnx --opset 13
 """
 
 from pathlib import Path
