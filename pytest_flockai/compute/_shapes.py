@@ -166,8 +166,15 @@ def _run_shapes(fixed: onnx.ModelProto, names: list[str]) -> tuple[dict, str | N
         outs = sess.get_outputs()
         values = sess.run([o.name for o in outs], feeds)
     except Exception as e:
-        return {}, f"onnxruntime run for shapes failed: {type(e).__name__}: {str(e)[:300]}"
+        return {}, f"onnxruntime run for shapes failed: {type(e).__name__}: {_clip(str(e))}"
     return {o.name: tuple(int(d) for d in np.shape(v)) for o, v in zip(outs, values)}, None
+
+
+def _clip(text: str, head: int = 100, tail: int = 240) -> str:
+    """``text`` cut to its start and its end (ONNX Runtime's reason comes last, after the
+    node's name, which exporters such as tf2onnx make hundreds of characters long)."""
+    text = " ".join(text.split())
+    return text if len(text) <= head + tail + 5 else f"{text[:head]} ... {text[-tail:]}"
 
 
 __all__ = ["constant_shapes", "fix_input_shapes", "graph_inputs", "infer_shapes", "load_onnx",

@@ -277,8 +277,8 @@ def analyze(model, input_shape=None, *, allow_uncounted: bool = False,
     fixed = fix_input_shapes(proto, shapes_in)
     for inp in graph_inputs(fixed):
         if static_shape(inp.type) is None:
-            dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else "?"
-                    for d in inp.type.tensor_type.shape.dim]
+            dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0
+                    else d.dim_param or "?" for d in inp.type.tensor_type.shape.dim]
             raise DynamicInputError(
                 f"input_shape = {input_shape!r}: input {inp.name!r} of "
                 f"{default_name or 'the model'!r} has dims {dims}; give its full shape (e.g. "

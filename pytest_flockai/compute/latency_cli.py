@@ -109,6 +109,8 @@ def rows(model, computers=None, *, runtime=None, precision=None, target=None, th
             out.append({"computer": name, **p.to_dict(), "milliseconds": p.milliseconds,
                         "int8_fallback": any(issubclass(w.category, _rt.QuantizedModelWarning)
                                              for w in said),
+                        "fp16_fallback": any(issubclass(w.category, _rt.HalfModelWarning)
+                                             for w in said),
                         "precision_warning": notes[0] if notes else None})
     return cost, out, left
 
@@ -117,7 +119,9 @@ def run_cli(a) -> int:
     cost, found, left = rows(a.model, a.computer, runtime=a.runtime, precision=a.precision,
                              target=a.target, threads=a.threads,
                              input_shape=_parse_shape(a.input_shape), own=a.computers)
-    print(f"flockai predict-latency: {cost.name}: {cost.macs / 1e9:.3g} GMAC, "
+    layers = sum(n.macs for n in cost.nodes if n.kind in ("conv", "dwconv", "matmul"))
+    print(f"flockai predict-latency: {cost.name}: {cost.macs / 1e9:.3g} GMAC "
+          f"({layers / 1e9:.3g} in convolutions and matrix products, as MACs are published), "
           f"{len(cost.run_nodes)} kernels, input {'x'.join(map(str, cost.input_shape or ()))}"
           + (f", quantized ({cost.meta['int8']})" if cost.meta.get("int8") else ""))
     print(f"{'computer':24s} {'runtime/target/precision':26s} {'threads':>7s} {'ms':>10s} "
@@ -133,12 +137,17 @@ def run_cli(a) -> int:
     if any(r["int8_fallback"] for r in found):
         print("  * the model is quantized (int8) and this deployment cannot run int8: its "
               "default precision is shown")
-    elif any(r["precision_warning"] for r in found):
-        print("  * " + next(r["precision_warning"] for r in found if r["precision_warning"])
-              .split(": ", 1)[-1])
+    if any(r["fp16_fallback"] for r in found):
+        print("  * the model's weights are fp16 and this deployment cannot run fp16: its "
+              "default precision is shown")
+    other = [r["precision_warning"] for r in found if r["precision_warning"]
+             and not r["int8_fallback"] and not r["fp16_fallback"]]
+    if other:                                   # the Edge TPU and a float graph
+        print("  * " + other[0].split(": ", 1)[-1])
     for why in left:
         print(f"  left out: {why}")
     if a.json is not None:
-        doc = {"model": str(a.model), "macs": cost.macs, "rows": found, "left_out": left}
+        doc = {"model": str(a.model), "macs": cost.macs, "layer_macs": layers, "rows": found,
+               "left_out": left}
         atomic_write(a.json, lambda fh: fh.write(json.dumps(doc, indent=1) + "\n"))
     return 0

@@ -233,7 +233,7 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
     precs = [p for p in unit.precisions if p in RUNTIME_PRECISIONS[runtime]]
     # the graph's own precision (an int8 or an fp16 graph runs its own kernels) where the
     # deployment runs it
-    own, what, cls = (("int8", f"is quantized (int8, {quantized})", QuantizedModelWarning)
+    own, what, cls = (("int8", f" is quantized (int8, {quantized})", QuantizedModelWarning)
                       if quantized else ("fp16", "'s weights are fp16", HalfModelWarning)
                       if half else (None, "", None))
     if precision is None and own is not None:

@@ -14,6 +14,7 @@ from onnx import TensorProto, helper, numpy_helper
 from onnxruntime.quantization import CalibrationDataReader, QuantFormat, quantize_static
 
 import pytest_flockai as fa
+from pytest_flockai.cli import main
 from pytest_flockai.compute import runtimes
 from pytest_flockai.compute.graph import FOLDED, analyze
 from pytest_flockai.compute.ort_graph import as_run
@@ -194,7 +195,7 @@ def _half_net(path):
     return path
 
 
-def test_an_fp16_graph_runs_at_fp16_where_it_can_and_warns_where_not(nets, tmp_path):
+def test_an_fp16_graph_runs_at_fp16_where_it_can_and_warns_where_not(nets, tmp_path, capsys):
     half = analyze(_half_net(tmp_path / "half.onnx"))
     assert half.meta.get("fp16") is True and "fp16" not in analyze(nets["float"]).meta
     with warnings.catch_warnings():
@@ -209,6 +210,13 @@ def test_an_fp16_graph_runs_at_fp16_where_it_can_and_warns_where_not(nets, tmp_p
         p4 = predict_latency(half, "raspberry-pi-4", runtime="ncnn")      # Cortex-A72: no fp16
     assert p4.precision == "fp32"
     assert p4.seconds == predict_latency(nets["float"], "raspberry-pi-4", runtime="ncnn").seconds
+    # the command line stars those rows and says why (the int8 note would be wrong here)
+    capsys.readouterr()
+    assert main(["predict-latency", str(tmp_path / "half.onnx"), "--computer",
+                 "raspberry-pi-4", "--runtime", "ncnn"]) == 0
+    out = capsys.readouterr().out
+    assert "ncnn/cpu/fp32*" in out and "weights are fp16 and this deployment cannot run fp16" in out
+    assert "quantized" not in out
 
 
 def test_a_float_graph_on_the_edge_tpu_warns_that_it_needs_int8(nets):
