@@ -24,6 +24,7 @@ initializers (shapes, indices, axes) are not parameters.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 
 import onnx
@@ -77,9 +78,11 @@ def count_macs(model, input_shapes: dict | None = None, *,
     ``input_shapes``: {input name: full shape} for inputs with dynamic dims. A node
     left uncounted is a ConfigError naming it unless ``allow_uncounted`` (a warning).
     """
+    name = None
     if not isinstance(model, onnx.ModelProto):
+        name = os.path.splitext(os.path.basename(os.fspath(model)))[0]   # as analyze names it
         model = load_onnx(model)
-    cost = analyze(model, input_shapes, allow_uncounted=allow_uncounted)
+    cost = analyze(model, input_shapes, allow_uncounted=allow_uncounted, name=name)
     return MacReport(macs=int(cost.macs), params=_param_count(model), by_op=cost.by_op(),
                      uncounted=list(cost.uncounted))
 
