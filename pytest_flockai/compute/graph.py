@@ -104,7 +104,7 @@ class NetworkCost:
     name: str = ""
     input_shape: tuple[int, ...] | None = None
     uncounted: tuple[str, ...] = ()
-    meta: dict = field(default_factory=dict, compare=False)
+    meta: dict = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def macs(self) -> int:

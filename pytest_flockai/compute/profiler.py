@@ -128,12 +128,12 @@ def _onnx_dims(path) -> list:
 
 
 def _same_input(path, shape, onnx_path) -> None:
-    """The ONNX file a .tflite model stands for takes as many input values (NHWC and NCHW
-    hold the same count); ConfigError where its input's dims are fixed and differ."""
+    """The ONNX file a .tflite or ncnn model stands for takes as many input values (NHWC
+    and NCHW hold the same count); ConfigError where its input's dims are fixed and differ."""
     dims = _onnx_dims(onnx_path)
     if all(d > 0 for d in dims) and int(np.prod(dims)) != int(np.prod(shape)):
         raise ConfigError(f"--onnx = {str(onnx_path)!r} is not allowed for {str(path)!r}: its "
-                          f"input {'x'.join(map(str, dims))} and the .tflite input "
+                          f"input {'x'.join(map(str, dims))} and the timed model's input "
                           f"{'x'.join(map(str, shape))} differ in size, so they are not one "
                           f"network at one input size")
 
