@@ -48,6 +48,9 @@ from .graph import analyze
 from .profile import RUNTIMES, SCHEMA, from_dict, model_format, model_sha256
 from .timed import MEASURABLE, OV_PRECISION, runner, targets
 
+#: the runtime a model file is timed with when ``--runtime`` is not given
+BY_FORMAT = {"onnx": "onnxruntime", "tflite": "tflite", "ncnn": "ncnn"}
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser("profile-device", help="time models on this computer with its "
@@ -55,7 +58,9 @@ def add_parser(sub) -> None:
     p.add_argument("models", type=Path, nargs="+", metavar="MODEL.onnx",
                    help="ONNX files (.tflite files for --runtime tflite or edgetpu, "
                         ".param files with their .bin for ncnn)")
-    p.add_argument("--runtime", default="onnxruntime", help=f"one of {', '.join(MEASURABLE)}")
+    p.add_argument("--runtime", default=None, help=f"one of {', '.join(MEASURABLE)} (default: "
+                                                   f"onnxruntime for .onnx files, tflite for "
+                                                   f".tflite, ncnn for .param)")
     p.add_argument("--target", default=None, help="cpu (default), gpu (onnxruntime's CUDA provider, "
                                                    "OpenVINO's GPU device) or npu (edgetpu)")
     p.add_argument("--threads", type=int, default=None, help="intra-op threads (runtime "
@@ -156,13 +161,16 @@ def _check_int(name, value, low):
         raise ConfigError(f"--{name} = {value!r} is not allowed; expected a whole number >= {low}")
 
 
-def measure(models, *, runtime="onnxruntime", target=None, threads=None, runs=50, warmup=5,
+def measure(models, *, runtime=None, target=None, threads=None, runs=50, warmup=5,
             input_shape=None, power_csv=None, idle_w=None, jetson_rails=False, name=None,
             seed=0, stands_for=None) -> dict:
     """Time each model and return the profile document (``write`` saves it).
     ``stands_for``: for ``.tflite`` and ncnn models, the ONNX file each stands for: the
     profile identifies the model by that file's SHA-256 (and counts its MACs), so a task
-    flying it draws these latencies; the timed file is kept under ``file``."""
+    flying it draws these latencies; the timed file is kept under ``file``. ``runtime``
+    None: the first model's format's (``BY_FORMAT``)."""
+    if runtime is None:
+        runtime = BY_FORMAT[model_format(models[0])] if models else "onnxruntime"
     if runtime not in MEASURABLE:
         where = "known but not measurable here" if runtime in RUNTIMES else "unknown"
         raise ConfigError(f"--runtime = {runtime!r} is not allowed ({where}); profile-device "
@@ -378,4 +386,4 @@ def _rail_reader(root):
                       f"{root}; this computer is not a Jetson: give --power-csv instead")
 
 
-__all__ = ["add_parser", "host_facts", "measure", "run_cli", "write"]
+__all__ = ["BY_FORMAT", "add_parser", "host_facts", "measure", "run_cli", "write"]

@@ -251,9 +251,10 @@ def test_tflite_times_a_tflite_file_for_the_onnx_file_it_stands_for(tmp_path):
     p = fa.compute.predict_latency(b, dev)
     assert p.method == "measured" and p.seconds == pytest.approx(
         np.percentile(dev.latency_samples(b), 50))
-    # without --onnx the .tflite file is the model: matched by its own SHA-256
-    alone = fa.compute.profile(write_doc(measure([q8], runtime="tflite", runs=3, warmup=1),
-                                         tmp_path / "q.json"))
+    # without --onnx the .tflite file is the model: matched by its own SHA-256 (and
+    # without --runtime a .tflite file is timed with tflite)
+    alone = fa.compute.profile(write_doc(measure([q8], runs=3, warmup=1), tmp_path / "q.json"))
+    assert alone.runtime == "tflite"
     assert alone.precision == "int8" and alone.latency_samples(q8).shape == (3,)
     assert alone.model(q8).macs is None
 
@@ -265,7 +266,8 @@ def write_doc(doc, path):
 
 @pytest.mark.parametrize("models, kw, text", [
     (["a.onnx"], {"runtime": "tflite"}, "is an ONNX file; --runtime tflite runs .tflite"),
-    ([DATA / "tiny_cnn.tflite"], {}, r"is a TF Lite \(.tflite\) file; --runtime onnxruntime"),
+    ([DATA / "tiny_cnn.tflite"], {"runtime": "onnxruntime"},
+     r"is a TF Lite \(.tflite\) file; --runtime onnxruntime"),
     ([DATA / "tiny_cnn.tflite"], {"runtime": "tflite", "stands_for": ["a.onnx", "a.onnx"]},
      "--onnx given 2 time"),
     (["a.onnx"], {"stands_for": ["a.onnx"]}, "an ONNX model itself"),
