@@ -128,7 +128,7 @@ def run_cli(a) -> int:
           f"{'held-out range (ms)':>21s} {'mJ above idle':>13s}")
     for r in found:
         dep = f"{r['runtime']}/{r['target']}/{r['precision']}" + (
-            "*" if r["precision_warning"] else "")
+            "*" if r["precision_warning"] else "") + ("~" if r["tuned"] is False else "")
         lo, hi = (1e3 * b for b in r["band"])
         thr = "-" if r["target"] != "cpu" else r["threads"] or "all"
         print(f"{r['computer']:24s} {dep:26s} {thr:>7} "
@@ -144,6 +144,10 @@ def run_cli(a) -> int:
              and not r["int8_fallback"] and not r["fp16_fallback"]]
     if other:                                   # the Edge TPU and a float graph
         print("  * " + other[0].split(": ", 1)[-1])
+    if any(r["tuned"] is False for r in found):
+        print("  ~ no published measurement of this runtime and precision was fitted: its "
+              "efficiency is borrowed from the runtime's other precisions or the unit's other "
+              "runtimes (docs: explanation/latency)")
     for why in left:
         print(f"  left out: {why}")
     if a.json is not None:

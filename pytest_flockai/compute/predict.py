@@ -55,6 +55,7 @@ from .devices import device as _device
 from .graph import analyze
 from .measured import is_measured
 from .ort_graph import as_run
+from .runtimes import param_stream
 
 EFFICIENCIES = Path(__file__).with_name("data") / "latency_efficiencies.json"
 KINDS = ("conv", "dwconv", "matmul", "elementwise", "pool", "data")
@@ -154,6 +155,9 @@ class LatencyPrediction:
     method: str                      # "roofline", "macs" (fallback) or "measured"
     macs: float
     per_node: tuple = ()
+    #: roofline only: whether published rows of this runtime, target and precision were
+    #: fitted (False: its scale is borrowed, ``FALLBACK``); None for the other methods
+    tuned: bool | None = None
 
     @property
     def milliseconds(self) -> float:
@@ -163,7 +167,7 @@ class LatencyPrediction:
         return {"seconds": self.seconds, "band": list(self.band), "energy_j": self.energy_j,
                 "device": self.device, "runtime": self.runtime, "target": self.target,
                 "precision": self.precision, "threads": self.threads, "method": self.method,
-                "macs": self.macs}
+                "macs": self.macs, "tuned": self.tuned}
 
 
 @lru_cache(maxsize=4)
@@ -217,18 +221,6 @@ def params_for(table: dict, dep: _rt.Deployment) -> dict:
     if f"{dep.runtime}/{dep.target}" in WINOGRAD:
         wino = float(table.get("winograd", {}).get("factor", PRIOR_WINOGRAD))
     return {**tgt, "scale": scale, "winograd": wino, "tuned": g is not None}
-
-
-def param_stream(nbytes: float, held: float, cache: float) -> tuple[float, float]:
-    """(bytes streamed at every inference, bytes held after) of a layer's ``nbytes`` of
-    parameters on an accelerator whose ``cache`` bytes of on-chip memory already hold
-    ``held``: the compiler caches the parameters in the network's order until the memory is
-    full, and the rest stream from the host's memory at every inference (Coral, "Edge TPU
-    Compiler": models "share the Edge TPU's RAM for parameter data caching"; arXiv 2503.01025,
-    abstract: "given the limited amount of on-chip memory on the Edge TPU, accesses to
-    external (host) memory rapidly become an important performance bottleneck")."""
-    fits = max(0.0, min(nbytes, cache - held))
-    return nbytes - fits, held + fits
 
 
 def roofline(cost, dev: Device, dep: _rt.Deployment, prm: dict) -> tuple[float, tuple]:
@@ -358,7 +350,7 @@ def predict_latency(model, device, *, runtime=None, precision=None, target=None,
     macs = float(sum(n.macs for n in cost.nodes))
     return LatencyPrediction(secs, _band(table, dev, dep, secs), secs * above_idle_w(dev, dep),
                              dev.name, dep.runtime, dep.target, dep.precision, dep.threads,
-                             "roofline", macs, per)
+                             "roofline", macs, per, bool(prm["tuned"]))
 
 
 def _from_macs(macs, dev, runtime, precision, target, threads) -> LatencyPrediction:

@@ -155,6 +155,18 @@ def thread_share(dep: Deployment, unit, parallel: float) -> float:
     return (1.0 + (n - 1) * parallel) / n
 
 
+def param_stream(nbytes: float, held: float, cache: float) -> tuple[float, float]:
+    """(bytes streamed at every inference, bytes held after) of a layer's ``nbytes`` of
+    parameters on an accelerator whose ``cache`` bytes of on-chip memory already hold
+    ``held``: the compiler caches the parameters in the network's order until the memory is
+    full, and the rest stream from the host's memory at every inference (Coral, "Edge TPU
+    Compiler": models "share the Edge TPU's RAM for parameter data caching"; arXiv 2503.01025,
+    abstract: "given the limited amount of on-chip memory on the Edge TPU, accesses to
+    external (host) memory rapidly become an important performance bottleneck")."""
+    fits = max(0.0, min(nbytes, cache - held))
+    return nbytes - fits, held + fits
+
+
 def peak_macs(dep: Deployment, unit) -> float:
     """The unit's peak MAC/s for the deployment (``compute_precision``; threads on a CPU)."""
     p, _ = compute_precision(dep, unit)
@@ -265,5 +277,5 @@ def resolve(device, runtime=None, precision=None, target=None, threads=None, *,
 
 __all__ = ["BYTES", "DEFAULT_THREADS", "FP16_ON_ARMV82", "PRECISIONS", "RUNTIMES", "RUNTIME_PRECISIONS", "RUNTIME_TARGETS", "TARGETS",
            "TF32_BY_DEFAULT", "Deployment", "HalfModelWarning", "ModelPrecisionWarning",
-           "QuantizedModelWarning", "check_names", "compute_precision", "peak_macs", "power_share",
-           "resolve", "thread_share"]
+           "QuantizedModelWarning", "check_names", "compute_precision", "param_stream", "peak_macs",
+           "power_share", "resolve", "thread_share"]

@@ -215,8 +215,15 @@ def test_an_fp16_graph_runs_at_fp16_where_it_can_and_warns_where_not(nets, tmp_p
     assert main(["predict-latency", str(tmp_path / "half.onnx"), "--computer",
                  "raspberry-pi-4", "--runtime", "ncnn"]) == 0
     out = capsys.readouterr().out
-    assert "ncnn/cpu/fp32*" in out and "weights are fp16 and this deployment cannot run fp16" in out
-    assert "quantized" not in out
+    assert "ncnn/cpu/fp32* " in out and "weights are fp16 and this deployment cannot run fp16" in out
+    assert "quantized" not in out and "~" not in out            # ncnn/cpu/fp32 was fitted
+    # fp16 on the Pi 5's CPU: no published row was fitted; the rows say so
+    assert p.tuned is True and predict_latency(half, "raspberry-pi-5", runtime="ncnn").tuned \
+        is False
+    assert main(["predict-latency", str(tmp_path / "half.onnx"), "--computer",
+                 "raspberry-pi-5", "--runtime", "ncnn"]) == 0
+    out = capsys.readouterr().out
+    assert "ncnn/cpu/fp16~" in out and "~ no published measurement of this runtime" in out
 
 
 def test_a_float_graph_on_the_edge_tpu_warns_that_it_needs_int8(nets):
