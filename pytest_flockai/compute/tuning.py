@@ -98,7 +98,7 @@ class _Compiled:
         self.wbytes = np.array([float(n.weight_elems) for n in nodes]) * size
         self.abytes = np.array([float(n.in_elems + n.out_elems) for n in nodes]) * size
         # parameters streamed from the host at every inference (an accelerator whose own
-        # memory cannot hold them all: ``predict.param_stream``)
+        # memory cannot hold them all: ``runtimes.param_stream``)
         self.link = unit.link_gbs * 1e9
         cache, held, streamed = unit.cache_mb * 2 ** 20, 0.0, []
         for w in self.wbytes:

@@ -288,7 +288,7 @@ def test_parameters_beyond_the_edge_tpus_memory_stream_over_its_link():
     network's order; the rest stream from the host over its PCIe link at every inference, so
     a large network pays its parameter bytes over the link, and a small one does not."""
     from pytest_flockai.compute import published, tuning
-    from pytest_flockai.compute.predict import param_stream
+    from pytest_flockai.compute.runtimes import param_stream
     mb = 2 ** 20
     assert param_stream(3 * mb, 0.0, 8 * mb) == (0.0, 3 * mb)           # fits
     assert param_stream(3 * mb, 7 * mb, 8 * mb) == (2 * mb, 8 * mb)     # 1 MB fits
