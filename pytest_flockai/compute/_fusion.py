@@ -130,10 +130,7 @@ def fuse(g, nodes: list) -> list:
                 first != "Add" or all(x == t or x in inits for x in g.node[j].input)):
             fused[j], t = head, g.node[j].output[0]
             j = only(t)
-        if j is not None and g.node[j].op_type in ACTIVATIONS:
-            fused[j] = head
-            continue
-        t = through(t)
+        t = through(t)                      # past a Q/DQ pair, or ``t`` itself
         j = only(t)
         if j is not None and g.node[j].op_type in ACTIVATIONS:
             fused[j] = head

@@ -17,11 +17,13 @@ the x86-only layout transforms of the level above), its fused int8 operators at 
 float layers marked ``in_float``, its Q/DQ nodes passes of their own; ``cost`` itself when
 ONNX Runtime fuses every quantized layer (``quantize_static``'s graphs), or when the
 optimizer cannot run (e.g. weights in external files). Memoised on the cost
-(``meta["_as_run"]``).
+(``meta["_as_run"]``) and on the proto's bytes, so that a task's model analysed anew for
+each flight is optimized once (``_BY_BYTES``).
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import tempfile
 from dataclasses import replace
@@ -31,19 +33,30 @@ import onnxruntime as ort
 
 from .graph import NetworkCost, analyze
 
+#: (SHA-256 of the shape-fixed proto, the cost's name) -> the graph ONNX Runtime runs, or
+#: None where it fuses everything (the cost itself); the last ``CACHED`` models
+_BY_BYTES: dict = {}
+CACHED = 16
+
 
 def as_run(cost: NetworkCost) -> NetworkCost:
     """See the module docstring."""
     meta = cost.meta
     if "_as_run" not in meta:
-        meta["_as_run"] = _as_run(cost)
+        proto = meta.get("_graph")
+        if proto is None:
+            return cost
+        key = (hashlib.sha256(proto.SerializeToString()).hexdigest(), cost.name)
+        if key not in _BY_BYTES:
+            if len(_BY_BYTES) >= CACHED:
+                _BY_BYTES.pop(next(iter(_BY_BYTES)))
+            run = _as_run(cost, proto)
+            _BY_BYTES[key] = None if run is cost else run
+        meta["_as_run"] = _BY_BYTES[key] or cost
     return meta["_as_run"]
 
 
-def _as_run(cost: NetworkCost) -> NetworkCost:
-    proto = cost.meta.get("_graph")
-    if proto is None:
-        return cost
+def _as_run(cost: NetworkCost, proto) -> NetworkCost:
     try:
         with tempfile.TemporaryDirectory() as tmp:
             src, out = os.path.join(tmp, "in.onnx"), os.path.join(tmp, "run.onnx")

@@ -44,9 +44,9 @@ import onnxruntime as ort
 
 from .._io import atomic_write
 from ..errors import ConfigError
-from .graph import analyze
+from .graph import analyze, half_weights, quantization
 from .profile import RUNTIMES, SCHEMA, from_dict, model_format, model_sha256
-from .timed import MEASURABLE, OV_PRECISION, runner, targets
+from .timed import MEASURABLE, OV_PRECISION, onnx_input, runner, targets
 
 #: the runtime a model file is timed with when ``--runtime`` is not given
 BY_FORMAT = {"onnx": "onnxruntime", "tflite": "tflite", "ncnn": "ncnn"}
@@ -124,19 +124,11 @@ def _stands_for(models, onnx_paths) -> list:
     return list(onnx_paths)
 
 
-def _onnx_dims(path) -> list:
-    """The dims of an ONNX file's (first) input, 0 where open."""
-    proto = onnx.load(os.fspath(path), load_external_data=False)
-    inits = {i.name for i in proto.graph.initializer}
-    inp = next(i for i in proto.graph.input if i.name not in inits)
-    return [d.dim_value if d.HasField("dim_value") else 0 for d in inp.type.tensor_type.shape.dim]
-
-
 def _same_input(path, shape, onnx_path) -> None:
     """The ONNX file a .tflite or ncnn model stands for takes as many input values (NHWC
     and NCHW hold the same count); ConfigError where its input's dims are fixed and differ."""
-    dims = _onnx_dims(onnx_path)
-    if all(d > 0 for d in dims) and int(np.prod(dims)) != int(np.prod(shape)):
+    dims = onnx_input(onnx_path)[1]
+    if None not in dims and int(np.prod(dims)) != int(np.prod(shape)):
         raise ConfigError(f"--onnx = {str(onnx_path)!r} is not allowed for {str(path)!r}: its "
                           f"input {'x'.join(map(str, dims))} and the timed model's input "
                           f"{'x'.join(map(str, shape))} differ in size, so they are not one "
@@ -205,8 +197,8 @@ def measure(models, *, runtime=None, target=None, threads=None, runs=50, warmup=
             sha = model_sha256(ident)
             mshape = shape
             if mshape is None and onnx_path is not None and model_format(path) == "ncnn":
-                dims = _onnx_dims(onnx_path)        # ncnn's files do not hold the input's
-                mshape = tuple(dims) if all(d > 0 for d in dims) else None
+                dims = onnx_input(onnx_path)[1]     # ncnn's files do not hold the input's
+                mshape = tuple(dims) if None not in dims else None
             r = runner(path, runtime, target, threads, mshape, seed)
             if onnx_path is not None:
                 _same_input(path, r.input_shape, onnx_path)
@@ -265,13 +257,10 @@ def _macs(path, shape):
 
 
 def _precision(path) -> str:
-    proto = onnx.load(os.fspath(path), load_external_data=False)
-    if any(n.op_type.startswith("QLinear") or n.op_type in ("ConvInteger", "MatMulInteger",
-                                                             "DequantizeLinear")
-           for n in proto.graph.node):
-        return "int8"
-    half = any(t.data_type == onnx.TensorProto.FLOAT16 for t in proto.graph.initializer)
-    return "fp16" if half else "fp32"
+    """The precision an ONNX graph computes in, as ``predict_latency`` reads it: int8 for a
+    quantized graph (``quantization``), fp16 for fp16 weights (``half_weights``)."""
+    g = onnx.load(os.fspath(path), load_external_data=False).graph
+    return "int8" if quantization(g) else "fp16" if half_weights(g) else "fp32"
 
 
 def host_facts() -> dict:

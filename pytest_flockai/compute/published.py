@@ -159,6 +159,11 @@ BOARD = {"jetson-nano-5w": "jetson-nano", "jetson-nano-10w": "jetson-nano",
          "jetson-orin-nano-super": "jetson-orin-nano"}
 
 
+def board_of(computer: str) -> str:
+    """The board a computer profile is a power mode of (``BOARD``), else itself."""
+    return BOARD.get(computer, computer)
+
+
 def predict_row(row: Row, table: dict) -> float:
     """Predicted seconds of one row with the efficiency table ``table``."""
     dev = row.device
@@ -275,5 +280,5 @@ def energy_check(table: dict, path: Path = ENERGY, networks: Path = NETWORKS) ->
     return out
 
 
-__all__ = ["ENERGY", "NETWORKS", "at_cpu_clock", "band_of", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
+__all__ = ["ENERGY", "NETWORKS", "at_cpu_clock", "band_of", "board_of", "energy_check", "SOURCES", "TABLE", "Row", "bands", "load_rows", "network_cost",
            "predict_row", "ratios", "summary"]

@@ -41,6 +41,7 @@ import onnx
 import onnxruntime as ort
 
 from ..errors import ConfigError
+from ._shapes import graph_inputs
 from .profile import model_format
 
 #: runtimes profile-device times
@@ -84,11 +85,7 @@ def runner(path, runtime: str, target: str, threads: int | None, shape, seed: in
         return _tflite(os.fspath(path), runtime, threads, shape, seed)
     if fmt == "ncnn":
         return _ncnn(os.fspath(path), target, threads, shape, seed)
-    proto = onnx.load(os.fspath(path), load_external_data=False)
-    inits = {i.name for i in proto.graph.initializer}
-    inp = next(i for i in proto.graph.input if i.name not in inits)
-    dims = [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else None
-            for d in inp.type.tensor_type.shape.dim]
+    inp, dims = onnx_input(path)
     if shape is not None:       # it fills the dims the model leaves open; fixed dims stay
         if len(shape) != len(dims):
             raise ConfigError(f"--input-shape = {'x'.join(map(str, shape))!r} has rank "
@@ -108,6 +105,15 @@ def runner(path, runtime: str, target: str, threads: int | None, shape, seed: in
          else rng.random(full).astype(dtype))
     make = {"opencv-dnn": _opencv, "openvino": _openvino}.get(runtime, _onnxruntime)
     return make(os.fspath(path), inp.name, x, target, threads)
+
+
+def onnx_input(path) -> tuple:
+    """(the input a caller feeds, its dims with None where open) of an ONNX file's first
+    graph input that is not an initializer."""
+    proto = onnx.load(os.fspath(path), load_external_data=False)
+    inp = graph_inputs(proto)[0]
+    return inp, [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else None
+                 for d in inp.type.tensor_type.shape.dim]
 
 
 def _opencv(path, name, x, target, threads) -> Runner:
@@ -302,5 +308,5 @@ def _tflite(path, runtime, threads, shape, seed) -> Runner:
     return Runner(run_tflite, tuple(dims), version, execution)
 
 
-__all__ = ["EDGETPU_LIB", "FORMAT", "MEASURABLE", "OV_PRECISION", "SUFFIX", "Runner", "runner",
-           "targets"]
+__all__ = ["EDGETPU_LIB", "FORMAT", "MEASURABLE", "OV_PRECISION", "SUFFIX", "Runner",
+           "onnx_input", "runner", "targets"]

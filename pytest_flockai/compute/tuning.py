@@ -60,7 +60,7 @@ from .predict import (
     stream_gbs,
     winograd_3x3,
 )
-from .published import BOARD, _stats, band_of, predict_row
+from .published import BOARD, _stats, band_of, board_of, predict_row
 
 PRIOR_WEIGHT = 0.1
 TARGET_PARAMS = ("dwconv", "matmul", "mem", "mem_weights", "dispatch_s", "overhead_s",
@@ -264,15 +264,13 @@ def loco(rows, fallback: dict | None = None, boards=None) -> dict:
     rule = efficiencies().get("fallback", {}) if fallback is None else fallback
     per: dict = {}
     out = []
-    every = sorted({BOARD.get(r.computer, r.computer) for r in rows})
+    every = sorted({board_of(r.computer) for r in rows})
     for board in every if boards is None else [b for b in every if b in boards]:
-        mine = [r for r in rows if BOARD.get(r.computer, r.computer) == board]
-        table = {**tune([r for r in tuning if BOARD.get(r.computer, r.computer) != board]),
-                 "fallback": rule}
+        table = {**tune([r for r in tuning if board_of(r.computer) != board]), "fallback": rule}
         for half in ("tuning", "heldout"):
-            rr = [predict_row(r, table) / r.latency_s for r in mine if r.half == half]
-            out += [(board, half, r.target, v)
-                    for r, v in zip((r for r in mine if r.half == half), rr)]
+            mine = [r for r in rows if board_of(r.computer) == board and r.half == half]
+            rr = [predict_row(r, table) / r.latency_s for r in mine]
+            out += [(board, half, r.target, v) for r, v in zip(mine, rr)]
             if rr:
                 per.setdefault(board, {})[half] = _abs_ln_stats(rr)
     pooled = {h: _abs_ln_stats([v for _, hh, _, v in out if hh == h])
@@ -302,8 +300,8 @@ def loco_bands(cv: dict) -> dict:
 
 def tuned_computers(rows) -> list[str]:
     """The profiles whose board has tuning rows (its power modes included: ``BOARD``)."""
-    boards = {BOARD.get(r.computer, r.computer) for r in rows if r.half == "tuning"}
-    return sorted(n for n in DEVICES if BOARD.get(n, n) in boards)
+    boards = {board_of(r.computer) for r in rows if r.half == "tuning"}
+    return sorted(n for n in DEVICES if board_of(n) in boards)
 
 
 __all__ = ["BOARD", "BOUNDS", "FALLBACK_RULES", "PRIOR_WEIGHT", "TARGET_PARAMS", "fallback_cv",

@@ -120,6 +120,12 @@ class SoC(Component):
         self.idle_w = _check.non_negative("idle_w", idle_w, where=where)
         self.active_w = _check.non_negative("active_w", active_w, where=where)
 
+    @classmethod
+    def of(cls, device, note: str = "") -> SoC:
+        """The SoC of a compute ``Device`` (its idle and busy watts), named ``soc``."""
+        return cls("soc", device.idle_w, device.active_w,
+                   f"on-board computer {device.name}{note}")
+
     def power_parts(self, u):
         b = u.soc_busy
         return (self.idle_w * (1.0 - b), self.active_w * b)

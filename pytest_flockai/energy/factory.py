@@ -25,8 +25,7 @@ def flight_energy_model(base, *, extra_sensors=(), device=None, blueprint_device
     model = base.copy()
     if swap_soc and "proc" in model:
         proc = model.component("proc")
-        soc = SoC("soc", device.idle_w, device.active_w,
-                  f"on-board computer {device.name}, added for the tasks")
+        soc = SoC.of(device, ", added for the tasks")
         if "soc" in proc:
             own = proc.component("soc")
             proc.replace("soc", soc)
@@ -60,7 +59,7 @@ def carry_computer(model, dev) -> None:
         if "soc" in proc:
             proc.remove("soc")
         return
-    soc = SoC("soc", dev.idle_w, dev.active_w, f"on-board computer {dev.name}")
+    soc = SoC.of(dev)
     if "soc" in proc:
         proc.replace("soc", soc)
     else:

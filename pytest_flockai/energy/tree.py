@@ -147,7 +147,7 @@ class EnergyModel(Group):
         proc = Group("proc", description="processing: flight controller, SoC, I/O, sensors")
         proc.add(Constant("fc", p.flight_controller_w, "flight controller"))
         if device is not None:
-            proc.add(SoC("soc", device.idle_w, device.active_w, f"on-board computer {device.name}"))
+            proc.add(SoC.of(device))
         proc.add(Constant("io", p.io_w, "storage and buses"))
         proc.add(Group("sensors", [Constant(k, v, f"{k} sensor") for k, v in p.sensors.items()],
                        "sensor power"))

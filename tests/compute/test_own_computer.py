@@ -76,7 +76,7 @@ def test_the_untuned_band_is_leave_one_computer_out_of_the_stored_fit():
     for half, v in table["loco"]["per_board"]["coral-dev-board"].items():
         assert cv["per_board"]["coral-dev-board"][half] == pytest.approx(v), half
     assert tuning.loco_bands(cv)["untuned/*/npu"] == pytest.approx(table["bands"]["untuned/*/npu"])
-    assert set(table["loco"]["per_board"]) == {tuning.BOARD.get(r.computer, r.computer)
+    assert set(table["loco"]["per_board"]) == {published.board_of(r.computer)
                                                for r in rows}
     assert table["tuned_computers"] == tuning.tuned_computers(rows)
     assert "jetson-nano-5w" in table["tuned_computers"]       # the Nano's other power mode
