@@ -299,6 +299,7 @@ def encode(key: str, result: FlightResult, secret: _auth.CacheKey | None = None)
     if drones is not None:
         header["drones"] = [{"name": name, **_arrays(r, f"d{i}_", arrays)}
                             for i, (name, r) in enumerate(drones.items())]
+        header["stations"] = list(getattr(result, "stations", ()))
     return seal(key, arrays, header, secret or _auth.default_key())
 
 
@@ -313,6 +314,7 @@ def decode(data: bytes, key: str, result_type: type[FlightResult] = FlightResult
         if "drones" in header:
             out.drones = {d["name"]: _result(d, f"d{i}_", arrays, FlightResult)
                           for i, d in enumerate(header["drones"])}
+            out.stations = list(header.get("stations", ()))
         elif result_type is not FlightResult:
             raise ValueError(f"a single flight's entry, not a {result_type.__name__}")
         return out

@@ -24,6 +24,7 @@ from ..errors import ConfigError, SimulationError
 from ..mission import Mission, sortie
 from ..mission.assemble import Flight
 from ..mission.plan import check_tasks, resolve
+from ..policy.together import stations
 from ..world import World
 from . import fleet_result
 from . import pads as _pads
@@ -186,6 +187,12 @@ class Fleet:
         put(self, "actors", self.missions[0].actors)
         put(self, "seed", tuple(fd.seed for fd in drones))
         self._plans()
+
+    def taken_from_cache(self, result) -> None:
+        """The flight cache answered ``result``: each ground station of a search together
+        is left as flying the fleet left it (``GroundStation.record``)."""
+        for st, rec in zip(stations(self.missions), getattr(result, "stations", ())):
+            st.restore(rec)
 
     def replace(self, **changes) -> Fleet:
         """A copy with ``changes`` (field=value), checked again like a new Fleet."""

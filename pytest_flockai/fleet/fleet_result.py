@@ -20,6 +20,7 @@ Fleet KPIs:
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -38,9 +39,11 @@ SEPARATION_HZ = 50.0
 
 
 class FleetResult(FlightResult):
-    """A ``FlightResult`` of the whole fleet; ``drones``: name -> that drone's FlightResult."""
+    """A ``FlightResult`` of the whole fleet; ``drones``: name -> that drone's FlightResult;
+    ``stations``: each ground station's ``record()`` after the flight (a search together)."""
 
     drones: dict
+    stations: Sequence[dict] = ()
 
     def _repr_html_(self) -> str:
         """In a notebook: the fleet KPIs, one row and one path colour per drone."""
@@ -75,6 +78,7 @@ def build(fleet, runs, stats: dict, wall_s: float) -> FleetResult:
     scen["sim_time_s"] = float(max(ends))
     out = FleetResult(kpis, tel, events, scen, energy, end, wall_s)
     out.drones = drones
+    out.stations = [st.record() for st in stations(runs)]
     first = next(iter(drones.values()))
     out.people = getattr(first, "people", np.zeros((0, 3)))
     return out

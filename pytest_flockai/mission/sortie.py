@@ -38,6 +38,9 @@ def run(spec: object, build: Callable[[Any], Sortie], result_type: type | None =
     None for a single flight's ``FlightResult``)."""
     found = _cache.lookup(spec, result_type)
     if found is not None and found.result is not None:
+        taken = getattr(spec, "taken_from_cache", None)
+        if taken is not None:           # what flying it leaves on your objects (a Fleet's)
+            taken(found.result)
         publish(found.result, spec)
         return found.result
     wall0 = _time.perf_counter()

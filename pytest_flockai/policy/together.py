@@ -49,6 +49,7 @@ import numpy as np
 from .. import _check
 from ..comm.link import link as _link
 from ..errors import ConfigError
+from . import handoff
 from .follow import _Perceiving
 from .scoring import MATCH_M
 
@@ -80,6 +81,7 @@ class GroundStation:
         self.share = _check.choice("share", share, SHARES, where="GroundStation")
         self.seed = int(seed)
         self._flight = None
+        self._kpis: dict | None = None
 
     # -- per flight ------------------------------------------------------------
     def bind_flight(self, run) -> None:
@@ -101,6 +103,7 @@ class GroundStation:
             self._seq = 0
             self.actors = run.actors
             self.t_plan = math.inf
+            self._kpis = None
 
     def _send(self, t: float, xy, direction: str, extra: int = 0) -> float:
         """Arrival time of one message (``report_bytes`` + ``extra``) over the shared
@@ -168,10 +171,10 @@ class GroundStation:
         if not free or self.share == "none":
             return
         if self.share == "tail":
-            head, tail = _tail(ahead, away_m)
-            parts = _cut(tail, len(free))
+            head, rest = handoff.tail(ahead, away_m)
+            parts = handoff.cut(rest, len(free))
         else:
-            head, *parts = _cut(ahead, len(free) + 1) or [[]]
+            head, *parts = handoff.cut(ahead, len(free) + 1) or [[]]
         if not parts:
             return
         self.handoffs += 1
@@ -218,9 +221,29 @@ class GroundStation:
         return [(m[3], m[4]) for m in due]
 
     # -- scoring ---------------------------------------------------------------
+    def record(self) -> dict:
+        """What the station holds after a flight (its targets, their last fixes, the
+        counts, ``kpis()``), as JSON data: a flight cache entry carries it, so a flight
+        taken from the cache leaves the station as flying it did (``restore``)."""
+        return {"targets": [[v if v is None or isinstance(v, str) else float(v) for v in tg]
+                             for tg in self.targets],
+                "fix": [[float(v) for v in f] for f in self.fix],
+                "counts": [self.reports, self.assignments, self.associations, self.handoffs],
+                "t_plan": float(self.t_plan), "kpis": self.kpis()}
+
+    def restore(self, rec: dict) -> None:
+        """The state ``record`` wrote, on this station (a flight taken from the cache)."""
+        self._flight, self.actors, self._kpis = None, None, dict(rec["kpis"])
+        self.targets = [list(tg) for tg in rec["targets"]]
+        self.fix = [tuple(f) for f in rec["fix"]]
+        self.reports, self.assignments, self.associations, self.handoffs = rec["counts"]
+        self.t_plan = rec["t_plan"]
+
     def kpis(self) -> dict:
         """Fleet KPIs: people found (a confirmed target within ``MATCH_M`` of one), the
         time to find them all after the plan started, reports and assignments."""
+        if self.actors is None and self._kpis is not None:   # restored: scored when flown
+            return dict(self._kpis)
         found: dict = {}
         people = [a for a in (self.actors.actors if self.actors is not None else ())
                   if a.kind == "person"]
@@ -360,7 +383,8 @@ class SharedSearch(_Perceiving):
 
 
 def stations(runs) -> list:
-    """The distinct ground stations of the policies of ``runs`` (a fleet's drones)."""
+    """The distinct ground stations of the policies of ``runs`` (a fleet's drones, flown
+    or their specs), in the order they first appear."""
     out: dict = {}
     for r in runs:
         for p in getattr(r, "policies", ()):
@@ -368,33 +392,6 @@ def stations(runs) -> list:
             if isinstance(st, GroundStation):
                 out[id(st)] = st
     return list(out.values())
-
-
-def _tail(points: list, length: float):
-    """``points`` (a route) cut ``length`` metres before its end: (head, tail); the cut
-    point ends the head and starts the tail."""
-    left = sum(math.dist(a, b) for a, b in zip(points, points[1:])) - length
-    if left <= 0:
-        return points[:1], points
-    for i, (a, b) in enumerate(zip(points, points[1:])):
-        d = math.dist(a, b)
-        if left <= d:
-            f = left / d
-            cut = tuple(a[j] + f * (b[j] - a[j]) for j in range(3))
-            return list(points[:i + 1]) + [cut], [cut] + list(points[i + 1:])
-        left -= d
-    return points, points[-1:]
-
-
-def _cut(points: list, n: int) -> list:
-    """``points`` (a route) cut into at most ``n`` contiguous routes of about equal leg
-    count; a cut point ends one part and starts the next (that leg is not lost)."""
-    legs = len(points) - 1
-    n = min(n, legs)
-    if n < 1:
-        return [points] if points else []
-    bounds = [round(i * legs / n) for i in range(n + 1)]
-    return [points[a:b + 1] for a, b in zip(bounds, bounds[1:])]
 
 
 __all__ = ["GroundStation", "SharedSearch", "stations"]

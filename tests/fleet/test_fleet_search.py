@@ -132,3 +132,25 @@ def test_a_ground_station_refuses_an_unknown_share():
                   "fleet.targets_found": ">= 4"})
 def test_budgets_on_a_drones_policy_kpis_parse_and_are_checked():
     search(2).run()
+
+
+def test_a_search_taken_from_the_flight_cache_leaves_its_station_as_flown(tmp_path):
+    from pytest_flockai.cache import FlightCache, caching
+    flown_at = fa.policy.GroundStation((0.0, 0.0, 0.0))
+    cached_at = fa.policy.GroundStation((0.0, 0.0, 0.0))
+    with caching(FlightCache(tmp_path)):
+        flown = search(2, station=flown_at).run()
+        again = search(2, station=cached_at).run()
+    assert flown.cache["status"] == "stored" and again.cache["status"] == "hit"
+    # the station of the cached flight holds what flying left on the other one
+    assert cached_at.targets == flown_at.targets and len(cached_at.targets) >= 4
+    assert cached_at.fix == flown_at.fix
+    scored = flown_at.kpis()
+    assert cached_at.kpis() == pytest.approx(scored, nan_ok=True)
+    assert {k: flown.kpis[k] for k in scored} == pytest.approx(scored, nan_ok=True)
+    assert (cached_at.reports, cached_at.assignments, cached_at.handoffs) == \
+        (flown_at.reports, flown_at.assignments, flown_at.handoffs)
+    # and flying it again (without the cache) starts the station afresh
+    with caching(None):
+        search(2, station=cached_at).run()
+    assert cached_at.targets == flown_at.targets and cached_at.actors is not None
