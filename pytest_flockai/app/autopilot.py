@@ -28,6 +28,7 @@ from ..control.tracking import yaw_of
 from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames
+from .boundary import ACTIONS, Boundary
 from .commands import Commands
 from .mavlink_udp import Link, M
 from .pilots import Setpoint
@@ -86,6 +87,8 @@ class Autopilot(Policy, Commands):
         self.setpoint: tuple | None = None   # (pos, vel, yaw, wall time, yaw rate) from the app
         self.sp_pilot: Setpoint | None = None
         self.mission_reset()
+        self.boundary, self._fence_v, self._gf_out = Boundary([], self.geo), 0, False
+        self.gf_breaches = 0
         self.link = Link(self.port, self)
         self.link.params["MPC_LAND_SPEED"] = self.stages.descent_speed
         self.link.params["MPC_TKO_SPEED"] = self.stages.climb_speed
@@ -153,6 +156,8 @@ class Autopilot(Policy, Commands):
         while pend and pend[0][0] <= self.wall:  # the rest arrived after this step
             self.handle(t, pend.popleft()[1])
         self._modes(t, self.wall)
+        if self.in_air:
+            self._geofence(t)
         if self.mission_active:
             self.mission_step(t)
         if t >= self._next_tel:
@@ -270,6 +275,36 @@ class Autopilot(Policy, Commands):
             self.mode = "HOLD"
             self.hold(t)
 
+    def _geofence(self, t: float) -> None:
+        """The geofence (``boundary``): on leaving it, an ``app_geofence_breach`` event, a
+        STATUSTEXT to the app and PX4's GF_ACTION (hold, return or land; 0 and 1 only
+        report it; 4, flight termination, is not emulated: the drone holds)."""
+        link = self.link
+        if link.fence_version != self._fence_v:
+            self._fence_v, self.boundary = link.fence_version, Boundary(link.fence, self.geo)
+        p = link.params
+        q = self.st.qc
+        why = self.boundary.breach(q[0], q[1], q[2], p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"])
+        was, self._gf_out = self._gf_out, why is not None
+        if why is None or was or self.mode in ("RTL", "LAND"):
+            return
+        action = ACTIONS[int(p["GF_ACTION"])]
+        self.gf_breaches += 1
+        if action == "terminate":
+            self.not_emulated("GF_ACTION", "", "flight termination (GF_ACTION 4) is not "
+                              "emulated: the drone holds instead")
+        self.run.event(t, "app_geofence_breach", reason=why, action=action,
+                       x=float(q[0]), y=float(q[1]), z=float(q[2]))
+        link.send(M.MAVLink_statustext_message(M.MAV_SEVERITY_CRITICAL,
+                                               f"Geofence violation: {action}".encode()))
+        none = (0.0,) * 7
+        if action in ("hold", "terminate"):
+            self.c_hold(t, none, 0)
+        elif action == "return":
+            self.c_rtl(t, none, 0)
+        elif action == "land":
+            self.c_land(t, none, 0)
+
     def _check_app(self, t: float) -> None:
         p = self.proc
         if p is None or self._app_gone or p.poll() is None:
@@ -333,12 +368,12 @@ class Autopilot(Policy, Commands):
         self.unsupported += 1
         self.run.event(self.t_last, "app_mission_refused", seq=int(seq), item=name, reason=why)
 
-    def not_emulated(self, kind: str, what: str) -> None:
+    def not_emulated(self, kind: str, what: str, reason: str | None = None) -> None:
         """The app sent ``kind``, an input PX4 flies and this front-end does not (named
         once per kind; the link's thread)."""
         self.unsupported += 1
         self.run.event(self.t_last, "app_not_emulated", message=kind,
-                       reason=f"{what} are not flown")
+                       reason=reason or f"{what} are not flown")
 
     def off_flight(self, msg) -> None:
         """A command while no flight is being simulated (after it ended)."""

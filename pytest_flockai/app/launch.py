@@ -49,6 +49,7 @@ for _name, _unit, _better, _what in (
         ("app.commands", "count", None, "MAVLink commands the app sent (requests for messages not counted)"),
         ("app.commands_denied", "count", "lower", "commands the autopilot refused (DENIED)"),
         ("app.commands_unsupported", "count", "lower", "commands and mission items not emulated"),
+        ("app.geofence_breaches", "count", "lower", "times the drone left the geofence the app set"),
         ("app.speed", "1", None, "simulated seconds per wall second"),
         ("app.lag_max_s", "s", "lower", "most the simulation fell behind the paced wall clock"),
         ("app.lag_mean_s", "s", "lower", "mean lag of the simulation behind the paced wall clock")):
@@ -185,6 +186,7 @@ def _fly(cmd, mission, timeout_s, app_env, cwd, port, speed) -> AppResult:
     res.kpis.update({"app.exit_code": float(proc.returncode if code is None else code),
                      "app.commands": float(ap.commands), "app.commands_denied": float(ap.denied),
                      "app.commands_unsupported": float(ap.unsupported), "app.speed": speed,
+                     "app.geofence_breaches": float(ap.gf_breaches),
                      "app.lag_max_s": ap.lag_max,
                      "app.lag_mean_s": ap.lag_sum / max(1, ap.n_steps)})
     res.scenario["app"] = {"cmd": list(cmd), "speed": speed, "port": port, "timeout_s": timeout_s}

@@ -2,9 +2,9 @@
 parsed by pymavlink (MAVLink 2, the common dialect), and a thread on the wall clock.
 
 The thread receives everything the app sends and answers, on the wall clock as an
-autopilot does: heartbeats (1 Hz), the parameter protocol, the mission protocol
-(upload, download, clear; an item the drone cannot fly is refused with
-MAV_MISSION_UNSUPPORTED and named in an event). Commands and setpoints go to the
+autopilot does: heartbeats (1 Hz), the parameter protocol (integer parameters byte-wise in
+the float field, as PX4 and MAVSDK encode them), the mission protocol of the mission and the
+geofence (``mission_protocol``). Commands and setpoints go to the
 simulation (``inbox``), which acts on them at its next step and acknowledges them.
 Before the flight starts and after it ended the thread answers commands itself and
 keeps streaming the last state, so an app that waits for "landed" or "disarmed"
@@ -15,30 +15,26 @@ telemetry is built and packed when its burst is sent (``queue_telemetry``).
 
 from __future__ import annotations
 
+import math
 import queue
 import socket
+import struct
 import threading
 import time
 
 from pymavlink.dialects.v20 import common as M
 
 from . import streams
+from .mission_protocol import Plans, name_of
 
-#: mission items the drone flies (the rest are refused at upload)
-MISSION_FLOWN = {M.MAV_CMD_NAV_WAYPOINT, M.MAV_CMD_NAV_TAKEOFF, M.MAV_CMD_NAV_LAND,
-                 M.MAV_CMD_NAV_RETURN_TO_LAUNCH, M.MAV_CMD_NAV_LOITER_TIME,
-                 M.MAV_CMD_NAV_LOITER_UNLIM, M.MAV_CMD_NAV_DELAY, M.MAV_CMD_DO_CHANGE_SPEED}
-#: mission items accepted and skipped: there is no gimbal or camera to point or trigger
-MISSION_SKIPPED = {M.MAV_CMD_DO_MOUNT_CONTROL, M.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
-                   M.MAV_CMD_IMAGE_START_CAPTURE, M.MAV_CMD_IMAGE_STOP_CAPTURE,
-                   M.MAV_CMD_VIDEO_START_CAPTURE, M.MAV_CMD_VIDEO_STOP_CAPTURE,
-                   M.MAV_CMD_DO_SET_CAM_TRIGG_DIST, M.MAV_CMD_DO_SET_ROI_NONE}
-MISSION_FRAMES = {M.MAV_FRAME_GLOBAL, M.MAV_FRAME_GLOBAL_RELATIVE_ALT, M.MAV_FRAME_GLOBAL_INT,
-                  M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, M.MAV_FRAME_MISSION}
 #: PX4 parameters served and applied (defaults of PX4's parameter reference; the climb and
 #: descent speeds are replaced by the mission's): name -> value
 PARAMS = {"MIS_TAKEOFF_ALT": 2.5, "MPC_XY_CRUISE": 5.0, "MPC_LAND_SPEED": 0.7,
-          "MPC_TKO_SPEED": 1.5}
+          "MPC_TKO_SPEED": 1.5, "GF_ACTION": 2, "GF_MAX_HOR_DIST": 0.0, "GF_MAX_VER_DIST": 0.0}
+
+#: integer parameters and the values allowed (PX4's GF_ACTION: 0 none, 1 warning, 2 hold, 3
+#: return, 4 terminate, 5 land)
+INT_PARAMS = {"GF_ACTION": range(6)}
 
 #: inputs PX4 flies that this front-end does not: each kind is named once, in the flight's
 #: events (``app_not_emulated``), in ``commands_unsupported`` and in a hang's diagnosis
@@ -50,12 +46,7 @@ NOT_FLOWN = {"SET_ATTITUDE_TARGET": "attitude setpoints",
 #: MAVSDK's UDP connection reads datagrams of up to 2048 bytes)
 MAX_DATAGRAM = 1400
 
-def name_of(cmd: int) -> str:
-    e = M.enums["MAV_CMD"].get(int(cmd))
-    return e.name.replace("MAV_CMD_", "") if e is not None else str(cmd)
-
-
-class Link:
+class Link(Plans):
     """The autopilot's UDP link to the app at 127.0.0.1:``port`` (see the module
     docstring). ``ap``: the ``Autopilot`` whose state it reports."""
 
@@ -74,6 +65,8 @@ class Link:
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()
         self.params = dict(PARAMS)
         self.mission: list = []
+        self.fence: list = []               # the geofence's items (``mission_protocol``, ``boundary``)
+        self.fence_version = 0
         self._up: dict | None = None        # an upload in progress: {"count", "items", "type"}
         self.app_id = (255, 0)
         self.last_msg: tuple | None = None  # (name, wall time) of the app's last message
@@ -265,9 +258,10 @@ class Link:
 
     # -- parameters --------------------------------------------------------------------
     def _param_value(self, name: str) -> None:
-        names = list(self.params)
-        self.send(M.MAVLink_param_value_message(name.encode(), float(self.params[name]),
-                                                M.MAV_PARAM_TYPE_REAL32, len(names),
+        names, v = list(self.params), self.params[name]
+        wire, kind = ((_as_float(int(v)), M.MAV_PARAM_TYPE_INT32) if name in INT_PARAMS
+                      else (float(v), M.MAV_PARAM_TYPE_REAL32))
+        self.send(M.MAVLink_param_value_message(name.encode(), wire, kind, len(names),
                                                 names.index(name)))
 
     def _param(self, kind: str, msg) -> None:
@@ -287,85 +281,18 @@ class Link:
             else:
                 self.asked_missing.add(f"parameter {pid}")
         elif kind == "PARAM_SET":
-            if pid in self.params:
+            if pid in INT_PARAMS:
+                v = _int_of(msg.param_value, INT_PARAMS[pid])
+                if v is not None:
+                    self.params[pid] = v
+                self._param_value(pid)
+            elif pid in self.params:
                 self.params[pid] = float(msg.param_value)
                 if pid == "MPC_XY_CRUISE" and msg.param_value > 0:
                     self.ap.cruise = float(msg.param_value)
                 self._param_value(pid)
             else:
                 self.asked_missing.add(f"parameter {pid}")
-
-    # -- the mission protocol ----------------------------------------------------------
-    def _mission_ack(self, result: int, mtype: int = 0) -> None:
-        self.send(M.MAVLink_mission_ack_message(*self.app_id, result, mtype))
-
-    def _request_next(self) -> None:
-        up = self._up
-        assert up is not None
-        up["resend"] = time.monotonic() + 0.5
-        self.send(M.MAVLink_mission_request_int_message(*self.app_id, len(up["items"]),
-                                                        up["type"]))
-
-    def _mission(self, kind: str, msg) -> None:
-        self.app_id = (msg.get_srcSystem(), msg.get_srcComponent())
-        mtype = getattr(msg, "mission_type", 0)
-        if kind == "MISSION_COUNT":
-            if mtype != M.MAV_MISSION_TYPE_MISSION:
-                self._mission_ack(M.MAV_MISSION_ACCEPTED if msg.count == 0
-                                  else M.MAV_MISSION_UNSUPPORTED, mtype)
-                return
-            if msg.count == 0:
-                self.mission = []
-                self._mission_ack(M.MAV_MISSION_ACCEPTED)
-                return
-            self._up = {"count": msg.count, "items": [], "type": mtype}
-            self._request_next()
-        elif kind in ("MISSION_ITEM_INT", "MISSION_ITEM") and self._up is not None:
-            up = self._up
-            if msg.seq != len(up["items"]):
-                return                      # a repeat: the next request goes out again
-            refused = self._refuse_item(msg)
-            if refused is not None:
-                self._up = None
-                self._mission_ack(refused)
-                return
-            up["items"].append(item_of(msg, kind == "MISSION_ITEM_INT"))
-            if len(up["items"]) == up["count"]:
-                self._up = None
-                self.mission = up["items"]
-                self.ap.mission_uploaded()
-                self._mission_ack(M.MAV_MISSION_ACCEPTED)
-            else:
-                self._request_next()
-        elif kind == "MISSION_REQUEST_LIST":
-            n = len(self.mission) if mtype == M.MAV_MISSION_TYPE_MISSION else 0
-            self.send(M.MAVLink_mission_count_message(*self.app_id, n, mtype))
-        elif kind in ("MISSION_REQUEST_INT", "MISSION_REQUEST"):
-            if 0 <= msg.seq < len(self.mission):
-                it = self.mission[msg.seq]
-                self.send(M.MAVLink_mission_item_int_message(
-                    *self.app_id, msg.seq, it["frame"], it["command"], 0, 1, *it["p"],
-                    int(round(it["x"] * 1e7)), int(round(it["y"] * 1e7)), it["z"], mtype))
-        elif kind == "MISSION_CLEAR_ALL":
-            if mtype in (M.MAV_MISSION_TYPE_MISSION, M.MAV_MISSION_TYPE_ALL):
-                self.mission = []
-                self.ap.mission_uploaded()
-            self._mission_ack(M.MAV_MISSION_ACCEPTED, mtype)
-
-    def _refuse_item(self, msg) -> int | None:
-        cmd = msg.command
-        if cmd in MISSION_SKIPPED:
-            return None
-        if cmd not in MISSION_FLOWN:
-            why, res = f"{name_of(cmd)} is not flown by the simulated autopilot", \
-                M.MAV_MISSION_UNSUPPORTED
-        elif msg.frame not in MISSION_FRAMES:
-            why, res = (f"{name_of(cmd)} in frame {msg.frame} (allowed: global, relative "
-                        f"altitude, mission)"), M.MAV_MISSION_UNSUPPORTED_FRAME
-        else:
-            return None
-        self.ap.refused_item(msg.seq, name_of(cmd), why)
-        return res
 
     # -- diagnosis of a hung app -------------------------------------------------------
     def diagnosis(self) -> str:
@@ -382,9 +309,15 @@ class Link:
         return "; ".join(out)
 
 
-def item_of(msg, is_int: bool) -> dict:
-    """A mission item as stored: frame, command, params 1-4, x/y in degrees, z in m."""
-    k = 1e-7 if is_int else 1.0
-    return {"seq": msg.seq, "frame": msg.frame, "command": msg.command,
-            "p": [msg.param1, msg.param2, msg.param3, msg.param4],
-            "x": msg.x * k, "y": msg.y * k, "z": float(msg.z)}
+def _as_float(v: int) -> float:
+    """An integer parameter in PARAM_VALUE's float field, byte-wise (PX4's encoding)."""
+    return struct.unpack("<f", struct.pack("<i", v))[0]
+
+
+def _int_of(value: float, allowed) -> int | None:
+    """The integer a PARAM_SET carries: byte-wise (PX4, MAVSDK, QGroundControl) or, from a
+    client that sends the number itself, the float's value; None when neither is allowed."""
+    for v in (struct.unpack("<i", struct.pack("<f", value))[0], value):
+        if math.isfinite(v) and v == int(v) and int(v) in allowed:
+            return int(v)
+    return None
