@@ -283,6 +283,9 @@ class Autopilot(Policy, Commands):
         if link.fence_version != self._fence_v:
             self._fence_v, self.boundary = link.fence_version, Boundary(link.fence, self.geo)
         p = link.params
+        if not self.boundary.shapes and p["GF_MAX_HOR_DIST"] <= 0 and p["GF_MAX_VER_DIST"] <= 0:
+            self._gf_out = False            # no geofence: nothing to check
+            return
         q = self.st.qc
         why = self.boundary.breach(q[0], q[1], q[2], p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"])
         was, self._gf_out = self._gf_out, why is not None

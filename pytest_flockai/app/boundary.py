@@ -73,6 +73,11 @@ class Boundary:
             self.polygons.append((it["command"] == POLY_IN, pts))
             i += n
 
+    @property
+    def shapes(self) -> int:
+        """How many polygons and circles the fence has."""
+        return len(self.polygons) + len(self.circles)
+
     def breach(self, x: float, y: float, z: float, max_hor_m: float = 0.0,
                max_ver_m: float = 0.0) -> str | None:
         """Why the point (x, y, z) is outside the geofence, or None when it is inside."""
