@@ -289,17 +289,20 @@ class Autopilot(Policy, Commands):
         q = self.st.qc
         why = self.boundary.breach(q[0], q[1], q[2], p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"])
         was, self._gf_out = self._gf_out, why is not None
-        if why is None or was or self.mode in ("RTL", "LAND"):
+        if why is None or was:
             return
         action = ACTIONS[int(p["GF_ACTION"])]
+        acted = self.mode not in ("RTL", "LAND")      # already returning or landing: reported
         self.gf_breaches += 1
-        if action == "terminate":
-            self.not_emulated("GF_ACTION", "", "flight termination (GF_ACTION 4) is not "
-                              "emulated: the drone holds instead")
-        self.run.event(t, "app_geofence_breach", reason=why, action=action,
+        self.run.event(t, "app_geofence_breach", reason=why, action=action, acted=acted,
                        x=float(q[0]), y=float(q[1]), z=float(q[2]))
         link.send(M.MAVLink_statustext_message(M.MAV_SEVERITY_CRITICAL,
                                                f"Geofence violation: {action}".encode()))
+        if not acted:
+            return
+        if action == "terminate":
+            self.not_emulated("GF_ACTION", "", "flight termination (GF_ACTION 4) is not "
+                              "emulated: the drone holds instead")
         none = (0.0,) * 7
         if action in ("hold", "terminate"):
             self.c_hold(t, none, 0)

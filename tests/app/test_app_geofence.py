@@ -85,7 +85,7 @@ def test_mavsdk_geofence_holds_the_drone_at_its_edge():
     assert "GF_ACTION 2" in r.output and "mode HOLD" in r.output and "landed" in r.output
     res = r.result
     (breach,) = [e for e in res.events if e["kind"] == "app_geofence_breach"]
-    assert breach["action"] == "hold" and "inclusion" in breach["reason"]
+    assert breach["action"] == "hold" and breach["acted"] and "inclusion" in breach["reason"]
     assert 19.5 < breach["y"] < 21.0                # caught within a step of the 20 m edge
     assert 20.0 < north_m(res) < 24.0               # it stopped, braking, just past it
     assert res.kpis["app.geofence_breaches"] == 1.0 and res.end_reason == "landed"
