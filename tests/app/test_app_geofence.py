@@ -100,3 +100,11 @@ def test_mavsdk_geofence_with_return_brings_the_drone_home():
     assert breach["action"] == "return"
     end = res.telemetry.iloc[-1]
     assert res.end_reason == "landed" and np.hypot(end["x"], end["y"]) < 1.5
+
+
+def test_an_integer_parameter_is_read_byte_wise_or_as_its_number():
+    from pytest_flockai.app.mavlink_udp import _as_float, _int_of
+    assert _as_float(3) != 3.0 and _int_of(_as_float(3), range(6)) == 3    # PX4, MAVSDK
+    assert _int_of(_as_float(0), range(6)) == 0
+    assert _int_of(3.0, range(6)) == 3                  # a client that sends the number
+    assert _int_of(7.0, range(6)) is None and _int_of(float("nan"), range(6)) is None
