@@ -44,10 +44,13 @@ def check(items: list) -> tuple[int, str] | None:
         if not (math.isfinite(n) and n == int(n) and n >= 3):
             return it["seq"], (f"a polygon's vertex count (param1) is {n!r}; allowed: a whole "
                                f"number >= 3")
-        run = items[i:i + int(n)]
-        if len(run) < n or any(v["command"] != it["command"] or v["p"][0] != n for v in run):
-            return it["seq"], (f"a polygon of {int(n)} vertices has {len(run)} items of its kind "
-                               f"in a row; allowed: its vertices one after the other")
+        k = 0                               # its vertices in a row
+        while i + k < len(items) and k < n and items[i + k]["command"] == it["command"] \
+                and items[i + k]["p"][0] == n:
+            k += 1
+        if k < n:
+            return it["seq"], (f"a polygon of {int(n)} vertices has {k} items of its kind in a "
+                               f"row; allowed: its vertices one after the other")
         i += int(n)
     return None
 

@@ -55,6 +55,9 @@ def test_a_fence_that_is_not_one_is_named_by_its_item():
     assert check(square(POLY_IN, 5.0)[:3]) == (0, "a polygon of 4 vertices has 3 items of its "
                                                    "kind in a row; allowed: its vertices one "
                                                    "after the other")
+    broken = square(POLY_IN, 5.0)[:2] + [item(2, CIRCLE_OUT, 1.0, 0.0, 0.0)] + \
+        square(POLY_IN, 5.0, seq0=3)[2:]
+    assert check(broken)[1].startswith("a polygon of 4 vertices has 2 items of its kind")
     two = [dict(v, p=[2.0, 0, 0, 0]) for v in square(POLY_IN, 5.0)[:2]]
     assert check(two)[1].startswith("a polygon's vertex count (param1) is 2.0")
     assert "radius (param1) is 0.0" in check([item(0, CIRCLE_OUT, 0.0, 0.0, 0.0)])[1]
