@@ -25,6 +25,7 @@ import hmac
 import os
 import secrets
 import stat
+import time
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -119,6 +120,12 @@ def _unusable(path: Path) -> str:
 
 
 def _read_or_create(path: Path) -> bytes | None:
+    """The key in ``path``; made first when there is none. Several processes may start
+    at once (pytest-xdist's workers on a first run): the key file appears whole or not at
+    all (written to a private file beside it, then hard-linked to its name, which never
+    replaces one that is there), so each reads the one key that won. Where hard links
+    are not supported, the file is made in place and a reader that finds it empty reads
+    again for up to ``_SETTLE_S``."""
     try:
         return _read(path)
     except FileNotFoundError:
@@ -127,17 +134,43 @@ def _read_or_create(path: Path) -> bytes | None:
         return None
     try:
         path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
-        with os.fdopen(fd, "w") as fh:
-            fh.write(secrets.token_hex(32) + "\n")
+        _create(path)
     except FileExistsError:
         pass                                 # another process made it first: read theirs
     except OSError:
         return None
+    deadline = time.monotonic() + _SETTLE_S
+    while True:
+        try:
+            data = _read(path)
+        except OSError:
+            return None
+        if data is not None or time.monotonic() >= deadline or not path.is_file():
+            return data
+        time.sleep(0.01)                     # made in place by another process: not written yet
+
+
+#: s a reader waits for a key file another process made in place to be written
+_SETTLE_S = 1.0
+
+
+def _create(path: Path) -> None:
+    """Write a new random key to ``path``, atomically; FileExistsError when there is one."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
     try:
-        return _read(path)
-    except OSError:
-        return None
+        with os.fdopen(fd, "w") as fh:
+            fh.write(secrets.token_hex(32) + "\n")
+        try:
+            os.link(tmp, path)               # appears whole; never replaces another's key
+        except FileExistsError:
+            raise
+        except OSError:                      # no hard links here: make it in place
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+            with os.fdopen(fd, "w") as fh, open(tmp) as src:
+                fh.write(src.read())
+    finally:
+        os.unlink(tmp)
 
 
 def _read(path: Path) -> bytes | None:

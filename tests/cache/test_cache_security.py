@@ -6,10 +6,12 @@ before a byte is read or decompressed, and kept under a size limit (LRU)."""
 import hashlib
 import io
 import json
+import multiprocessing
 import os
 import signal
 import time
 import tracemalloc
+import warnings
 import zipfile
 
 import numpy as np
@@ -298,3 +300,33 @@ def test_quick():
     res.stdout.fnmatch_lines(["*CacheMismatch: cache entry not authentic*flight_time_s*"])
     bad = pytester.runpytest("--flockai-cache-verify=2")
     assert bad.ret == 4 and "--flockai-cache-verify = '2'" in bad.stderr.str()
+
+
+def _first_key(barrier, out):
+    barrier.wait()
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        k = default_key()
+    out.put((k.source, hashlib.sha256(k.secret).hexdigest(), [str(w.message) for w in seen]))
+
+
+def test_processes_that_make_the_key_at_once_all_get_the_one_key(tmp_path, monkeypatch):
+    """pytest-xdist's workers on a first run: each reads the key one of them made (a worker
+    that read the file before it was written used to seal its entries with a key of its
+    own, and the next run flew them again as "not authentic")."""
+    monkeypatch.delenv("FLOCKAI_CACHE_KEY")
+    ctx = multiprocessing.get_context("fork")
+    for round_ in range(6):
+        monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / f"config{round_}"))
+        n = 8
+        barrier, out = ctx.Barrier(n), ctx.Queue()
+        procs = [ctx.Process(target=_first_key, args=(barrier, out)) for _ in range(n)]
+        for p in procs:
+            p.start()
+        got = [out.get(timeout=30) for _ in procs]
+        for p in procs:
+            p.join(timeout=30)
+        kf = tmp_path / f"config{round_}" / "pytest-flockai" / "cache-key"
+        want = hashlib.sha256(kf.read_bytes().strip()).hexdigest()
+        assert got == [(str(kf), want, [])] * n
+        assert sorted(os.listdir(kf.parent)) == ["cache-key"]       # no scratch file left
