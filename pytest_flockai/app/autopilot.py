@@ -28,8 +28,9 @@ from ..control.tracking import yaw_of
 from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames
-from .boundary import ACTIONS, Boundary
+from .boundary import Boundary
 from .commands import Commands
+from .failsafe import Failsafe
 from .mavlink_udp import Link, M
 from .pilots import Setpoint
 from .streams import RATES
@@ -50,7 +51,7 @@ def _floats(a) -> list:
     return a.tolist() if hasattr(a, "tolist") else [float(x) for x in a]
 
 
-class Autopilot(Policy, Commands):
+class Autopilot(Policy, Commands, Failsafe):
     """The app's autopilot (module docstring); ``port``: the UDP port the app listens
     on; ``speed``: simulated seconds per wall second; ``deadline``: time.monotonic()
     after which the flight stops ("app_timeout")."""
@@ -275,42 +276,6 @@ class Autopilot(Policy, Commands):
             self.mode = "HOLD"
             self.hold(t)
 
-    def _geofence(self, t: float) -> None:
-        """The geofence (``boundary``): on leaving it, an ``app_geofence_breach`` event, a
-        STATUSTEXT to the app and PX4's GF_ACTION (hold, return or land; 0 and 1 only
-        report it; 4, flight termination, is not emulated: the drone holds)."""
-        link = self.link
-        if link.fence_version != self._fence_v:
-            self._fence_v, self.boundary = link.fence_version, Boundary(link.fence, self.geo)
-        p = link.params
-        if not self.boundary.shapes and p["GF_MAX_HOR_DIST"] <= 0 and p["GF_MAX_VER_DIST"] <= 0:
-            self._gf_out = False            # no geofence: nothing to check
-            return
-        q = self.st.qc
-        why = self.boundary.breach(q[0], q[1], q[2], p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"])
-        was, self._gf_out = self._gf_out, why is not None
-        if why is None or was:
-            return
-        action = ACTIONS[int(p["GF_ACTION"])]
-        acted = self.mode not in ("RTL", "LAND")      # already returning or landing: reported
-        self.gf_breaches += 1
-        self.run.event(t, "app_geofence_breach", reason=why, action=action, acted=acted,
-                       x=float(q[0]), y=float(q[1]), z=float(q[2]))
-        link.send(M.MAVLink_statustext_message(M.MAV_SEVERITY_CRITICAL,
-                                               f"Geofence violation: {action}".encode()))
-        if not acted:
-            return
-        if action == "terminate":
-            self.not_emulated("GF_ACTION", "", "flight termination (GF_ACTION 4) is not "
-                              "emulated: the drone holds instead")
-        none = (0.0,) * 7
-        if action in ("hold", "terminate"):
-            self.c_hold(t, none, 0)
-        elif action == "return":
-            self.c_rtl(t, none, 0)
-        elif action == "land":
-            self.c_land(t, none, 0)
-
     def _check_app(self, t: float) -> None:
         p = self.proc
         if p is None or self._app_gone or p.poll() is None:
@@ -354,6 +319,8 @@ class Autopilot(Policy, Commands):
         except ConfigError as exc:
             self.run.event(t, "app_refused", reason=str(exc))
             return M.MAV_RESULT_DENIED
+        if self.outside_fence(t, pos):      # acknowledged; the drone stays where it is
+            return M.MAV_RESULT_ACCEPTED
         sp = Setpoint(pos[2], speed or self.cruise, pos=tuple(pos),
                       yaw=self._yaw() if yaw is None else yaw)
         self.fly(t, sp)

@@ -111,3 +111,18 @@ def test_an_integer_parameter_is_read_byte_wise_or_as_its_number():
     assert _int_of(_as_float(0), range(6)) == 0
     assert _int_of(3.0, range(6)) == 3                  # a client that sends the number
     assert _int_of(7.0, range(6)) is None and _int_of(float("nan"), range(6)) is None
+
+
+def test_mavsdk_goto_outside_the_geofence_leaves_the_drone_where_it_is():
+    r = run("mavsdk_geofence.py", "goto")
+    assert r.exit_code == 0, r.output
+    assert "landed" in r.output
+    res = r.result
+    (refused,) = [e for e in res.events if e["kind"] == "app_reposition_refused"]
+    assert refused["reason"] == "the target is outside the geofence's inclusion zones"
+    assert 39.0 < refused["y"] < 41.0
+    goto = [e for e in res.events if e["kind"] == "app_command" and e["command"] == "DO_REPOSITION"]
+    assert [e["result"] for e in goto] == ["ACCEPTED"]      # PX4's commander acknowledges it
+    tel = res.telemetry
+    assert np.max(np.hypot(tel["x"] - tel["x"].iloc[0], tel["y"] - tel["y"].iloc[0])) < 1.0
+    assert res.kpis["app.geofence_breaches"] == 0.0 and res.end_reason == "landed"

@@ -3,7 +3,8 @@
 5 m and fly north in offboard at 3 m/s until the autopilot leaves OFFBOARD (the geofence's
 failsafe), print the mode and where it stopped, then land (or, after a return, wait for
 the landing). It does not call ``offboard.stop()``: that switches PX4 to HOLD, which would
-end a return the failsafe started."""
+end a return the failsafe started. With argv[1] "goto" it asks instead for a reposition
+40 m north, outside the fence, and prints where the drone is 2 s later, then lands."""
 
 import asyncio
 import math
@@ -33,7 +34,8 @@ async def main():
         if health.is_global_position_ok and health.is_home_position_ok:
             break
     home = await first(drone.telemetry.home())
-    if len(sys.argv) > 1:
+    goto = sys.argv[1:] == ["goto"]
+    if len(sys.argv) > 1 and not goto:
         await drone.param.set_param_int("GF_ACTION", int(sys.argv[1]))
     print("GF_ACTION", await drone.param.get_param_int("GF_ACTION"), flush=True)
     dlat = 20.0 / M_PER_DEG
@@ -47,6 +49,19 @@ async def main():
     async for pos in drone.telemetry.position():
         if pos.relative_altitude_m > 4.8:
             break
+    if goto:                        # a reposition outside the fence: PX4 stays where it is
+        await drone.action.goto_location(home.latitude_deg + 40.0 / M_PER_DEG,
+                                         home.longitude_deg, home.absolute_altitude_m + 5.0, 0.0)
+        await asyncio.sleep(2.0)
+        pos = await first(drone.telemetry.position())
+        print(f"after goto at {(pos.latitude_deg - home.latitude_deg) * M_PER_DEG:.1f} m "
+              f"north of home", flush=True)
+        await drone.action.land()
+        async for in_air in drone.telemetry.in_air():
+            if not in_air:
+                break
+        print("landed", flush=True)
+        return
     await drone.offboard.set_velocity_ned(VelocityNedYaw(3.0, 0.0, 0.0, 0.0))
     await drone.offboard.start()
     async for mode in drone.telemetry.flight_mode():     # the heartbeat's mode (1 Hz)
