@@ -88,9 +88,9 @@ class Autopilot(Policy, Commands, Failsafe):
         self.setpoint: tuple | None = None   # (pos, vel, yaw, wall time, yaw rate) from the app
         self.sp_pilot: Setpoint | None = None
         self.mission_reset()
-        self.boundary, self._fence_v, self._gf_out = Boundary([], self.geo), 0, False
-        self.gf_breaches = 0
         self.link = Link(self.port, self)
+        self._fence_items, self._gf_out, self.gf_breaches = self.link.fence, False, 0
+        self.boundary = Boundary(self._fence_items, self.geo)
         self.link.params["MPC_LAND_SPEED"] = self.stages.descent_speed
         self.link.params["MPC_TKO_SPEED"] = self.stages.climb_speed
         self.link.sim_running = True

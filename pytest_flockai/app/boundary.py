@@ -30,29 +30,35 @@ ITEMS = {POLY_IN, POLY_OUT, CIRCLE_IN, CIRCLE_OUT}
 ACTIONS = {0: "none", 1: "warn", 2: "hold", 3: "return", 4: "terminate", 5: "land"}
 
 
-def check(items: list) -> tuple[int, str] | None:
-    """(seq, why) of the first item that makes ``items`` not a geofence, or None."""
+def _shapes(items: list) -> tuple[list, tuple[int, str] | None]:
+    """``items`` grouped into shapes, [(command, [its items])], and (seq, why) of the first
+    item that makes them not a geofence (None: they are one; the shapes before it)."""
+    out: list = []
     i = 0
     while i < len(items):
         it = items[i]
-        if it["command"] in (CIRCLE_IN, CIRCLE_OUT):
-            if not (math.isfinite(it["p"][0]) and it["p"][0] > 0):
-                return it["seq"], f"a circle's radius (param1) is {it['p'][0]!r}; allowed: > 0 m"
-            i += 1
-            continue
         n = it["p"][0]
-        if not (math.isfinite(n) and n == int(n) and n >= 3):
-            return it["seq"], (f"a polygon's vertex count (param1) is {n!r}; allowed: a whole "
-                               f"number >= 3")
-        k = 0                               # its vertices in a row
-        while i + k < len(items) and k < n and items[i + k]["command"] == it["command"] \
-                and items[i + k]["p"][0] == n:
-            k += 1
+        if it["command"] in (CIRCLE_IN, CIRCLE_OUT):
+            if not (math.isfinite(n) and n > 0):
+                return out, (it["seq"], f"a circle's radius (param1) is {n!r}; allowed: > 0 m")
+            n = 1
+        elif not (math.isfinite(n) and n == int(n) and n >= 3):
+            return out, (it["seq"], f"a polygon's vertex count (param1) is {n!r}; allowed: a "
+                                    f"whole number >= 3")
+        run = items[i:i + int(n)]
+        k = next((j for j, v in enumerate(run) if v["command"] != it["command"]
+                  or v["p"][0] != it["p"][0]), len(run))       # its vertices in a row
         if k < n:
-            return it["seq"], (f"a polygon of {int(n)} vertices has {k} items of its kind in a "
-                               f"row; allowed: its vertices one after the other")
+            return out, (it["seq"], f"a polygon of {int(n)} vertices has {k} items of its kind "
+                                    f"in a row; allowed: its vertices one after the other")
+        out.append((it["command"], run))
         i += int(n)
-    return None
+    return out, None
+
+
+def check(items: list) -> tuple[int, str] | None:
+    """(seq, why) of the first item that makes ``items`` not a geofence, or None."""
+    return _shapes(items)[1]
 
 
 class Boundary:
@@ -63,18 +69,12 @@ class Boundary:
         self.polygons: list[tuple[bool, list]] = []      # (inclusion, [(x, y), ...])
         self.circles: list[tuple[bool, float, float, float]] = []   # (inclusion, x, y, r)
         self.home = geo.home
-        i = 0
-        while i < len(items):
-            it = items[i]
-            if it["command"] in (CIRCLE_IN, CIRCLE_OUT):
-                x, y, _ = geo.to_world(it["x"], it["y"], 0.0)
-                self.circles.append((it["command"] == CIRCLE_IN, x, y, float(it["p"][0])))
-                i += 1
-                continue
-            n = int(it["p"][0])
-            pts = [geo.to_world(v["x"], v["y"], 0.0)[:2] for v in items[i:i + n]]
-            self.polygons.append((it["command"] == POLY_IN, pts))
-            i += n
+        for cmd, run in _shapes(items)[0]:
+            pts = [geo.to_world(v["x"], v["y"], 0.0)[:2] for v in run]
+            if cmd in (CIRCLE_IN, CIRCLE_OUT):
+                self.circles.append((cmd == CIRCLE_IN, *pts[0], float(run[0]["p"][0])))
+            else:
+                self.polygons.append((cmd == POLY_IN, pts))
 
     @property
     def shapes(self) -> int:

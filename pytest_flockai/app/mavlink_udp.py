@@ -66,7 +66,6 @@ class Link(Plans):
         self.params = dict(PARAMS)
         self.mission: list = []
         self.fence: list = []               # the geofence's items (``mission_protocol``, ``boundary``)
-        self.fence_version = 0
         self._up: dict | None = None        # an upload in progress: {"count", "items", "type"}
         self.app_id = (255, 0)
         self.last_msg: tuple | None = None  # (name, wall time) of the app's last message

@@ -39,14 +39,13 @@ def name_of(cmd: int) -> str:
 
 class Plans:
     """The mission protocol (module docstring) on the link's ``mission`` and ``fence`` (the
-    items as stored, ``item_of``); ``fence_version`` counts the geofences uploaded."""
+    items as stored, ``item_of``; each upload or clear stores a new list)."""
 
     # provided by Link (the autopilot, the app's address, the plans, the sender)
     ap: Any
     app_id: tuple
     mission: list
     fence: list
-    fence_version: int
     _up: dict | None
     send: Callable[[Any], None]
 
@@ -116,7 +115,6 @@ class Plans:
             self.ap.mission_uploaded()
         else:
             self.fence = items
-            self.fence_version += 1
 
     def _refuse_item(self, msg, mtype: int) -> int | None:
         cmd = msg.command
