@@ -1,22 +1,31 @@
 """Inference latency on a device profile: ``modeled`` and ``measured``.
 
-``modeled`` (the default, deterministic)::
+``modeled`` (the default, deterministic) for a model known only by its MAC count (a
+``PythonModel(fn, macs=...)``, a template) is the computer's MAC-count rule::
 
     latency = device.overhead_s + macs / device.macs_per_s
 
-``measured``: the host's wall time of the *real* inference, scaled to the
-device. The scale comes from a calibration benchmark run once per process: a
-fixed convolutional ONNX model (built in memory, its MACs counted exactly) is
-timed with ONNX Runtime on the host, which gives the host's effective
-MAC rate ``host_macs_per_s``. Then::
+(an ONNX model's modeled latency comes from its layers instead: ``predict.predict_latency``).
 
-    latency = device.overhead_s + wall_s * host_macs_per_s / device.macs_per_s
+``measured``: the host's wall time of the *real* inference, scaled to the computer's CPU.
+The scale comes from a calibration benchmark run once per process: a fixed convolutional
+ONNX model (built in memory) is timed with ONNX Runtime on one host core, and the same
+network is predicted by the layer model (``predict.predict_latency``) on one core of the
+computer's CPU (ONNX Runtime where the computer lists it, else its first CPU runtime, at
+fp32). Then::
 
-so a model that runs as fast (per MAC) on the host as the calibration network
-gets exactly its modeled latency, and one that runs slower (memory bound,
-Python overhead, unusual operators) gets proportionally more. Measured results
-are not reproducible by nature (they depend on the host and its load): use
-them to check the modeled MAC count of a model, not as CI budgets.
+    latency = overhead_s + wall_s * compute_s(calibration net on the computer) / median_s(host)
+
+with ``overhead_s`` that deployment's per-inference overhead (``HostScale``). So code that
+runs as fast on the host as the calibration network gets the layer model's time on the
+computer's core, and code that runs slower (memory bound, Python, unusual operators) gets
+proportionally more. A computer with no CPU runtime in its datasheet (the Coral board lists
+only its Edge TPU, ``ground-gpu`` only its GPU) keeps the MAC-count rule's rate
+(``wall_s * host_macs_per_s / device.macs_per_s``). The host's code runs on the host's CPU,
+so this is a CPU-to-CPU scale: for a GPU or NPU deployment of an ONNX model use the modeled
+latency or a measured profile (``flockai profile-device``). Measured results are not
+reproducible by nature (they depend on the host and its load): use them to see what a
+model's code costs, not as CI budgets.
 """
 
 from __future__ import annotations
@@ -25,6 +34,7 @@ import math
 import threading
 import time
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import onnxruntime as ort
@@ -34,6 +44,7 @@ from ..errors import ConfigError
 from .devices import Device
 from .devices import device as _device
 from .measured import as_device, is_measured
+from .predict import predict_latency
 
 LATENCY_MODES = ("modeled", "measured")
 
@@ -166,11 +177,51 @@ def calibrate(*, runs: int = 15, force: bool = False) -> Calibration:
         return _CAL
 
 
+@dataclass(frozen=True)
+class HostScale:
+    """How host seconds become a computer's: ``overhead_s + wall_s * factor``.
+
+    ``rule``: what set it (the layer model's deployment, or the MAC-count rule)."""
+
+    factor: float
+    overhead_s: float
+    rule: str
+
+    def to_dict(self) -> dict:
+        return {"factor": self.factor, "overhead_s": self.overhead_s, "rule": self.rule}
+
+
+def _cpu_deployment(dev: Device) -> str | None:
+    """The CPU runtime the host's calibration is compared with: ONNX Runtime where the
+    computer lists it (the calibration ran in it), else its first CPU runtime."""
+    cpu = [d.split("/")[0] for d in dev.deployments if d.endswith("/cpu")]
+    return "onnxruntime" if "onnxruntime" in cpu else (cpu[0] if cpu else None)
+
+
+@lru_cache(maxsize=64)
+def _host_scale(dev: Device, cal: Calibration) -> HostScale:
+    runtime = _cpu_deployment(dev)
+    if runtime is None or getattr(dev, "measured", None) is not None:
+        why = ("a measured profile has no datasheet to predict from" if runtime else
+               f"{dev.name!r} lists no CPU runtime")
+        return HostScale(cal.host_macs_per_s / dev.macs_per_s, dev.overhead_s,
+                         f"MAC-count rule: {why}")
+    p = predict_latency(_calibration_model_bytes(), dev, runtime=runtime, target="cpu",
+                        precision="fp32", threads=1)
+    compute = float(sum(n[2] for n in p.per_node))
+    return HostScale(compute / cal.median_s, p.seconds - compute,
+                     f"layer model: {runtime}/cpu/fp32, 1 thread")
+
+
+def host_scale(device, calibration: Calibration | None = None) -> HostScale:
+    """The scale from this host's seconds to ``device``'s (see the module docstring)."""
+    return _host_scale(resolve_device(device), calibration or calibrate())
+
+
 def scale_to_device(wall_s: float, device, calibration: Calibration | None = None) -> float:
     """Device seconds for an inference that took ``wall_s`` on this host."""
-    dev = resolve_device(device)
-    cal = calibration or calibrate()
-    return dev.overhead_s + float(wall_s) * cal.host_macs_per_s / dev.macs_per_s
+    sc = host_scale(device, calibration)
+    return sc.overhead_s + float(wall_s) * sc.factor
 
 
 def measured_latency(fn, *args, device, calibration: Calibration | None = None):
@@ -185,6 +236,5 @@ def measured_latency(fn, *args, device, calibration: Calibration | None = None):
     return out, scale_to_device(wall, device, cal), wall
 
 
-__all__ = ["LATENCY_MODES", "Calibration", "calibrate", "compute_seconds", "device_value", "measured_latency",
-           "modeled_latency",
-           "resolve_device", "scale_to_device"]
+__all__ = ["LATENCY_MODES", "Calibration", "HostScale", "calibrate", "compute_seconds", "device_value",
+           "host_scale", "measured_latency", "modeled_latency", "resolve_device", "scale_to_device"]

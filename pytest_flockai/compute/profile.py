@@ -134,7 +134,9 @@ class MeasuredDevice:
         if isinstance(model, MeasuredModel):
             return model
         key = model
-        if not isinstance(model, str) or not (len(model) == 64 and model in self.models):
+        if isinstance(model, (bytes, bytearray)):      # a self-contained file's bytes
+            key = hashlib.sha256(model).hexdigest()
+        elif not isinstance(model, str) or not (len(model) == 64 and model in self.models):
             path = getattr(model, "path", model)
             if isinstance(path, (str, os.PathLike)) and os.path.isfile(path):
                 key = model_sha256(path)
@@ -145,7 +147,11 @@ class MeasuredDevice:
             if len(named) == 1:
                 return named[0]
         have = ", ".join(f"{m.name} ({m.sha256[:12]})" for m in self.models.values())
-        raise ConfigError(f"model = {getattr(model, 'name', model)!r} was not profiled on "
+        what = (f"<{len(model)} bytes of ONNX, SHA-256 {key[:12]}>"
+                if isinstance(model, (bytes, bytearray)) else
+                repr(getattr(model, "name", None) or getattr(getattr(model, "graph", None), "name",
+                                                              None) or model))
+        raise ConfigError(f"model = {what} was not profiled on "
                           f"{self.name!r} (profile {self.path!r}; SHA-256 of the ONNX file "
                           f"compared); profiled: {have}")
 

@@ -25,5 +25,5 @@ __getattr__ = moved(__name__, {
     "is_measured": "pytest_flockai.ml.task_runner.is_measured",
     "memo": "pytest_flockai.ml.task_runner.memo",
     "resolve_device": "pytest_flockai.ml.task_runner.resolve_device",
-    "scale_to_device": "pytest_flockai.ml.task_runner.scale_to_device",
+    "scale_to_device": "pytest_flockai.compute.latency.scale_to_device",
 })

@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import memo
 from ..comm.link import link as _link
-from ..compute.latency import calibrate, compute_seconds, resolve_device, scale_to_device
+from ..compute.latency import calibrate, compute_seconds, host_scale, resolve_device
 from ..errors import ConfigError
 from .events import DeviceClock, InferenceEvent
 from .jpeg import JPEG_MACS_PER_PIXEL, annotate, decode_jpeg, encode_jpeg, is_image
@@ -251,7 +251,8 @@ class TaskRunner:
         wall = time.perf_counter() - t0
         if measured:
             self._wall.append(wall)
-            return pred, err, scale_to_device(wall, device, self.calibration)
+            sc = host_scale(device, self.calibration)
+            return pred, err, sc.overhead_s + wall * sc.factor
         macs = None
         try:
             macs = model.macs_for(frame) if hasattr(model, "macs_for") else model.macs
@@ -266,7 +267,7 @@ class TaskRunner:
             data = encode_jpeg(frame, self.task.jpeg_quality)
             wall = time.perf_counter() - t0
             if self.task.latency == "measured":
-                secs = scale_to_device(wall, device, self.calibration) - device.overhead_s
+                secs = wall * host_scale(device, self.calibration).factor
             else:
                 secs = compute_seconds(frame.shape[0] * frame.shape[1] * JPEG_MACS_PER_PIXEL, device)
             return data, len(data), secs
@@ -390,7 +391,9 @@ class TaskRunner:
             w = np.asarray(self._wall)
             p10, p50, p90 = (float(x) for x in np.percentile(w, (10, 50, 90)))
             out["measured_wall_s"] = {"median": p50, "p10": p10, "p90": p90, "n": int(w.size)}
-            out["calibration"] = self.calibration.to_dict()
+            dev = self.device if self.task.execution == "onboard" else self.ground_device
+            out["calibration"] = {**self.calibration.to_dict(),
+                                  "scale": host_scale(dev, self.calibration).to_dict()}
         return out
 
 

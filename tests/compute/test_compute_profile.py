@@ -64,6 +64,14 @@ def test_profile_device_writes_a_profile_that_loads(measured, tmp_path):
     assert dev.energy_j(a) == pytest.approx(np.median(small) * 4.0)
     with pytest.raises(ConfigError, match="was not profiled on 'this-host'.*small"):
         dev.latency_samples(_net(tmp_path, "other.onnx", 4))
+    # the file's bytes match by their SHA-256; others are named by size and hash, not dumped
+    np.testing.assert_array_equal(dev.latency_samples(a.read_bytes()), small)
+    other = (tmp_path / "other.onnx").read_bytes()
+    with pytest.raises(ConfigError) as e:
+        dev.latency_samples(other)
+    digest = hashlib.sha256(other).hexdigest()[:12]
+    assert f"model = <{len(other)} bytes of ONNX, SHA-256 {digest}>" in str(e.value)
+    assert len(str(e.value)) < 300
 
 
 def test_seeded_draws_repeat_and_reproduce_p50_p95(measured):

@@ -1,15 +1,22 @@
 """Latency on device profiles: modeled (deterministic) and measured (calibrated)."""
 
+import time
+
 import numpy as np
+import onnxruntime as ort
 import pytest
+from onnx import TensorProto, helper, numpy_helper
 
 from pytest_flockai.compute.devices import device
 from pytest_flockai.compute.latency import (
+    _calibration_model_bytes,
     calibrate,
+    host_scale,
     measured_latency,
     modeled_latency,
     scale_to_device,
 )
+from pytest_flockai.compute.predict import predict_latency
 from pytest_flockai.errors import ConfigError
 
 
@@ -40,9 +47,67 @@ def test_calibration_is_cached_and_scales_to_devices():
     assert calibrate() is cal
     assert cal.host_macs_per_s > 1e8 and cal.runs >= 3
     assert cal.p10_s <= cal.median_s <= cal.p90_s and cal.spread >= 0
-    # the calibration net itself gets its modeled latency, by construction
+    # the calibration net itself gets the layer model's time on one core of the computer
     rpi = device("raspberry-pi-4")
-    assert scale_to_device(cal.median_s, rpi, cal) == pytest.approx(
-        modeled_latency(cal.macs, rpi))
+    want = predict_latency(_calibration_model_bytes(), rpi, runtime="onnxruntime",
+                           target="cpu", precision="fp32", threads=1).seconds
+    assert scale_to_device(cal.median_s, rpi, cal) == pytest.approx(want)
     out, secs, wall = measured_latency(np.add, 1, 2, device=rpi)
-    assert out == 3 and secs >= rpi.overhead_s and wall >= 0
+    assert out == 3 and secs >= host_scale(rpi, cal).overhead_s and wall >= 0
+
+
+def test_host_scale_follows_the_computers_cpu_datasheets():
+    cal = calibrate()
+    f = {n: host_scale(n, cal) for n in ("raspberry-pi-4", "raspberry-pi-5", "jetson-nano-10w",
+                                          "jetson-orin-nano", "coral-dev-board", "ground-gpu")}
+    assert all("layer model: onnxruntime/cpu/fp32, 1 thread" == f[n].rule
+               for n in ("raspberry-pi-4", "raspberry-pi-5", "jetson-nano-10w", "jetson-orin-nano"))
+    # a Cortex-A76 core at 2.4 GHz outruns an A72 at 1.8 GHz; the Orin's A78AE the Nano's A57
+    assert f["raspberry-pi-5"].factor < f["raspberry-pi-4"].factor
+    assert f["jetson-orin-nano"].factor < f["jetson-nano-10w"].factor
+    # no CPU runtime in the datasheet: the MAC-count rule, and the report says so
+    for n in ("coral-dev-board", "ground-gpu"):
+        assert f[n].rule.startswith("MAC-count rule") and n in f[n].rule
+        assert f[n].factor == pytest.approx(cal.host_macs_per_s / device(n).macs_per_s)
+
+
+def _dense_net() -> bytes:
+    """Four 3x3 convolutions of 48 channels on 48x48: dense, compute bound, unlike the
+    calibration network in every shape."""
+    rng = np.random.default_rng(7)
+    nodes, inits, name, c_in = [], [], "x", 8
+    for i in range(4):
+        w = (rng.standard_normal((48, c_in, 3, 3)) * 0.05).astype(np.float32)
+        inits.append(numpy_helper.from_array(w, f"w{i}"))
+        nodes += [helper.make_node("Conv", [name, f"w{i}"], [f"c{i}"], pads=[1, 1, 1, 1]),
+                  helper.make_node("Relu", [f"c{i}"], [f"r{i}"])]
+        name, c_in = f"r{i}", 48
+    g = helper.make_graph(nodes, "dense", [helper.make_tensor_value_info(
+        "x", TensorProto.FLOAT, [1, 8, 48, 48])], [helper.make_tensor_value_info(
+            name, TensorProto.FLOAT, [1, 48, 48, 48])], inits)
+    m = helper.make_model(g, opset_imports=[helper.make_opsetid("", 13)])
+    m.ir_version = 8
+    return m.SerializeToString()
+
+
+def test_measured_latency_of_a_dense_network_agrees_with_the_layer_model():
+    """Timed on the host and scaled, a dense network lands near the layer model's time on
+    the computer's core (the MAC-count rule's guessed rate put it 4x too slow on a Pi 4)."""
+    net = _dense_net()
+    opts = ort.SessionOptions()
+    opts.intra_op_num_threads = opts.inter_op_num_threads = 1
+    sess = ort.InferenceSession(net, opts, providers=["CPUExecutionProvider"])
+    x = np.random.default_rng(0).standard_normal((1, 8, 48, 48)).astype(np.float32)
+    for _ in range(3):
+        sess.run(None, {"x": x})
+    cal = calibrate(force=True)             # host timings close together in time
+    walls = []
+    for _ in range(15):
+        t0 = time.perf_counter()
+        sess.run(None, {"x": x})
+        walls.append(time.perf_counter() - t0)
+    for name in ("raspberry-pi-4", "jetson-orin-nano"):
+        measured = scale_to_device(float(np.median(walls)), name, cal)
+        modeled = predict_latency(net, name, runtime="onnxruntime", target="cpu",
+                                  precision="fp32", threads=1).seconds
+        assert 0.4 < measured / modeled < 2.5, (name, measured, modeled)
