@@ -1,5 +1,6 @@
-"""CI runs the README's test command as written: no extra flags that change
-what the tests see (``-p no:cacheprovider`` turned the flight cache off in CI only)."""
+"""CI runs the README's test command as written: the same extras installed, the same
+pytest arguments, no extra flags that change what the tests see (``-p no:cacheprovider``
+once turned the flight cache off in CI only; ``-rs`` now comes from pyproject.toml)."""
 
 import re
 from pathlib import Path
@@ -11,13 +12,14 @@ def test_ci_runs_the_readme_test_command_as_written():
     readme = (ROOT / "README.md").read_text()
     quick = readme[readme.index("## Quick start"):]
     block = quick[quick.index("```bash"):quick.index("```", quick.index("```bash") + 7)]
-    (command,) = [line.split(".venv/bin/pytest ", 1)[1].strip() for line in block.splitlines()
-                  if ".venv/bin/pytest tests" in line]
+    (line,) = [ln for ln in block.splitlines() if ".venv/bin/pytest tests" in ln]
+    command = line.split(".venv/bin/pytest ", 1)[1].strip()
     assert command == "tests -n 2"
+    (extras,) = re.findall(r'pip install -e "\.\[([^]]+)\]"', line)
     ci = (ROOT / ".ci" / "run").read_text()
-    runs = re.findall(r'-m pytest (.*)', ci)
-    assert len(runs) == 2
-    for args in runs:
-        words = args.split()
-        assert " ".join(words[:3]) == command, args
-        assert set(words[3:]) <= {"-rs"}, args       # reporting only: -rs lists the skips
+    runs = re.findall(r'bin/pytest"? (.*)', ci)
+    assert runs == [command, command]          # the newest versions, then the lowest
+    assert "-m pytest" not in ci               # python -m pytest would add the cwd to sys.path
+    # the newest stage installs what the README's command installs (then the linters)
+    installs = re.findall(r'\$venv/bin/python" -m pip install --quiet -e "\.\[([^]]+)\]"', ci)
+    assert installs[0] == extras, (installs, extras)
