@@ -70,6 +70,15 @@ class InferenceTimer:
                                           task.threads, where=f"task {task.name!r} on "
                                                               f"{device.name!r}",
                                           quantized=quant, half=half)
+        dep = self.deployment
+        if task.latency == "measured" and gm is not None and dep is not None \
+                and dep.target != "cpu":
+            warnings.warn(f"task {task.name!r}: latency='measured' times the model on this "
+                          f"host's CPU and scales the time to one core of {device.name!r}'s "
+                          f"CPU, but the task runs with {dep.runtime} on its {dep.target}: "
+                          f"for that time use latency='modeled' (the layer model) or a "
+                          f"measured profile (flockai profile-device)", UserWarning,
+                          stacklevel=2)
         #: the share of the computer's busy power above idle an inference draws (on a CPU,
         #: the deployment's threads over its cores: ``compute.runtimes.power_share``); 1 for
         #: a measured profile (its busy power was measured at its own threads)

@@ -1,6 +1,7 @@
 """ML deployment: MAC counting, models on ONNX Runtime, templates, tasks and the runner."""
 
 import math
+import warnings
 
 import numpy as np
 import onnx
@@ -462,3 +463,17 @@ def test_frames_before_the_period_are_ignored_and_the_grid_does_not_drift():
         r.on_frame(i * 0.03, np.zeros((2, 2, 3), np.uint8))
     assert r.frames == 7               # t = 0, 0.51, 1.02, 1.5, 2.01, 2.52, 3.0
     assert r.next_frame_t == pytest.approx(3.5)
+
+
+def test_measured_latency_of_an_onnx_model_on_a_gpu_deployment_says_what_it_measures(tmp_path):
+    """The host's CPU time scaled to the computer's CPU is not the time on its GPU: say so."""
+    model = OnnxModel(_grey_mean_model(tmp_path))
+    with pytest.warns(UserWarning, match=r"latency='measured' times the model on this host's "
+                                         r"CPU.*tensorrt on its gpu"):
+        _fly(Task(model, period_s=1.0, latency="measured", device="jetson-orin-nano"),
+             seconds=2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")              # the Pi 4's CPU deployment: nothing to say
+        _fly(Task(model, period_s=1.0, latency="measured", device="raspberry-pi-4"), seconds=2.0)
+        _fly(Task(model, period_s=1.0, latency="measured", device="jetson-orin-nano",
+                  runtime="onnxruntime", target="cpu"), seconds=2.0)
