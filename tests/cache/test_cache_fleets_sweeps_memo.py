@@ -360,7 +360,7 @@ def test_in_flight_the_model_runs_never_a_memoised_answer(tmp_path):
         model(frame)                                       # stored
         for latency in ("measured", "modeled"):
             r = TaskRunner(fa.Task(model, period_s=1.0, latency=latency,
-                                   device="jetson-orin-nano")).bind(np.random.default_rng(0))
+                                   device="raspberry-pi-4")).bind(np.random.default_rng(0))
             pred, err, _ = r._infer(model, frame, r.device)
             assert err is None and pred is not None
     assert cache.memo.counts == {"stored": 1}              # model(frame) outside a task only
