@@ -28,7 +28,6 @@ from ..control.tracking import yaw_of
 from ..errors import ConfigError
 from ..policy.base import Policy
 from . import frames
-from .boundary import Boundary
 from .commands import Commands
 from .failsafe import Failsafe
 from .mavlink_udp import Link, M
@@ -89,8 +88,7 @@ class Autopilot(Policy, Commands, Failsafe):
         self.sp_pilot: Setpoint | None = None
         self.mission_reset()
         self.link = Link(self.port, self)
-        self._fence_items, self._gf_out, self.gf_breaches = self.link.fence, False, 0
-        self.boundary = Boundary(self._fence_items, self.geo)
+        self._fence_items, self._gf_out, self.gf_breaches = None, False, 0   # see Failsafe
         self.link.params["MPC_LAND_SPEED"] = self.stages.descent_speed
         self.link.params["MPC_TKO_SPEED"] = self.stages.climb_speed
         self.link.sim_running = True

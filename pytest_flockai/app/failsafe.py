@@ -34,7 +34,7 @@ class Failsafe:
     run: Any
     mode: str
     boundary: Boundary
-    _fence_items: list          # the link's fence the boundary was built from
+    _fence_items: list | None   # the link's fence the boundary was built from (None: not yet)
     _gf_out: bool
     gf_breaches: int
     hold: Callable[[float], None]
@@ -46,7 +46,7 @@ class Failsafe:
     def _fence_why(self, x: float, y: float, z: float) -> str | None:
         """Why (x, y, z) is outside the geofence; None inside, or with no geofence."""
         link = self.link
-        if link.fence is not self._fence_items:     # a fence uploaded or cleared since
+        if link.fence is not self._fence_items:     # the first check, or a new fence since
             self._fence_items, self.boundary = link.fence, Boundary(link.fence, self.geo)
         p = link.params
         if not self.boundary.shapes and p["GF_MAX_HOR_DIST"] <= 0 and p["GF_MAX_VER_DIST"] <= 0:
